@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "render/image_io.h"
+
+#include "render/error.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <system_error>
+#include <unistd.h>
+
+namespace texfab {
+namespace fs = std::filesystem;
+
+namespace {
+
+// OIIO error texts can span several lines; texfab errors are one line.
+std::string oneLine(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text.empty() ? std::string("unknown error") : text;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+uint32_t readBigEndian32(const uint8_t* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+void checkSize(int64_t width, int64_t height, const std::string& name) {
+  if (width <= 0 || height <= 0)
+    throw Error(name + ": image has no pixels (" + std::to_string(width) + "x" +
+                std::to_string(height) + ")");
+  if (width > kMaxImageSide || height > kMaxImageSide)
+    throw Error(name + ": image is " + std::to_string(width) + "x" + std::to_string(height) +
+                ", larger than the supported " + std::to_string(kMaxImageSide) + " per side");
+}
+
+Image readPatFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open file");
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return decodePat(bytes, path.string());
+}
+
+PixelFormat formatOf(OIIO::TypeDesc type) {
+  switch (type.basetype) {
+  case OIIO::TypeDesc::UINT8:
+  case OIIO::TypeDesc::INT8: return PixelFormat::UInt8;
+  case OIIO::TypeDesc::UINT16:
+  case OIIO::TypeDesc::INT16: return PixelFormat::UInt16;
+  default: return PixelFormat::Float;
+  }
+}
+
+} // namespace
+
+Image decodePat(std::span<const uint8_t> bytes, const std::string& name) {
+  // GIMP pattern, version 1: six big-endian uint32 (header size, version, width, height,
+  // bytes per pixel, magic "GPAT"), a NUL-terminated name filling the header, then raw pixels.
+  constexpr size_t kFixedHeader = 24;
+  if (bytes.size() < kFixedHeader) throw Error(name + ": not a GIMP pattern (file too short)");
+  const uint32_t headerSize = readBigEndian32(bytes.data());
+  const uint32_t version = readBigEndian32(bytes.data() + 4);
+  const uint32_t width = readBigEndian32(bytes.data() + 8);
+  const uint32_t height = readBigEndian32(bytes.data() + 12);
+  const uint32_t depth = readBigEndian32(bytes.data() + 16);
+  if (std::memcmp(bytes.data() + 20, "GPAT", 4) != 0)
+    throw Error(name + ": not a GIMP pattern (no GPAT magic)");
+  if (version != 1) throw Error(name + ": unsupported GIMP pattern version " + std::to_string(version));
+  if (depth < 1 || depth > 4)
+    throw Error(name + ": GIMP pattern has " + std::to_string(depth) + " bytes per pixel (expected 1-4)");
+  if (headerSize < kFixedHeader || headerSize > bytes.size())
+    throw Error(name + ": corrupt GIMP pattern header (header size " + std::to_string(headerSize) + ")");
+  checkSize(width, height, name);
+  const size_t expected = size_t(width) * height * depth;
+  const size_t available = bytes.size() - headerSize;
+  if (available < expected)
+    throw Error(name + ": truncated pattern data (expected " + std::to_string(expected) +
+                " bytes, found " + std::to_string(available) + ")");
+  Image image(int(width), int(height), int(depth), PixelFormat::UInt8);
+  const uint8_t* data = bytes.data() + headerSize;
+  for (size_t i = 0; i < expected; ++i) image.pixels[i] = float(data[i]) / 255.0f;
+  return image;
+}
+
+Image readImage(const fs::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(name + ": no such file");
+  if (fs::is_directory(path, ec)) throw Error(name + ": is a directory, not an image");
+  if (lower(path.extension().string()) == ".pat") return readPatFile(path);
+
+  auto in = OIIO::ImageInput::open(name);
+  if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
+  const OIIO::ImageSpec& spec = in->spec();
+  checkSize(spec.width, spec.height, name);
+  if (spec.depth > 1) throw Error(name + ": volume images are not supported");
+  if (spec.nchannels < 1) throw Error(name + ": image has no channels");
+  Image image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+    throw Error(name + ": cannot decode image: " + oneLine(in->geterror()));
+  return image;
+}
+
+fs::path temporaryPathFor(const fs::path& path) {
+  static std::atomic<unsigned> counter{0};
+  // Built by appending: GCC 12 warns falsely (-Wrestrict, PR 105329) on "literal" + string here.
+  std::string tmpName(".");
+  tmpName.append(path.filename().string()).append(".tmp-").append(std::to_string(::getpid()));
+  tmpName.append("-").append(std::to_string(counter++));
+  return path.parent_path() / tmpName;
+}
+
+void commitFile(const fs::path& tmp, const fs::path& path) {
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw Error(path.string() + ": cannot write file: " + ec.message());
+  }
+}
+
+void checkImageWritable(const fs::path& path) {
+  const std::string name = path.string();
+  if (path.filename().empty() || path.extension().empty())
+    throw Error(name + ": output needs a file name with an image extension (.png, .exr, ...)");
+  if (!OIIO::ImageOutput::create(name)) throw Error(name + ": no image writer for this file extension");
+  std::error_code ec;
+  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  if (!fs::is_directory(folder, ec)) throw Error(name + ": folder " + folder.string() + " does not exist");
+}
+
+void writeImage(const Image& image, const fs::path& path) {
+  const std::string name = path.string();
+  checkSize(image.width, image.height, name);
+  if (image.channels < 1 || image.pixels.size() != image.index(0, image.height))
+    throw Error(name + ": refusing to write an inconsistent image buffer");
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out) throw Error(name + ": no image writer for this file extension");
+
+  const std::string ext = lower(path.extension().string());
+  OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
+  if (ext == ".exr" || ext == ".hdr") type = OIIO::TypeDesc::FLOAT;
+  else if (image.format != PixelFormat::UInt8 && (ext == ".png" || ext == ".tif" || ext == ".tiff"))
+    type = OIIO::TypeDesc::UINT16;
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
+  if (ext == ".png") spec.attribute("png:compressionLevel", 6);
+
+  const fs::path tmp = temporaryPathFor(path);
+  if (!out->open(tmp.string(), spec))
+    throw Error(name + ": cannot create file: " + oneLine(out->geterror()));
+  const bool written = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+  const bool closed = out->close();
+  if (!written || !closed) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw Error(name + ": cannot write image: " + oneLine(out->geterror()));
+  }
+  commitFile(tmp, path);
+}
+
+} // namespace texfab

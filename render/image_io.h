@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Reading and writing images. Reading goes through OpenImageIO (PNG, JPEG, TGA, TIFF, EXR, and
+// whatever else the installed OIIO reads) plus GIMP patterns (.pat), which OIIO does not read.
+// Writing: PNG (8 or 16 bit), EXR (half or float), and any other format OIIO writes by extension.
+// Every function throws texfab::Error with a one-line message naming the file on failure.
+
+#include "render/image.h"
+
+#include <filesystem>
+#include <span>
+#include <cstdint>
+#include <string>
+
+namespace texfab {
+
+/// Largest accepted width or height of any image texfab reads or writes.
+inline constexpr int kMaxImageSide = 65536;
+
+/// Reads an image. Grey, grey+alpha, RGB and RGBA are kept as 1, 2, 3, 4 channels; more channels
+/// are kept as they are. `format` is set from the file's precision.
+Image readImage(const std::filesystem::path& path);
+
+/// Decodes a GIMP pattern (.pat, format version 1) held in memory; `name` is used in errors.
+Image decodePat(std::span<const uint8_t> bytes, const std::string& name);
+
+/// Writes `image`. The format follows the extension; for PNG the bit depth is 16 when
+/// image.format is UInt16 or Float, else 8. Writes to a temporary file in the same folder first,
+/// then renames it, so a failed write never leaves a partial file under `path`.
+void writeImage(const Image& image, const std::filesystem::path& path);
+
+/// Throws texfab::Error unless an image can be written to `path`: a known image extension and an
+/// existing folder. Commands call it before long work so a bad output path fails at once.
+void checkImageWritable(const std::filesystem::path& path);
+
+/// Renames `tmp` onto `path`, removing `tmp` and throwing texfab::Error on failure. For writers
+/// that produce files other than images with the same write-then-rename discipline.
+void commitFile(const std::filesystem::path& tmp, const std::filesystem::path& path);
+
+/// A temporary name next to `path` (same folder, so the final rename is atomic).
+std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
+
+} // namespace texfab

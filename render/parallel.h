@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The one place texfab decides how work is spread over threads (TBB underneath).
+// Callers pass an explicit thread count (0 = all cores); work items must write disjoint outputs,
+// so results never depend on the thread count or on scheduling.
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+namespace texfab {
+
+/// Calls fn(begin, end) on disjoint sub-ranges covering [begin, end), on up to `threads` threads
+/// (0 = all available). `grain` is the smallest sub-range worth a task.
+template <class Fn>
+void parallelFor(int begin, int end, int threads, Fn&& fn, int grain = 1) {
+  if (end <= begin) return;
+  if (threads == 1 || end - begin <= grain) {
+    fn(begin, end);
+    return;
+  }
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(begin, end, grain),
+                      [&](const tbb::blocked_range<int>& r) { fn(r.begin(), r.end()); });
+  });
+}
+
+} // namespace texfab

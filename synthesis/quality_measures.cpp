@@ -1,0 +1,190 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "synthesis/quality_measures.h"
+
+#include "render/error.h"
+#include "render/parallel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <vector>
+
+namespace texfab::synthesis {
+
+namespace {
+
+int colourChannelCount(const Image& image) { return image.channels >= 3 ? 3 : 1; }
+
+uint8_t quantize(float v) { return uint8_t(std::lrint(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
+
+std::vector<float> luminance(const Image& image) {
+  std::vector<float> out(size_t(image.width) * size_t(image.height));
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const float* p = image.pixel(x, y);
+      out[size_t(y) * image.width + x] = image.channels >= 3 ? 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2] : p[0];
+    }
+  return out;
+}
+
+double pearson(const std::vector<float>& lum, int w, int h, int dx, int dy) {
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  const double n = double(w - dx) * double(h - dy);
+  for (int y = 0; y + dy < h; ++y)
+    for (int x = 0; x + dx < w; ++x) {
+      const double a = lum[size_t(y) * w + x], b = lum[size_t(y + dy) * w + x + dx];
+      sa += a; sb += b; saa += a * a; sbb += b * b; sab += a * b;
+    }
+  const double cov = sab / n - (sa / n) * (sb / n);
+  const double va = saa / n - (sa / n) * (sa / n), vb = sbb / n - (sb / n) * (sb / n);
+  if (va <= 1e-12 || vb <= 1e-12) return 1.0;  // a constant image repeats with any period
+  return cov / std::sqrt(va * vb);
+}
+
+} // namespace
+
+double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, int threads) {
+  const int r = options.radius, side = 2 * r + 1;
+  if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
+  if (image.width < side || image.height < side)
+    throw Error("image is smaller than the " + std::to_string(side) + "x" + std::to_string(side) + " fidelity neighborhood");
+  if (colourChannelCount(image) != colourChannelCount(exemplar))
+    throw Error("image and exemplar differ in colour channels (grey versus RGB)");
+  const int c = colourChannelCount(image);
+  const int dims = side * side * c;
+
+  // All exemplar neighborhoods (toroidal), 8-bit, one contiguous vector each.
+  const int ew = exemplar.width, eh = exemplar.height;
+  std::vector<uint8_t> ex(size_t(ew) * size_t(eh) * size_t(dims));
+  for (int y = 0; y < eh; ++y)
+    for (int x = 0; x < ew; ++x) {
+      uint8_t* v = &ex[(size_t(y) * ew + x) * size_t(dims)];
+      for (int j = -r; j <= r; ++j)
+        for (int i = -r; i <= r; ++i) {
+          const float* p = exemplar.pixel(((x + i) % ew + ew) % ew, ((y + j) % eh + eh) % eh);
+          for (int ch = 0; ch < c; ++ch) *v++ = quantize(p[ch]);
+        }
+    }
+
+  // Output neighborhoods on a regular grid of interior texels.
+  const int iw = image.width - 2 * r, ih = image.height - 2 * r;
+  int stepX = 1, stepY = 1;
+  if (options.samples > 0 && int64_t(iw) * ih > options.samples) {
+    const double step = std::sqrt(double(iw) * ih / options.samples);
+    stepX = std::max(1, int(std::lround(step)));
+    stepY = stepX;
+  }
+  std::vector<std::pair<int, int>> centres;
+  for (int y = r; y < image.height - r; y += stepY)
+    for (int x = r; x < image.width - r; x += stepX) centres.emplace_back(x, y);
+
+  std::vector<double> nearest(centres.size());
+  parallelFor(0, int(centres.size()), threads, [&](int begin, int end) {
+    std::vector<uint8_t> q(size_t(dims), 0);
+    for (int s = begin; s < end; ++s) {
+      const auto [cx, cy] = centres[size_t(s)];
+      uint8_t* v = q.data();
+      for (int j = -r; j <= r; ++j)
+        for (int i = -r; i <= r; ++i) {
+          const float* p = image.pixel(cx + i, cy + j);
+          for (int ch = 0; ch < c; ++ch) *v++ = quantize(p[ch]);
+        }
+      // Exact search with partial-distance elimination, one neighborhood row at a time.
+      const int rowDims = side * c;
+      int64_t best = std::numeric_limits<int64_t>::max();
+      for (size_t e = 0; e < size_t(ew) * size_t(eh); ++e) {
+        const uint8_t* a = &ex[e * size_t(dims)];
+        int64_t sum = 0;
+        for (int row = 0; row < side && sum < best; ++row) {
+          int32_t rowSum = 0;
+          for (int d = row * rowDims; d < (row + 1) * rowDims; ++d) {
+            const int32_t diff = int32_t(a[d]) - int32_t(q[size_t(d)]);
+            rowSum += diff * diff;
+          }
+          sum += rowSum;
+        }
+        best = std::min(best, sum);
+      }
+      nearest[size_t(s)] = std::sqrt(double(best) / dims) / 255.0;
+    }
+  }, 16);
+  return std::accumulate(nearest.begin(), nearest.end(), 0.0) / double(nearest.size());
+}
+
+double histogramDistance(const Image& image, const Image& exemplar) {
+  const int c = colourChannelCount(image);
+  if (c != colourChannelCount(exemplar)) throw Error("image and exemplar differ in colour channels (grey versus RGB)");
+  auto histogram = [](const Image& img, int ch) {
+    std::vector<double> h(256, 0.0);
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) h[quantize(img.at(x, y, ch))] += 1.0;
+    for (double& v : h) v /= double(img.width) * img.height;
+    return h;
+  };
+  double worst = 0;
+  for (int ch = 0; ch < c; ++ch) {
+    const std::vector<double> a = histogram(image, ch), b = histogram(exemplar, ch);
+    double cdfA = 0, cdfB = 0, emd = 0;
+    for (int i = 0; i < 256; ++i) {
+      cdfA += a[size_t(i)];
+      cdfB += b[size_t(i)];
+      emd += std::abs(cdfA - cdfB);
+    }
+    worst = std::max(worst, emd / 255.0);
+  }
+  return worst;
+}
+
+double coherence(const CoordMap& m) {
+  int64_t pairs = 0, coherent = 0;
+  const auto ew = uint32_t(m.exemplarWidth), eh = uint32_t(m.exemplarHeight);
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x) {
+      const uint32_t c = m.at(x, y);
+      if (x + 1 < m.width) {
+        const uint32_t n = m.at(x + 1, y);
+        ++pairs;
+        coherent += coordU(n) == (coordU(c) + 1) % ew && coordV(n) == coordV(c);
+      }
+      if (y + 1 < m.height) {
+        const uint32_t n = m.at(x, y + 1);
+        ++pairs;
+        coherent += coordU(n) == coordU(c) && coordV(n) == (coordV(c) + 1) % eh;
+      }
+    }
+  return pairs ? double(coherent) / double(pairs) : 0.0;
+}
+
+double coverage(const CoordMap& m) {
+  std::vector<bool> used(size_t(m.exemplarWidth) * size_t(m.exemplarHeight), false);
+  for (uint32_t c : m.coords) used[size_t(coordV(c)) * m.exemplarWidth + coordU(c)] = true;
+  return double(std::count(used.begin(), used.end(), true)) / double(used.size());
+}
+
+double shiftedSelfCorrelation(const Image& image, int dx, int dy) {
+  if (dx <= 0 || dy <= 0 || image.width <= dx || image.height <= dy)
+    throw Error("shifted correlation needs an image larger than the shift (" + std::to_string(dx) + ", " +
+                std::to_string(dy) + "), got " + std::to_string(image.width) + "x" + std::to_string(image.height));
+  const std::vector<float> lum = luminance(image);
+  return std::max(pearson(lum, image.width, image.height, dx, 0), pearson(lum, image.width, image.height, 0, dy));
+}
+
+QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
+                             const FidelityOptions& fidelity, int threads) {
+  QualityReport report;
+  report.fidelity = neighborhoodFidelity(image, exemplar, fidelity, threads);
+  report.histogramDistance = histogramDistance(image, exemplar);
+  if (image.width > exemplar.width && image.height > exemplar.height)
+    report.shiftedCorrelation = shiftedSelfCorrelation(image, exemplar.width, exemplar.height);
+  else
+    report.shiftedCorrelation = std::numeric_limits<double>::quiet_NaN();
+  if (coords) {
+    report.coherence = coherence(*coords);
+    report.coverage = coverage(*coords);
+  }
+  return report;
+}
+
+} // namespace texfab::synthesis
