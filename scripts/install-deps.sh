@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Installs what texfab needs to build and test on Debian 12, skipping what is already installed.
+# Debian packages only (plus npm packages for the real clients some tests run).
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake pkg-config ccache git
+  # images, threads, maths, command line, reports
+  libopenimageio-dev openimageio-tools libtbb-dev libeigen3-dev nlohmann-json3-dev libcli11-dev
+  libnanoflann-dev
+  # meshes: glTF, Draco, Embree, halfedge structures, CGAL (and its data set)
+  libtinygltf-dev libdraco-dev draco libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
+  # tests and benchmarks; real clients that check our outputs
+  libgtest-dev libbenchmark-dev assimp-utils nodejs npm
+  # test data: GIMP's patterns (marble, granite, brick, wood, ...)
+  gimp-data
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if [ "$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null)" != "install ok installed" ]; then
+    missing+=("$p")
+  fi
+done
+# A node/npm already on PATH (not from Debian) is fine: keep it.
+if command -v node >/dev/null && command -v npm >/dev/null; then
+  filtered=()
+  for p in "${missing[@]}"; do [[ "$p" == nodejs || "$p" == npm ]] || filtered+=("$p"); done
+  missing=("${filtered[@]}")
+fi
+
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "install-deps: all Debian packages present"
+fi
