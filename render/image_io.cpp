@@ -87,7 +87,8 @@ Image decodePat(std::span<const uint8_t> bytes, const std::string& name) {
                 " bytes, found " + std::to_string(available) + ")");
   Image image(int(width), int(height), int(depth), PixelFormat::UInt8);
   const uint8_t* data = bytes.data() + headerSize;
-  for (size_t i = 0; i < expected; ++i) image.pixels[i] = float(data[i]) / 255.0f;
+  // The same conversion as OpenImageIO's, so a pattern and its PNG copy give identical values.
+  for (size_t i = 0; i < expected; ++i) image.pixels[i] = float(data[i]) * (1.0f / 255.0f);
   return image;
 }
 
@@ -98,7 +99,10 @@ Image readImage(const fs::path& path) {
   if (fs::is_directory(path, ec)) throw Error(name + ": is a directory, not an image");
   if (lower(path.extension().string()) == ".pat") return readPatFile(path);
 
-  auto in = OIIO::ImageInput::open(name);
+  // Texture data: keep alpha unassociated (as stored), never premultiplied.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(name, &config);
   if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
   const OIIO::ImageSpec& spec = in->spec();
   checkSize(spec.width, spec.height, name);
@@ -153,6 +157,7 @@ void writeImage(const Image& image, const fs::path& path) {
     type = OIIO::TypeDesc::UINT16;
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
   if (ext == ".png") spec.attribute("png:compressionLevel", 6);
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // our alpha is not premultiplied
 
   const fs::path tmp = temporaryPathFor(path);
   if (!out->open(tmp.string(), spec))

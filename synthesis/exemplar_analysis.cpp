@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr uint32_t kCacheMagic = 0x41584654;  // "TFXA"
-constexpr uint32_t kCacheVersion = 1;         // bump whenever the analysis changes
+constexpr uint32_t kCacheVersion = 2;         // bump whenever the analysis changes
 constexpr int kPatchRadius = 2;               // 5x5 appearance neighborhoods
 constexpr float kPatchSigma = 1.5f;           // Gaussian weighting of the 5x5 samples
 constexpr int kDiagonalX[kNeighborhoodSamples] = {-1, 1, -1, 1};  // as in cpu/synthesis_kernels.cpp
@@ -187,28 +187,42 @@ std::vector<int8_t> runtimeNeighborhoods(const std::vector<int8_t>& appearance, 
 }
 
 // k-coherence candidates: the pixel itself, then its most similar pixels (exact k-nearest
-// neighbors in appearance space) that lie at least `minDistance` from it and from each other
+// neighbors in appearance space) that lie at least a minimum distance from it and from each other
 // (LH05 §3.3: candidates spread apart in the exemplar). Missing slots repeat the pixel itself.
-std::vector<uint32_t> coherenceCandidates(const std::vector<int8_t>& appearance, int w, int h,
+//
+// Level l sees the exemplar through samples `spacing` apart, so pixels closer than that are the
+// same feature there: the search runs over a grid of that stride (capped at an eighth of the
+// exemplar, so that a few dozen places remain to choose from) and the spread distance grows to
+// match. Without this, coarse levels found no candidate outside the pixel's own blur footprint.
+std::vector<uint32_t> coherenceCandidates(const std::vector<int8_t>& appearance, int w, int h, int spacing,
                                           const AnalysisOptions& options, int threads) {
   const int n = w * h;
+  const int stride = std::max(1, std::min(spacing, std::min(w, h) / 8));
   AppearanceCloud cloud;
-  cloud.points.assign(appearance.begin(), appearance.end());
+  std::vector<uint32_t> sites;  // exemplar index of each point of the search grid
+  for (int y = 0; y < h; y += stride)
+    for (int x = 0; x < w; x += stride) {
+      sites.push_back(uint32_t(y * w + x));
+      for (int d = 0; d < kAppearanceDims; ++d)
+        cloud.points.push_back(appearance[size_t(y * w + x) * kAppearanceDims + size_t(d)]);
+    }
   AppearanceTree tree(kAppearanceDims, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  const int64_t minDistance = std::max<int64_t>(2, std::lrint(options.minSpread * float(std::min(w, h))));
+  const int64_t minDistance = std::max<int64_t>(
+      {2, std::lrint(options.minSpread * float(std::min(w, h))), int64_t(stride)});
   const int64_t minDistance2 = minDistance * minDistance;
-  const auto query = size_t(std::min(n, options.searchNeighbors + 1));
+  const auto query = std::min(sites.size(), size_t(options.searchNeighbors) + 1);
 
   std::vector<uint32_t> out(size_t(n) * size_t(options.k));
   parallelFor(0, n, threads, [&](int begin, int end) {
     std::vector<uint32_t> index(query);
-    std::vector<float> dist(query);
+    std::vector<float> dist(query), point(kAppearanceDims);
     std::vector<std::pair<float, uint32_t>> ranked;
     for (int p = begin; p < end; ++p) {
       const int px = p % w, py = p / w;
-      const size_t found = tree.knnSearch(&cloud.points[size_t(p) * kAppearanceDims], query, index.data(), dist.data());
+      for (int d = 0; d < kAppearanceDims; ++d) point[size_t(d)] = appearance[size_t(p) * kAppearanceDims + size_t(d)];
+      const size_t found = tree.knnSearch(point.data(), query, index.data(), dist.data());
       ranked.clear();
-      for (size_t i = 0; i < found; ++i) ranked.emplace_back(dist[i], index[i]);
+      for (size_t i = 0; i < found; ++i) ranked.emplace_back(dist[i], sites[index[i]]);
       std::sort(ranked.begin(), ranked.end());  // distance, then index: a fixed order for ties
       uint32_t* slot = &out[size_t(p) * size_t(options.k)];
       int taken = 0;
@@ -277,13 +291,14 @@ Image featureDistance(const Image& exemplar) {
   std::vector<float> sorted = gradient;
   const size_t decile = sorted.size() * 9 / 10;
   std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(decile), sorted.end());
-  const float threshold = sorted[decile];
+  // Features: the top decile of gradient magnitude, and never flat pixels.
+  const float threshold = std::max(sorted[decile], 1e-6f);
 
   // Squared distance to the nearest feature pixel: rows then columns, each over three periods so
   // the transform is toroidal.
   const float far = float(w * w + h * h);
   std::vector<float> dist2(gradient.size());
-  for (size_t i = 0; i < gradient.size(); ++i) dist2[i] = gradient[i] > threshold && threshold > 0 ? 0.0f : far;
+  for (size_t i = 0; i < gradient.size(); ++i) dist2[i] = gradient[i] > threshold ? 0.0f : far;
   std::vector<float> line;
   for (int y = 0; y < h; ++y) {
     line.resize(size_t(3 * w));
@@ -370,7 +385,7 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
       level.spacing = 1 << (finest - l);
       level.appearance = appearanceVectors(stack[size_t(l)], level.spacing);
       level.neighborhood = runtimeNeighborhoods(level.appearance, w, h, level.spacing);
-      level.candidates = coherenceCandidates(level.appearance, w, h, options, threads);
+      level.candidates = coherenceCandidates(level.appearance, w, h, level.spacing, options, threads);
     }
   });
   return analysis;

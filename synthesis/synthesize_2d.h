@@ -49,7 +49,7 @@ struct SynthesisOptions {
   void validate() const;
 };
 
-/// The default jitter: strong at coarse levels (large-scale layout), fading at fine levels.
+/// The default jitter: 1 at the three coarsest levels, 0.5 at the fourth, 0 below.
 std::vector<float> defaultJitter(int levelCount);
 
 /// Per-level statistics (time, texels corrected), for reports. Never fed back into synthesis.

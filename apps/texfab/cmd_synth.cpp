@@ -24,7 +24,7 @@ struct SynthArgs {
   int passes = 2;
   int interleave = 2;
   int k = 2;
-  float featureWeight = 1.0f;
+  float featureWeight = synthesis::AnalysisOptions{}.featureWeight;
   bool tileable = false;
   std::string coords;
   std::vector<std::string> apply;
@@ -169,7 +169,7 @@ Command addSynthCommand(CLI::App& root) {
   app->add_option("--seed", args->seed, "Random seed: the only source of variation")->capture_default_str();
   app->add_option("--jitter", args->jitter,
                   "Jitter strength in [0,1]: one value for every level, or one per level coarsest first "
-                  "(default: 1 at coarse levels fading to 0 at the finest; 0 gives an exact tiling)");
+                  "(default 1,1,1,0.5,0...: randomize the large-scale layout only; 0 gives an exact tiling)");
   app->add_option("--passes", args->passes, "Correction passes per level")->capture_default_str();
   app->add_option("--interleave", args->interleave, "Sub-pass interleave: 1, 2 (4 sub-passes) or 3 (9)")
       ->capture_default_str();

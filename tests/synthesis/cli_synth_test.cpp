@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End-to-end tests of `texfab synth` and `texfab stats`, through the real binary.
+#include "render/image_io.h"
+#include "synthesis/coord_map.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <sstream>
+
+namespace texfab {
+namespace {
+
+using test::TempDir;
+
+const std::string kCli = TEXFAB_CLI;
+const std::string kBrick = std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/brick.png";
+
+struct Outcome {
+  int status;
+  std::string err;
+  std::string out;
+};
+
+Outcome texfab(const std::string& args, const TempDir& dir) {
+  const auto outFile = dir / "stdout.txt", errFile = dir / "stderr.txt";
+  const int status = test::run(kCli + " " + args + " >" + outFile.string() + " 2>" + errFile.string());
+  auto slurp = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  Outcome o{status, slurp(errFile), slurp(outFile)};
+  std::filesystem::remove(outFile);
+  std::filesystem::remove(errFile);
+  return o;
+}
+
+std::string cacheArg(const TempDir& dir) { return " --cache-dir " + (dir / "cache").string(); }
+
+TEST(CliSynth, BadInputGivesOneLineErrorAndNoOutput) {
+  TempDir dir;
+  { std::ofstream(dir / "text.png") << "not an image"; }
+  Image tiny(1, 1, 3);
+  writeImage(tiny, dir / "tiny.png");
+  const std::string out = (dir / "out.png").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {(dir / "text.png").string() + " -o " + out, "text.png"},
+      {(dir / "missing.png").string() + " -o " + out, "missing.png"},
+      {(dir / "tiny.png").string() + " -o " + out, "1x1"},
+      {kBrick + " -o " + out + " --size 70000x16", "70000"},
+      {kBrick + " -o " + out + " --size 0x16", "out of range"},
+      {kBrick + " -o " + out + " --jitter 2", "jitter"},
+      {kBrick + " -o " + out + " --window 1,2,3", "X,Y,W,H"},
+      {kBrick + " -o " + out + " --frobnicate", "frobnicate"},
+      {kBrick + " -o " + (dir / "nofolder" / "x.png").string(), "nofolder"},
+      {kBrick + " -o " + out + " --apply " + (dir / "tiny.png").string() + ":" + (dir / "c.png").string(), "1x1"},
+  };
+  for (const auto& [args, mention] : cases) {
+    SCOPED_TRACE(args);
+    const Outcome o = texfab("synth " + args + cacheArg(dir), dir);
+    EXPECT_NE(o.status, 0);
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+    EXPECT_NE(o.err.find("error"), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find(mention), std::string::npos) << o.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_FALSE(std::filesystem::exists(dir / "c.png"));
+  }
+  // Nothing but the inputs and the cache is left in the folder: no temporary files either.
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_TRUE(entry.path().filename() == "text.png" || entry.path().filename() == "tiny.png" ||
+                entry.path().filename() == "cache")
+        << entry.path();
+}
+
+TEST(CliSynth, CoordsApplyAndReportAgree) {
+  TempDir dir;
+  const Image exemplar = readImage(kBrick);
+  // A companion "height map": 16-bit, one channel, a function of the exemplar pixel.
+  Image height(exemplar.width, exemplar.height, 1, PixelFormat::UInt16);
+  for (int y = 0; y < exemplar.height; ++y)
+    for (int x = 0; x < exemplar.width; ++x) height.at(x, y, 0) = float(y * exemplar.width + x) / 65535.0f;
+  writeImage(height, dir / "height.png");
+
+  const Outcome o = texfab("synth " + kBrick + " -o " + (dir / "out.png").string() + " --size 200x150 --seed 9" +
+                               " --coords " + (dir / "coords.png").string() + " --apply " +
+                               (dir / "height.png").string() + ":" + (dir / "out_height.png").string() +
+                               " --report " + (dir / "report.json").string() + cacheArg(dir),
+                           dir);
+  ASSERT_EQ(o.status, 0) << o.err;
+  const Image out = readImage(dir / "out.png");
+  const synthesis::CoordMap coords = synthesis::readCoordMap(dir / "coords.png", exemplar.width, exemplar.height);
+  ASSERT_EQ(coords.width, 200);
+  ASSERT_EQ(coords.height, 150);
+  EXPECT_EQ(synthesis::applyCoords(coords, exemplar).pixels, out.pixels);
+  const Image outHeight = readImage(dir / "out_height.png");
+  EXPECT_EQ(outHeight.format, PixelFormat::UInt16);
+  for (int y = 0; y < 150; ++y)
+    for (int x = 0; x < 200; ++x) {
+      const uint32_t c = coords.at(x, y);
+      ASSERT_EQ(std::lround(outHeight.at(x, y, 0) * 65535.0f),
+                long(synthesis::coordV(c) * uint32_t(exemplar.width) + synthesis::coordU(c)));
+    }
+
+  std::ifstream in(dir / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  for (const char* key : {"fidelity", "histogram_distance", "coherence", "coverage", "shifted_correlation"})
+    EXPECT_TRUE(report["measures"].contains(key)) << key;
+  for (const char* key : {"load", "analysis", "synthesis", "resolve", "write"})
+    EXPECT_TRUE(report["timings"].contains(key)) << key;
+  EXPECT_FALSE(report["exemplar"]["analysis_cached"].get<bool>());
+
+  // The second run finds the analysis in the cache and produces the same image.
+  const Outcome again = texfab("synth " + kBrick + " -o " + (dir / "again.png").string() +
+                                   " --size 200x150 --seed 9 --report " + (dir / "again.json").string() + cacheArg(dir),
+                               dir);
+  ASSERT_EQ(again.status, 0) << again.err;
+  std::ifstream in2(dir / "again.json");
+  EXPECT_TRUE(nlohmann::json::parse(in2)["exemplar"]["analysis_cached"].get<bool>());
+  EXPECT_EQ(readImage(dir / "again.png").pixels, out.pixels);
+}
+
+TEST(CliSynth, WindowsMatchTheFullImage) {
+  TempDir dir;
+  ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "full.png").string() + " --window -64,-32,256,192 --threads 2" +
+                       cacheArg(dir), dir).status, 0);
+  ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "part.png").string() + " --window 10,-5,40,30 --threads 1" +
+                       cacheArg(dir), dir).status, 0);
+  const Image full = readImage(dir / "full.png"), part = readImage(dir / "part.png");
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 74, y + 27, c));
+}
+
+TEST(CliSynth, StatsReportsTheMeasures) {
+  TempDir dir;
+  ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "o.png").string() + " --size 256 --coords " +
+                       (dir / "c.exr").string() + cacheArg(dir), dir).status, 0);
+  const Outcome o = texfab("stats " + (dir / "o.png").string() + " --exemplar " + kBrick + " --coords " +
+                               (dir / "c.exr").string() + " --report " + (dir / "s.json").string(),
+                           dir);
+  ASSERT_EQ(o.status, 0) << o.err;
+  for (const char* word : {"fidelity", "histogram", "coherence", "coverage", "shifted"})
+    EXPECT_NE(o.out.find(word), std::string::npos) << word;
+  std::ifstream in(dir / "s.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_GT(s["coherence"].get<double>(), 0.0);
+  EXPECT_LT(s["coherence"].get<double>(), 1.0);
+  // A tiling of the exemplar measures as one.
+  ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "t.png").string() + " --size 256 --jitter 0 --coords " +
+                       (dir / "t.png.coords.png").string() + cacheArg(dir), dir).status, 0);
+  const Outcome t = texfab("stats " + (dir / "t.png").string() + " --exemplar " + kBrick + " --coords " +
+                               (dir / "t.png.coords.png").string() + " --report " + (dir / "t.json").string(),
+                           dir);
+  ASSERT_EQ(t.status, 0) << t.err;
+  std::ifstream in2(dir / "t.json");
+  const nlohmann::json tj = nlohmann::json::parse(in2);
+  EXPECT_DOUBLE_EQ(tj["coherence"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(tj["fidelity"].get<double>(), 0.0);
+  EXPECT_NEAR(tj["shifted_correlation"].get<double>(), 1.0, 1e-9);
+}
+
+TEST(CliSynth, HelpListsEveryCommandAndOption) {
+  TempDir dir;
+  const Outcome top = texfab("--help", dir);
+  EXPECT_EQ(top.status, 0);
+  EXPECT_NE(top.out.find("synth"), std::string::npos);
+  EXPECT_NE(top.out.find("stats"), std::string::npos);
+  const Outcome synth = texfab("synth --help", dir);
+  for (const char* flag : {"--size", "--seed", "--jitter", "--window", "--tileable", "--coords", "--apply", "--threads",
+                           "--report"})
+    EXPECT_NE(synth.out.find(flag), std::string::npos) << flag;
+  EXPECT_NE(texfab("", dir).status, 0);  // no command
+}
+
+} // namespace
+} // namespace texfab

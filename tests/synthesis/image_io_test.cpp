@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "render/error.h"
+#include "render/image_io.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace texfab {
+namespace {
+
+using test::TempDir;
+
+Image gradient(int w, int h, int c, PixelFormat f) {
+  Image image(w, h, c, f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < c; ++k) image.at(x, y, k) = float((x * 7 + y * 13 + k * 29) % 256) / 255.0f;
+  return image;
+}
+
+void expectNear(const Image& a, const Image& b, float tolerance) {
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  ASSERT_EQ(a.channels, b.channels);
+  for (size_t i = 0; i < a.pixels.size(); ++i) ASSERT_NEAR(a.pixels[i], b.pixels[i], tolerance) << "value " << i;
+}
+
+TEST(ImageIo, LosslessFormatsRoundTripEveryChannelCount) {
+  TempDir dir;
+  for (int channels : {1, 2, 3, 4})
+    for (const char* ext : {".png", ".tga", ".tif", ".exr"}) {
+      SCOPED_TRACE(std::string(ext) + " with " + std::to_string(channels) + " channels");
+      const Image image = gradient(37, 21, channels, PixelFormat::UInt8);
+      const auto path = dir / ("img" + std::to_string(channels) + ext);
+      writeImage(image, path);
+      const Image back = readImage(path);
+      expectNear(back, image, 1e-3f);
+    }
+}
+
+TEST(ImageIo, SixteenBitPngKeepsSixteenBits) {
+  TempDir dir;
+  Image image(256, 4, 1, PixelFormat::UInt16);
+  for (int x = 0; x < 256; ++x)
+    for (int y = 0; y < 4; ++y) image.at(x, y, 0) = float(x * 256 + y) / 65535.0f;
+  writeImage(image, dir / "h.png");
+  const Image back = readImage(dir / "h.png");
+  EXPECT_EQ(back.format, PixelFormat::UInt16);
+  for (int x = 0; x < 256; ++x)
+    for (int y = 0; y < 4; ++y) ASSERT_EQ(std::lround(back.at(x, y, 0) * 65535.0f), x * 256 + y);
+}
+
+TEST(ImageIo, FloatExrKeepsValuesOutsideZeroOne) {
+  TempDir dir;
+  Image image(3, 2, 3, PixelFormat::Float);
+  image.pixels = {-1.5f, 0.0f, 2.25f, 1000.0f, 0.125f, 3.0f, 7.0f, 8.0f, 9.0f, 0.5f, 0.25f, 65535.0f,
+                  1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f};
+  writeImage(image, dir / "f.exr");
+  const Image back = readImage(dir / "f.exr");
+  EXPECT_EQ(back.format, PixelFormat::Float);
+  EXPECT_EQ(back.pixels, image.pixels);
+}
+
+TEST(ImageIo, JpegReadsBackClose) {
+  TempDir dir;
+  Image image(64, 64, 3);
+  for (float& v : image.pixels) v = 0.5f;
+  writeImage(image, dir / "a.jpg");
+  expectNear(readImage(dir / "a.jpg"), image, 0.02f);
+}
+
+TEST(ImageIo, DecodesGimpPattern) {
+  // Header: size 28 (24 + "ab\0" padded to 4), version 1, 2x1, 3 bytes per pixel, "GPAT", "ab\0\0".
+  const std::vector<uint8_t> bytes = {0, 0, 0, 28, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 1, 0, 0, 0, 3,
+                                      'G', 'P', 'A', 'T', 'a', 'b', 0, 0, 255, 0, 0, 0, 51, 255};
+  const Image image = decodePat(bytes, "test.pat");
+  ASSERT_EQ(image.width, 2);
+  ASSERT_EQ(image.height, 1);
+  ASSERT_EQ(image.channels, 3);
+  const std::vector<float> expected = {1.0f, 0.0f, 0.0f, 0.0f, 0.2f, 1.0f};
+  for (size_t i = 0; i < expected.size(); ++i) EXPECT_FLOAT_EQ(image.pixels[i], expected[i]);
+}
+
+TEST(ImageIo, ReadsRealGimpPatterns) {
+  const auto brick = test::gimpPatterns() / "Stone" / "brick.pat";
+  ASSERT_TRUE(std::filesystem::exists(brick)) << "gimp-data is not installed (scripts/install-deps.sh)";
+  const Image image = readImage(brick);
+  EXPECT_EQ(image.width, 96);
+  EXPECT_EQ(image.height, 96);
+  EXPECT_EQ(image.channels, 3);
+  // The bundled PNG is the same pattern.
+  EXPECT_EQ(readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/brick.png").pixels,
+            image.pixels);
+}
+
+TEST(ImageIo, RejectsBrokenPatterns) {
+  std::vector<uint8_t> good = {0, 0, 0, 24, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 2, 0, 0, 0, 1,
+                               'G', 'P', 'A', 'T', 1, 2, 3, 4};
+  EXPECT_NO_THROW(decodePat(good, "ok.pat"));
+  auto truncated = good;
+  truncated.pop_back();
+  EXPECT_THROW(decodePat(truncated, "t.pat"), Error);
+  auto badMagic = good;
+  badMagic[20] = 'X';
+  EXPECT_THROW(decodePat(badMagic, "m.pat"), Error);
+  auto zeroSize = good;
+  zeroSize[11] = 0;
+  EXPECT_THROW(decodePat(zeroSize, "z.pat"), Error);
+  auto huge = good;
+  huge[9] = 0x10;  // width 2^20 + 2
+  EXPECT_THROW(decodePat(huge, "h.pat"), Error);
+  auto badHeader = good;
+  badHeader[3] = 200;  // header larger than the file
+  EXPECT_THROW(decodePat(badHeader, "b.pat"), Error);
+  EXPECT_THROW(decodePat(std::vector<uint8_t>(10, 0), "short.pat"), Error);
+}
+
+TEST(ImageIo, ErrorsNameTheFile) {
+  TempDir dir;
+  { std::ofstream(dir / "notimage.png") << "this is not a PNG file"; }
+  try {
+    readImage(dir / "notimage.png");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("notimage.png"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "one line: " << e.what();
+  }
+  EXPECT_THROW(readImage(dir / "missing.png"), Error);
+  EXPECT_THROW(readImage(dir.path()), Error);
+}
+
+TEST(ImageIo, FailedWriteLeavesNoFile) {
+  TempDir dir;
+  EXPECT_THROW(writeImage(gradient(4, 4, 3, PixelFormat::UInt8), dir / "no-such-folder" / "x.png"), Error);
+  EXPECT_THROW(writeImage(gradient(4, 4, 3, PixelFormat::UInt8), dir / "x.unknownext"), Error);
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+} // namespace
+} // namespace texfab

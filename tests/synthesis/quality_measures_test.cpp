@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "render/error.h"
+#include "synthesis/quality_measures.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+namespace texfab::synthesis {
+namespace {
+
+CoordMap tiling(int w, int h, int ew, int eh) {
+  CoordMap m{w, h, ew, eh, {}};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) m.coords.push_back(packCoord(uint32_t(x % ew), uint32_t(y % eh)));
+  return m;
+}
+
+Image constant(int w, int h, float value) {
+  Image image(w, h, 3);
+  for (float& v : image.pixels) v = value;
+  return image;
+}
+
+TEST(QualityMeasures, FidelityIsZeroForAnyCropOfTheTiledExemplar) {
+  const Image exemplar = test::noiseImage(16, 16);
+  const Image tiled = applyCoords(tiling(50, 40, 16, 16), exemplar);
+  EXPECT_DOUBLE_EQ(neighborhoodFidelity(tiled, exemplar, {3, 0}), 0.0);
+}
+
+TEST(QualityMeasures, FidelityOfAConstantOffsetIsThatOffset) {
+  // Every neighborhood of a constant 0.2 image is 0.1 away (RMS) from every neighborhood of a
+  // constant 0.3 exemplar: the measure is that distance, up to 8-bit quantization.
+  const double f = neighborhoodFidelity(constant(20, 20, 0.2f), constant(8, 8, 0.3f), {3, 0});
+  EXPECT_NEAR(f, 0.1, 1.0 / 255.0);
+}
+
+TEST(QualityMeasures, FidelityOfNoiseIsWorseThanOfTheTiling) {
+  const Image exemplar = test::noiseImage(16, 16);
+  const double noise = neighborhoodFidelity(test::noiseImage(40, 40, 99), exemplar, {3, 0});
+  EXPECT_GT(noise, 0.2);  // uniform noise: RMS difference of two independent uniforms is ~0.4
+}
+
+TEST(QualityMeasures, HistogramDistanceIsTheEarthMoversDistance) {
+  EXPECT_NEAR(histogramDistance(constant(8, 8, 0.2f), constant(4, 4, 0.7f)), 0.5, 1.0 / 255.0);
+  EXPECT_DOUBLE_EQ(histogramDistance(test::noiseImage(16, 16), test::noiseImage(16, 16)), 0.0);
+  // Half the mass moved by 0.4: distance 0.2.
+  Image half = constant(8, 8, 0.2f);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x)
+      for (int c = 0; c < 3; ++c) half.at(x, y, c) = 0.6f;
+  EXPECT_NEAR(histogramDistance(half, constant(8, 8, 0.2f)), 0.2, 1.0 / 255.0);
+}
+
+TEST(QualityMeasures, CoherenceOfKnownMaps) {
+  EXPECT_DOUBLE_EQ(coherence(tiling(30, 20, 8, 8)), 1.0);  // wrapping still counts as adjacent
+  // A 2x2 map: (0,0) (1,0) / (5,5) (1,1): pairs: right-top coherent, right-bottom not,
+  // down-left not, down-right coherent -> 2 of 4.
+  CoordMap m{2, 2, 8, 8, {packCoord(0, 0), packCoord(1, 0), packCoord(5, 5), packCoord(1, 1)}};
+  EXPECT_DOUBLE_EQ(coherence(m), 0.5);
+}
+
+TEST(QualityMeasures, CoverageCountsUsedExemplarPixels) {
+  EXPECT_DOUBLE_EQ(coverage(tiling(8, 8, 8, 8)), 1.0);
+  EXPECT_DOUBLE_EQ(coverage(tiling(4, 8, 8, 8)), 0.5);
+  CoordMap one{3, 3, 4, 4, std::vector<uint32_t>(9, packCoord(2, 2))};
+  EXPECT_DOUBLE_EQ(coverage(one), 1.0 / 16.0);
+}
+
+TEST(QualityMeasures, ShiftedCorrelationOfATilingIsOne) {
+  const Image exemplar = test::noiseImage(16, 16);
+  EXPECT_NEAR(shiftedSelfCorrelation(applyCoords(tiling(64, 64, 16, 16), exemplar), 16, 16), 1.0, 1e-9);
+  EXPECT_LT(std::abs(shiftedSelfCorrelation(test::noiseImage(256, 256, 5), 16, 16)), 0.05);
+  EXPECT_THROW(shiftedSelfCorrelation(exemplar, 16, 16), Error);
+}
+
+} // namespace
+} // namespace texfab::synthesis
