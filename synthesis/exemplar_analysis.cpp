@@ -331,8 +331,7 @@ uint64_t analysisKey(const Image& exemplar, const AnalysisOptions& options) {
   return hash.h;
 }
 
-ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, int threads) {
-  options.validate();
+void validateExemplarSize(const Image& exemplar) {
   if (exemplar.width < kMinExemplarSide || exemplar.height < kMinExemplarSide)
     throw Error("exemplar is " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
                 ", smaller than the " + std::to_string(kMinExemplarSide) + "x" +
@@ -340,6 +339,11 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
   if (exemplar.width > 4096 || exemplar.height > 4096)
     throw Error("exemplar is " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
                 ", larger than the supported 4096x4096 (exemplars are small pictures: 64 to 512 pixels)");
+}
+
+ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, int threads) {
+  options.validate();
+  validateExemplarSize(exemplar);
   const int w = exemplar.width, h = exemplar.height;
 
   // Colour plus (optionally) the feature-distance channel, scaled so that its standard deviation

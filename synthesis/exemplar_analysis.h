@@ -81,6 +81,9 @@ std::vector<Image> gaussianStack(const Image& exemplar);
 /// in pixels: the feature-distance channel of appearance-space synthesis (LH06 §3.2).
 Image featureDistance(const Image& exemplar);
 
+/// Throws texfab::Error unless the exemplar's size is usable (kMinExemplarSide to 4096 per side).
+void validateExemplarSize(const Image& exemplar);
+
 /// Analyses `exemplar` (at least kMinExemplarSide pixels per side). Pure: the result depends only
 /// on the pixels and the options, never on `threads` (0 = all cores).
 ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, int threads = 0);

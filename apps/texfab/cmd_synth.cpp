@@ -81,6 +81,11 @@ void runSynth(const SynthArgs& args) {
 
   progress.start("load");
   const Image exemplar = readImage(args.exemplar);
+  try {
+    validateExemplarSize(exemplar);
+  } catch (const Error& e) {
+    throw Error(args.exemplar + ": " + e.what());
+  }
   std::vector<Companion> companions;
   for (const std::string& spec : args.apply) {
     const size_t colon = spec.rfind(':');
