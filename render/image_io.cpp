@@ -92,6 +92,11 @@ Image decodePat(std::span<const uint8_t> bytes, const std::string& name) {
   return image;
 }
 
+uint64_t physicalMemoryBytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && pageSize > 0 ? uint64_t(pages) * uint64_t(pageSize) : uint64_t(8) << 30;
+}
+
 Image readImage(const fs::path& path) {
   const std::string name = path.string();
   std::error_code ec;
@@ -108,6 +113,10 @@ Image readImage(const fs::path& path) {
   checkSize(spec.width, spec.height, name);
   if (spec.depth > 1) throw Error(name + ": volume images are not supported");
   if (spec.nchannels < 1) throw Error(name + ": image has no channels");
+  const uint64_t bytes = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels) * sizeof(float);
+  if (bytes > physicalMemoryBytes() / 2)
+    throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                ", too large to load in this machine's memory");
   Image image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
     throw Error(name + ": cannot decode image: " + oneLine(in->geterror()));

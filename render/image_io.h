@@ -17,6 +17,9 @@ namespace texfab {
 /// Largest accepted width or height of any image texfab reads or writes.
 inline constexpr int kMaxImageSide = 65536;
 
+/// Physical memory of this machine in bytes (for refusing work that cannot fit, up front).
+uint64_t physicalMemoryBytes();
+
 /// Reads an image. Grey, grey+alpha, RGB and RGBA are kept as 1, 2, 3, 4 channels; more channels
 /// are kept as they are. `format` is set from the file's precision.
 Image readImage(const std::filesystem::path& path);

@@ -101,6 +101,15 @@ void runSynth(const SynthArgs& args) {
   }
   progress.finish(args.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
 
+  // Coordinates (two buffers while synthesizing) plus the colour and companion images, as floats.
+  int channels = exemplar.channels;
+  for (const Companion& c : companions) channels += c.map.channels;
+  const double needed = double(window.width) * window.height * (12.0 + 4.0 * channels);
+  if (needed > 0.8 * double(physicalMemoryBytes()))
+    throw Error("a " + std::to_string(window.width) + "x" + std::to_string(window.height) + " output needs about " +
+                std::to_string(int(needed / double(1 << 30)) + 1) + " GiB, more than this machine's memory; " +
+                "synthesize it in windows (--window) instead");
+
   progress.start("analysis");
   bool cached = false;
   const ExemplarAnalysis analysis =

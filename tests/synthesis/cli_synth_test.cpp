@@ -53,6 +53,7 @@ TEST(CliSynth, BadInputGivesOneLineErrorAndNoOutput) {
       {(dir / "tiny.png").string() + " -o " + out, "1x1"},
       {kBrick + " -o " + out + " --size 70000x16", "70000"},
       {kBrick + " -o " + out + " --size 0x16", "out of range"},
+      {kBrick + " -o " + out + " --size 65536x65536 -q", "GiB"},
       {kBrick + " -o " + out + " --jitter 2", "jitter"},
       {kBrick + " -o " + out + " --window 1,2,3", "X,Y,W,H"},
       {kBrick + " -o " + out + " --frobnicate", "frobnicate"},
