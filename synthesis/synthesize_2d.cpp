@@ -61,6 +61,23 @@ void SynthesisOptions::validate() const {
     throw Error("tiling period must be in [0, " + std::to_string(kMaxImageSide) + "]");
 }
 
+int firstSynthesisLevel(int levelCount, const SynthesisOptions& options) {
+  // A tiling period must stay whole, and a multiple of the interleave (so the sub-pass classes
+  // repeat with it), at every synthesized level; coarser levels are skipped.
+  if (options.periodX == 0 && options.periodY == 0) return 0;
+  const int finest = levelCount - 1;
+  auto periodic = [&](int period, int shift) {
+    return period == 0 || (period % (1 << shift) == 0 && (period >> shift) % options.interleave == 0);
+  };
+  if (!periodic(options.periodX, 0) || !periodic(options.periodY, 0))
+    throw Error("tiling period " + std::to_string(options.periodX) + "x" + std::to_string(options.periodY) +
+                " must be a multiple of the interleave (" + std::to_string(options.interleave) + ")");
+  int first = finest;
+  while (first > 0 && periodic(options.periodX, finest - first + 1) && periodic(options.periodY, finest - first + 1))
+    --first;
+  return first;
+}
+
 SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& window,
                              const SynthesisOptions& options, int threads) {
   options.validate();
@@ -73,22 +90,12 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
   if (analysis.levels.empty()) throw Error("exemplar analysis is empty");
 
   const int finest = analysis.finestLevel();
-  // A tiling period must stay whole, and a multiple of the interleave (so the sub-pass classes
-  // repeat with it), at every synthesized level; coarser levels are skipped.
-  int first = 0;
-  if (options.periodX > 0 || options.periodY > 0) {
-    auto periodic = [&](int period, int shift) {
-      return period == 0 || (period % (1 << shift) == 0 && (period >> shift) % options.interleave == 0);
-    };
-    first = finest;
-    while (first > 0 && periodic(options.periodX, finest - first + 1) && periodic(options.periodY, finest - first + 1))
-      --first;
-    if (!periodic(options.periodX, 0) || !periodic(options.periodY, 0))
-      throw Error("tiling period " + std::to_string(options.periodX) + "x" + std::to_string(options.periodY) +
-                  " must be a multiple of the interleave (" + std::to_string(options.interleave) + ")");
-  }
+  const int first = firstSynthesisLevel(finest + 1, options);
   std::vector<float> jitter = options.jitter.empty() ? defaultJitter(finest + 1) : options.jitter;
   jitter.resize(size_t(finest + 1), jitter.back());
+  // Skipped coarse levels hand their variation to the first synthesized one, so that a tile too
+  // small for the whole stack is still randomized rather than a plain tiling.
+  jitter[size_t(first)] = *std::max_element(jitter.begin(), jitter.begin() + first + 1);
 
   const int subpasses = options.correct ? options.passes * options.interleave * options.interleave : 0;
   // Backward: the rectangle each level must produce (valid[l]) and the padded one it computes.

@@ -52,6 +52,10 @@ struct SynthesisOptions {
 /// The default jitter: 1 at the three coarsest levels, 0.5 at the fourth, 0 below.
 std::vector<float> defaultJitter(int levelCount);
 
+/// The coarsest level synthesized: 0, or for a tiling period the coarsest level at which the
+/// period is still a whole number of texels and a multiple of the interleave.
+int firstSynthesisLevel(int levelCount, const SynthesisOptions& options);
+
 /// Per-level statistics (time, texels corrected), for reports. Never fed back into synthesis.
 struct LevelStats {
   int level = 0;

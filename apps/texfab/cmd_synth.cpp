@@ -119,6 +119,14 @@ void runSynth(const SynthArgs& args) {
                                            args.threads, &cached);
   progress.finish(cached ? "(cached)" : std::to_string(analysis.levels.size()) + " levels");
 
+  if (const int first = firstSynthesisLevel(int(analysis.levels.size()), options); first > 0) {
+    const int full = options.interleave << (analysis.levels.size() - 1);
+    progress.note("tileable: a " + std::to_string(window.width) + "x" + std::to_string(window.height) +
+                  " tile allows " + std::to_string(analysis.levels.size() - size_t(first)) + " of " +
+                  std::to_string(analysis.levels.size()) + " levels; sizes that are multiples of " +
+                  std::to_string(full) + " keep the whole multiresolution synthesis");
+  }
+
   progress.start("synthesis");
   const SynthesisResult result = synthesize2d(analysis, window, options, args.threads);
   progress.finish(std::to_string(window.width) + "x" + std::to_string(window.height));
