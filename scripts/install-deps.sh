@@ -39,3 +39,15 @@ if [ ${#missing[@]} -gt 0 ]; then
 else
   echo "install-deps: all Debian packages present"
 fi
+
+# The Khronos glTF validator (npm gltf-validator), which the geometry tests run on every glTF/GLB
+# texfab writes; installed into the repository's ignored .tools/ folder, not system-wide.
+repo="$(cd "$(dirname "$0")/.." && pwd)"
+if [ ! -f "$repo/.tools/node_modules/gltf-validator/package.json" ]; then
+  echo "install-deps: installing gltf-validator into .tools/"
+  npm install --prefix "$repo/.tools" --no-audit --no-fund --loglevel=error gltf-validator
+else
+  echo "install-deps: gltf-validator present"
+fi
+# CGAL's mesh data set for the tests that want more meshes (models/cgal/, ignored).
+if [ ! -f "$repo/models/cgal/elephant.off" ]; then "$repo/models/fetch" || true; fi

@@ -16,5 +16,8 @@ struct Command {
 
 Command addSynthCommand(CLI::App& root);
 Command addStatsCommand(CLI::App& root);
+Command addInfoCommand(CLI::App& root);
+Command addConvertCommand(CLI::App& root);
+Command addRenderCommand(CLI::App& root);
 
 } // namespace texfab::cli

@@ -1,0 +1,285 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// glTF 2.0 writing (.glb and .gltf with data URIs), built directly as JSON so that every detail
+// the Khronos validator checks (alignment, min/max, unit normals, targets) is under our control.
+#include "geometry/mesh_formats.h"
+#include "render/error.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <map>
+#include <tuple>
+
+namespace texfab::geometry::detail {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+std::string encodeBase64(const std::vector<uint8_t>& data) {
+  static const char* chars = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((data.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < data.size(); i += 3) {
+    const uint32_t n = uint32_t(data[i]) << 16 | (i + 1 < data.size() ? uint32_t(data[i + 1]) << 8 : 0) |
+                       (i + 2 < data.size() ? uint32_t(data[i + 2]) : 0);
+    out += chars[(n >> 18) & 63];
+    out += chars[(n >> 12) & 63];
+    out += i + 1 < data.size() ? chars[(n >> 6) & 63] : '=';
+    out += i + 2 < data.size() ? chars[n & 63] : '=';
+  }
+  return out;
+}
+
+class GltfBuilder {
+public:
+  explicit GltfBuilder(bool binary) : binary_(binary) {}
+
+  int bufferView(const void* data, size_t size, int target) {
+    align(4);
+    json view = {{"buffer", 0}, {"byteOffset", buffer_.size()}, {"byteLength", size}};
+    if (target) view["target"] = target;
+    buffer_.insert(buffer_.end(), static_cast<const uint8_t*>(data), static_cast<const uint8_t*>(data) + size);
+    views_.push_back(view);
+    return int(views_.size() - 1);
+  }
+
+  template <int N>
+  int accessor(const std::vector<Eigen::Matrix<float, N, 1>>& values, const char* type, bool minMax, int view = -2) {
+    json a = {{"componentType", kFloat}, {"count", values.size()}, {"type", type}};
+    if (view == -2) view = bufferView(values.data(), values.size() * sizeof(float) * N, kArrayBuffer);
+    if (view >= 0) a["bufferView"] = view;
+    if (minMax) {
+      Eigen::Matrix<float, N, 1> lo = values[0], hi = values[0];
+      for (const auto& v : values) {
+        lo = lo.cwiseMin(v);
+        hi = hi.cwiseMax(v);
+      }
+      a["min"] = std::vector<float>(lo.data(), lo.data() + N);
+      a["max"] = std::vector<float>(hi.data(), hi.data() + N);
+    }
+    accessors_.push_back(a);
+    return int(accessors_.size() - 1);
+  }
+
+  int indexAccessor(const std::vector<uint32_t>& indices, size_t vertexCount, bool withView) {
+    const bool shortIndices = vertexCount <= 65535;
+    json a = {{"componentType", shortIndices ? kUnsignedShort : kUnsignedInt}, {"count", indices.size()}, {"type", "SCALAR"}};
+    if (withView) {
+      if (shortIndices) {
+        std::vector<uint16_t> s(indices.begin(), indices.end());
+        a["bufferView"] = bufferView(s.data(), s.size() * 2, kElementArrayBuffer);
+      } else {
+        a["bufferView"] = bufferView(indices.data(), indices.size() * 4, kElementArrayBuffer);
+      }
+    }
+    accessors_.push_back(a);
+    return int(accessors_.size() - 1);
+  }
+
+  std::vector<uint8_t>& buffer() { return buffer_; }
+  json& views() { return views_; }
+  json& accessors() { return accessors_; }
+  void align(size_t n) {
+    while (buffer_.size() % n) buffer_.push_back(0);
+  }
+
+private:
+  bool binary_;
+  std::vector<uint8_t> buffer_;
+  json views_ = json::array();
+  json accessors_ = json::array();
+};
+
+// A glTF vertex = one distinct (position, uv, normal, tangent) combination of a primitive's corners.
+struct CornerKey {
+  uint32_t position;
+  std::array<float, 9> attributes;
+  bool operator<(const CornerKey& o) const { return std::tie(position, attributes) < std::tie(o.position, o.attributes); }
+};
+
+} // namespace
+
+void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options) {
+  Mesh mesh = input;
+  if (!mesh.hasNormals()) computeSmoothNormals(mesh);
+  bool anyNormalMap = false;
+  for (const Material& m : mesh.materials) anyNormalMap |= bool(m.normalTexture);
+  if (mesh.hasUvs() && !mesh.hasTangents() && anyNormalMap && options.computeMissingTangents) computeTangents(mesh);
+  if (!mesh.hasUvs()) mesh.tangents.clear();
+  // Unit normals and tangents with w = ±1, as the validator checks.
+  for (auto& n : mesh.normals) n = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : Eigen::Vector3f(0, 0, 1);
+  for (auto& t : mesh.tangents) {
+    Eigen::Vector3f xyz = t.head<3>();
+    xyz = xyz.squaredNorm() > 0 ? Eigen::Vector3f(xyz.normalized()) : Eigen::Vector3f(1, 0, 0);
+    t = Eigen::Vector4f(xyz.x(), xyz.y(), xyz.z(), t.w() < 0 ? -1.0f : 1.0f);
+  }
+
+  GltfBuilder b(binary);
+  json doc;
+  doc["asset"] = {{"version", "2.0"}, {"generator", "texfab"}};
+  json extensionsUsed = json::array();
+  bool usesTransform = false;
+
+  // Materials and textures (one image per distinct Image object).
+  json materials = json::array(), textures = json::array(), images = json::array();
+  std::map<const Image*, int> imageIndex;
+  auto textureInfo = [&](const Texture& t) -> json {
+    int image;
+    const auto it = imageIndex.find(t.image.get());
+    if (it != imageIndex.end()) {
+      image = it->second;
+    } else {
+      const std::vector<uint8_t> png = encodePng(*t.image);
+      json entry;
+      if (binary) {
+        entry = {{"bufferView", b.bufferView(png.data(), png.size(), 0)}, {"mimeType", "image/png"}};
+      } else {
+        entry = {{"uri", "data:image/png;base64," + encodeBase64(png)}};
+      }
+      images.push_back(entry);
+      image = int(images.size() - 1);
+      imageIndex[t.image.get()] = image;
+    }
+    textures.push_back({{"sampler", 0}, {"source", image}});
+    json info = {{"index", int(textures.size() - 1)}};
+    if (t.hasTransform()) {
+      info["extensions"]["KHR_texture_transform"] = {
+          {"offset", {t.offset.x(), t.offset.y()}}, {"scale", {t.scale.x(), t.scale.y()}}, {"rotation", t.rotation}};
+      usesTransform = true;
+    }
+    return info;
+  };
+  std::vector<Material> materialList = mesh.materials;
+  if (materialList.empty()) materialList.push_back(Material{});
+  for (const Material& m : materialList) {
+    json pbr = {{"baseColorFactor", {m.baseColorFactor.x(), m.baseColorFactor.y(), m.baseColorFactor.z(), m.baseColorFactor.w()}},
+                {"metallicFactor", m.metallicFactor},
+                {"roughnessFactor", m.roughnessFactor}};
+    const bool textured = mesh.hasUvs();
+    if (textured && m.baseColorTexture) pbr["baseColorTexture"] = textureInfo(m.baseColorTexture);
+    if (textured && m.metallicRoughnessTexture) pbr["metallicRoughnessTexture"] = textureInfo(m.metallicRoughnessTexture);
+    json material = {{"pbrMetallicRoughness", pbr}};
+    if (!m.name.empty()) material["name"] = m.name;
+    if (textured && m.normalTexture) {
+      material["normalTexture"] = textureInfo(m.normalTexture);
+      if (m.normalScale != 1.0f) material["normalTexture"]["scale"] = m.normalScale;
+    }
+    if (m.doubleSided) material["doubleSided"] = true;
+    if (m.baseColorFactor.w() < 1.0f) material["alphaMode"] = "BLEND";
+    materials.push_back(material);
+  }
+
+  // One primitive per (material, tag).
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>> groups;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) groups[{mesh.materialOf(t), mesh.tagOf(t)}].push_back(uint32_t(t));
+  json primitives = json::array();
+  for (const auto& [key, tris] : groups) {
+    VertexArrays v;
+    std::map<CornerKey, uint32_t> vertexOf;
+    for (uint32_t t : tris)
+      for (int k = 0; k < 3; ++k) {
+        const size_t c = 3 * size_t(t) + size_t(k);
+        CornerKey ck{mesh.triangles[t][size_t(k)], {}};
+        if (mesh.hasUvs()) ck.attributes[0] = mesh.uvs[c].x(), ck.attributes[1] = mesh.uvs[c].y();
+        for (int i = 0; i < 3; ++i) ck.attributes[size_t(2 + i)] = mesh.normals[c][i];
+        if (mesh.hasTangents())
+          for (int i = 0; i < 4; ++i) ck.attributes[size_t(5 + i)] = mesh.tangents[c][i];
+        const auto [it, inserted] = vertexOf.emplace(ck, uint32_t(v.positions.size()));
+        if (inserted) {
+          v.positions.push_back(mesh.positions[ck.position]);
+          v.normals.push_back(mesh.normals[c]);
+          if (mesh.hasUvs()) v.uvs.emplace_back(mesh.uvs[c].x(), 1.0f - mesh.uvs[c].y());
+          if (mesh.hasTangents()) v.tangents.push_back(mesh.tangents[c]);
+        }
+        v.indices.push_back(it->second);
+      }
+    json primitive = {{"mode", 4}, {"material", key.first}};
+    if (key.second != 0) primitive["extras"] = {{"texfab:tag", key.second}};
+    json attributes;
+    if (options.draco) {
+      DracoAttributeIds ids;
+      const std::vector<uint8_t> compressed = encodeDraco(v, options, ids);
+      // Accessors describe the decoded data: decode once to get its exact count and bounds.
+      const VertexArrays decoded = decodeDraco(compressed.data(), compressed.size(), ids, path.string());
+      const int view = b.bufferView(compressed.data(), compressed.size(), 0);
+      json dracoAttributes;
+      attributes["POSITION"] = b.accessor<3>(decoded.positions, "VEC3", true, -1);
+      dracoAttributes["POSITION"] = ids.position;
+      attributes["NORMAL"] = b.accessor<3>(decoded.normals, "VEC3", false, -1);
+      dracoAttributes["NORMAL"] = ids.normal;
+      if (ids.uv >= 0) {
+        attributes["TEXCOORD_0"] = b.accessor<2>(decoded.uvs, "VEC2", false, -1);
+        dracoAttributes["TEXCOORD_0"] = ids.uv;
+      }
+      if (ids.tangent >= 0) {
+        attributes["TANGENT"] = b.accessor<4>(decoded.tangents, "VEC4", false, -1);
+        dracoAttributes["TANGENT"] = ids.tangent;
+      }
+      primitive["indices"] = b.indexAccessor(decoded.indices, decoded.positions.size(), false);
+      primitive["extensions"]["KHR_draco_mesh_compression"] = {{"bufferView", view}, {"attributes", dracoAttributes}};
+    } else {
+      attributes["POSITION"] = b.accessor<3>(v.positions, "VEC3", true);
+      attributes["NORMAL"] = b.accessor<3>(v.normals, "VEC3", false);
+      if (!v.uvs.empty()) attributes["TEXCOORD_0"] = b.accessor<2>(v.uvs, "VEC2", false);
+      if (!v.tangents.empty()) attributes["TANGENT"] = b.accessor<4>(v.tangents, "VEC4", false);
+      primitive["indices"] = b.indexAccessor(v.indices, v.positions.size(), true);
+    }
+    primitive["attributes"] = attributes;
+    primitives.push_back(primitive);
+  }
+
+  doc["scene"] = 0;
+  doc["scenes"] = json::array({{{"nodes", {0}}}});
+  doc["nodes"] = json::array({{{"mesh", 0}}});
+  doc["meshes"] = json::array({{{"primitives", primitives}}});
+  doc["materials"] = materials;
+  if (!textures.empty()) {
+    doc["textures"] = textures;
+    doc["images"] = images;
+    doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
+  }
+  b.align(4);
+  if (!b.views().empty()) doc["bufferViews"] = b.views();
+  if (!b.accessors().empty()) doc["accessors"] = b.accessors();
+  if (options.draco) {
+    extensionsUsed.push_back("KHR_draco_mesh_compression");
+    doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
+  }
+  if (usesTransform) extensionsUsed.push_back("KHR_texture_transform");
+  if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
+
+  std::string out;
+  if (binary) {
+    if (!b.buffer().empty()) doc["buffers"] = json::array({{{"byteLength", b.buffer().size()}}});
+    std::string text = doc.dump();
+    while (text.size() % 4) text += ' ';
+    const uint64_t total = 12 + 8 + text.size() + (b.buffer().empty() ? 0 : 8 + b.buffer().size());
+    if (total > UINT32_MAX) throw Error(path.string() + ": the model is too large for a GLB file (4 GiB)");
+    auto put32 = [&](uint32_t v) {
+      for (int i = 0; i < 4; ++i) out += char((v >> (8 * i)) & 0xff);
+    };
+    put32(0x46546C67);
+    put32(2);
+    put32(uint32_t(total));
+    put32(uint32_t(text.size()));
+    put32(0x4E4F534A);
+    out += text;
+    if (!b.buffer().empty()) {
+      put32(uint32_t(b.buffer().size()));
+      put32(0x004E4942);
+      out.append(reinterpret_cast<const char*>(b.buffer().data()), b.buffer().size());
+    }
+  } else {
+    if (!b.buffer().empty())
+      doc["buffers"] = json::array(
+          {{{"byteLength", b.buffer().size()}, {"uri", "data:application/octet-stream;base64," + encodeBase64(b.buffer())}}});
+    out = doc.dump(1) + "\n";
+  }
+  writeFileBytes(tmp, out, path);
+}
+
+} // namespace texfab::geometry::detail

@@ -1,0 +1,89 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Internal to geometry/: one reader/writer pair per format (obj_io.cpp, ply_io.cpp, off_io.cpp,
+// stl_io.cpp, gltf_read.cpp, gltf_write.cpp) behind readMesh/writeMesh, plus shared helpers.
+// Readers may return meshes that validateMesh has not checked yet; readMesh validates.
+
+#include "geometry/mesh_io.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace texfab::geometry::detail {
+
+Mesh readObj(const std::filesystem::path& path);
+Mesh readPly(const std::filesystem::path& path);
+Mesh readOff(const std::filesystem::path& path);
+Mesh readStl(const std::filesystem::path& path);
+Mesh readGltf(const std::filesystem::path& path); ///< .gltf and .glb
+
+/// Writers write to `tmp` (and commit any side files themselves, after the main file is complete
+/// in `tmp`); the caller renames `tmp` onto `path`.
+void writeObj(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp,
+              std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& sideFiles);
+void writePly(const Mesh& mesh, const std::filesystem::path& tmp, bool binary);
+void writeOff(const Mesh& mesh, const std::filesystem::path& tmp);
+void writeStl(const Mesh& mesh, const std::filesystem::path& tmp, bool binary);
+void writeGltf(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp, bool binary,
+               const MeshWriteOptions& options);
+
+/// The whole file; throws texfab::Error naming it when it cannot be read or exceeds `maxBytes`.
+std::vector<uint8_t> readFileBytes(const std::filesystem::path& path, uint64_t maxBytes = uint64_t(4) << 30);
+/// Writes bytes to `path` (no rename), throwing texfab::Error naming `shownAs` on failure.
+void writeFileBytes(const std::filesystem::path& path, std::string_view bytes, const std::filesystem::path& shownAs);
+
+/// Encodes an image as PNG (8-bit, or 16-bit for UInt16/Float images) in memory.
+std::vector<uint8_t> encodePng(const Image& image);
+/// Decodes PNG/JPEG bytes (glTF embedded images); `name` names errors.
+Image decodeImage(const uint8_t* data, size_t size, const std::string& name);
+
+/// Line-oriented text cursor shared by the ASCII readers (OBJ, MTL, PLY, OFF, STL).
+class TextCursor {
+public:
+  TextCursor(const char* begin, const char* end) : p_(begin), end_(end) {}
+  bool atEnd() const { return p_ >= end_; }
+  /// Next line without its terminator (handles \n, \r\n, \r); advances the line counter.
+  std::string_view nextLine();
+  size_t lineNumber() const { return line_; }
+
+private:
+  const char* p_;
+  const char* end_;
+  size_t line_ = 0;
+};
+
+/// Splits on spaces/tabs.
+std::vector<std::string_view> splitWords(std::string_view line);
+/// Strict number parsing; false on garbage or overflow.
+bool parseFloat(std::string_view word, float& value);
+bool parseInt(std::string_view word, long long& value);
+
+} // namespace texfab::geometry::detail
+
+namespace texfab::geometry::detail {
+
+/// One glTF primitive's vertex data, per vertex (glTF layout), used for Draco coding.
+struct VertexArrays {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<Eigen::Vector2f> uvs;      ///< glTF convention (v down); empty if absent
+  std::vector<Eigen::Vector3f> normals;  ///< empty if absent
+  std::vector<Eigen::Vector4f> tangents; ///< empty if absent
+  std::vector<uint32_t> indices;         ///< 3 per triangle
+};
+
+/// Draco attribute unique ids of an encoded primitive (-1 = absent), as the glTF extension lists.
+struct DracoAttributeIds {
+  int position = -1, uv = -1, normal = -1, tangent = -1;
+};
+
+/// Encodes a primitive with Draco (edgebreaker); returns the bytes and the attribute ids.
+std::vector<uint8_t> encodeDraco(const VertexArrays& vertices, const MeshWriteOptions& options, DracoAttributeIds& ids);
+
+/// Decodes a Draco-compressed glTF primitive; `name` names errors. Attributes whose id is -1 are
+/// not read; normals are renormalized and tangent w snapped to ±1.
+VertexArrays decodeDraco(const uint8_t* data, size_t size, const DracoAttributeIds& ids, const std::string& name);
+
+} // namespace texfab::geometry::detail

@@ -1,0 +1,187 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "geometry/mesh_io.h"
+
+#include "geometry/mesh_formats.h"
+#include "render/error.h"
+#include "render/image_io.h"
+
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+
+namespace texfab::geometry {
+namespace fs = std::filesystem;
+
+MeshFormat meshFormatOf(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".obj") return MeshFormat::Obj;
+  if (ext == ".ply") return MeshFormat::Ply;
+  if (ext == ".off") return MeshFormat::Off;
+  if (ext == ".stl") return MeshFormat::Stl;
+  if (ext == ".gltf") return MeshFormat::Gltf;
+  if (ext == ".glb") return MeshFormat::Glb;
+  throw Error(path.string() + ": unknown mesh format '" + ext + "' (expected .obj, .ply, .off, .stl, .gltf or .glb)");
+}
+
+const char* meshFormatName(MeshFormat format) {
+  switch (format) {
+  case MeshFormat::Obj: return "OBJ";
+  case MeshFormat::Ply: return "PLY";
+  case MeshFormat::Off: return "OFF";
+  case MeshFormat::Stl: return "STL";
+  case MeshFormat::Gltf: return "glTF";
+  case MeshFormat::Glb: return "GLB";
+  }
+  return "?";
+}
+
+Mesh readMesh(const fs::path& path) {
+  const MeshFormat format = meshFormatOf(path);
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": no such file");
+  Mesh mesh;
+  switch (format) {
+  case MeshFormat::Obj: mesh = detail::readObj(path); break;
+  case MeshFormat::Ply: mesh = detail::readPly(path); break;
+  case MeshFormat::Off: mesh = detail::readOff(path); break;
+  case MeshFormat::Stl: mesh = detail::readStl(path); break;
+  case MeshFormat::Gltf:
+  case MeshFormat::Glb: mesh = detail::readGltf(path); break;
+  }
+  validateMesh(mesh, path.string());
+  return mesh;
+}
+
+void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& options) {
+  const MeshFormat format = meshFormatOf(path);
+  validateMesh(mesh, path.string());
+  if (options.draco && format != MeshFormat::Gltf && format != MeshFormat::Glb)
+    throw Error(path.string() + ": Draco compression needs a .glb or .gltf output");
+  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) throw Error(path.string() + ": the output folder does not exist");
+  const fs::path tmp = temporaryPathFor(path);
+  std::vector<std::pair<fs::path, fs::path>> sideFiles; // (temporary, final)
+  try {
+    switch (format) {
+    case MeshFormat::Obj: detail::writeObj(mesh, path, tmp, sideFiles); break;
+    case MeshFormat::Ply: detail::writePly(mesh, tmp, options.binary); break;
+    case MeshFormat::Off: detail::writeOff(mesh, tmp); break;
+    case MeshFormat::Stl: detail::writeStl(mesh, tmp, options.binary); break;
+    case MeshFormat::Gltf: detail::writeGltf(mesh, path, tmp, false, options); break;
+    case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options); break;
+    }
+  } catch (...) {
+    fs::remove(tmp, ec);
+    for (const auto& side : sideFiles) fs::remove(side.first, ec);
+    throw;
+  }
+  // Side files (textures, MTL) first, the model last: the model never points at missing files.
+  for (const auto& side : sideFiles) commitFile(side.first, side.second);
+  commitFile(tmp, path);
+}
+
+namespace detail {
+
+std::vector<uint8_t> readFileBytes(const fs::path& path, uint64_t maxBytes) {
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw Error(path.string() + ": cannot open file");
+  std::error_code ec;
+  const uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw Error(path.string() + ": cannot read file size");
+  if (size > maxBytes) throw Error(path.string() + ": file is too large (" + std::to_string(size) + " bytes)");
+  std::vector<uint8_t> bytes(size);
+  if (size > 0 && std::fread(bytes.data(), 1, size, file.get()) != size)
+    throw Error(path.string() + ": read error");
+  return bytes;
+}
+
+void writeFileBytes(const fs::path& path, std::string_view bytes, const fs::path& shownAs) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw Error(shownAs.string() + ": cannot create file");
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+  if (!out.flush()) throw Error(shownAs.string() + ": write error");
+}
+
+std::vector<uint8_t> encodePng(const Image& image) {
+  if (image.empty() || image.channels < 1 || image.channels > 4) throw Error("cannot encode an image with " +
+                                                                            std::to_string(image.channels) + " channels as PNG");
+  // stb writes 8-bit PNGs; 16-bit sources are rounded to 8 bits (textures are displayed, not measured).
+  std::vector<uint8_t> pixels(image.pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i)
+    pixels[i] = uint8_t(std::lround(std::clamp(image.pixels[i], 0.0f, 1.0f) * 255.0f));
+  std::vector<uint8_t> png;
+  auto sink = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<uint8_t>*>(context);
+    out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+  };
+  if (!stbi_write_png_to_func(sink, &png, image.width, image.height, image.channels, pixels.data(),
+                              image.width * image.channels))
+    throw Error("PNG encoding failed");
+  return png;
+}
+
+Image decodeImage(const uint8_t* data, size_t size, const std::string& name) {
+  if (size == 0 || size > size_t(INT32_MAX)) throw Error(name + ": empty or oversized image data");
+  int w = 0, h = 0, c = 0;
+  if (!stbi_info_from_memory(data, int(size), &w, &h, &c)) throw Error(name + ": not a decodable PNG or JPEG image");
+  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide) throw Error(name + ": image size out of range");
+  const bool sixteen = stbi_is_16_bit_from_memory(data, int(size));
+  Image image(w, h, c, sixteen ? PixelFormat::UInt16 : PixelFormat::UInt8);
+  if (sixteen) {
+    std::unique_ptr<stbi_us, void (*)(void*)> px(stbi_load_16_from_memory(data, int(size), &w, &h, &c, 0), &stbi_image_free);
+    if (!px) throw Error(name + ": " + stbi_failure_reason());
+    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = float(px.get()[i]) / 65535.0f;
+  } else {
+    std::unique_ptr<stbi_uc, void (*)(void*)> px(stbi_load_from_memory(data, int(size), &w, &h, &c, 0), &stbi_image_free);
+    if (!px) throw Error(name + ": " + stbi_failure_reason());
+    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = float(px.get()[i]) / 255.0f;
+  }
+  return image;
+}
+
+std::string_view TextCursor::nextLine() {
+  const char* start = p_;
+  while (p_ < end_ && *p_ != '\n' && *p_ != '\r') ++p_;
+  std::string_view line(start, size_t(p_ - start));
+  if (p_ < end_ && *p_ == '\r') ++p_;
+  if (p_ < end_ && *p_ == '\n') ++p_;
+  ++line_;
+  return line;
+}
+
+std::vector<std::string_view> splitWords(std::string_view line) {
+  std::vector<std::string_view> words;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    const size_t start = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+    if (i > start) words.push_back(line.substr(start, i - start));
+  }
+  return words;
+}
+
+bool parseFloat(std::string_view word, float& value) {
+  const char* b = word.data();
+  if (!word.empty() && *b == '+') ++b;
+  const auto [end, ec] = std::from_chars(b, word.data() + word.size(), value);
+  return ec == std::errc() && end == word.data() + word.size();
+}
+
+bool parseInt(std::string_view word, long long& value) {
+  const char* b = word.data();
+  if (!word.empty() && *b == '+') ++b;
+  const auto [end, ec] = std::from_chars(b, word.data() + word.size(), value);
+  return ec == std::errc() && end == word.data() + word.size();
+}
+
+} // namespace detail
+} // namespace texfab::geometry

@@ -1,0 +1,335 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Wavefront OBJ + MTL reading and writing.
+#include "geometry/mesh_formats.h"
+#include "geometry/model_path.h"
+#include "render/error.h"
+#include "render/image_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace texfab::geometry::detail {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lineError(const fs::path& path, size_t line, const std::string& what) {
+  return path.string() + ":" + std::to_string(line) + ": " + what;
+}
+
+// The file name of a map_* statement: the words after any "-option value..." pairs.
+std::string mapFileName(const std::vector<std::string_view>& words) {
+  static const std::map<std::string, int, std::less<>> argCount{
+      {"-blendu", 1}, {"-blendv", 1}, {"-bm", 1}, {"-boost", 1}, {"-cc", 1}, {"-clamp", 1}, {"-imfchan", 1},
+      {"-mm", 2},     {"-o", 3},      {"-s", 3},  {"-t", 3},     {"-texres", 1}, {"-type", 1}};
+  size_t i = 1;
+  while (i < words.size() && words[i].size() > 1 && words[i][0] == '-') {
+    const auto it = argCount.find(words[i]);
+    if (it == argCount.end()) break;
+    ++i;
+    // -o/-s/-t take 1 to 3 numbers.
+    for (int k = 0; k < it->second && i < words.size(); ++k) {
+      float f;
+      if (!parseFloat(words[i], f) && !(it->second == 1)) break;
+      ++i;
+    }
+  }
+  std::string name;
+  for (; i < words.size(); ++i) {
+    if (!name.empty()) name += ' ';
+    name.append(words[i]);
+  }
+  return name;
+}
+
+struct TextureCache {
+  std::map<fs::path, std::shared_ptr<const Image>> images;
+  Texture load(const fs::path& mtl, const std::string& reference) {
+    const fs::path file = resolveModelReference(mtl, reference);
+    auto& slot = images[file];
+    if (!slot) slot = std::make_shared<const Image>(readImage(file));
+    Texture texture;
+    texture.image = slot;
+    texture.name = file.filename().string();
+    return texture;
+  }
+};
+
+void readMtl(const fs::path& obj, const std::string& reference, std::vector<Material>& materials,
+             std::map<std::string, uint32_t>& byName, TextureCache& textures) {
+  const fs::path path = resolveModelReference(obj, reference);
+  const std::vector<uint8_t> bytes = readFileBytes(path, uint64_t(256) << 20);
+  TextCursor cursor(reinterpret_cast<const char*>(bytes.data()), reinterpret_cast<const char*>(bytes.data() + bytes.size()));
+  Material* current = nullptr;
+  while (!cursor.atEnd()) {
+    const std::string_view line = cursor.nextLine();
+    const auto words = splitWords(line);
+    if (words.empty() || words[0][0] == '#') continue;
+    const std::string_view key = words[0];
+    if (key == "newmtl") {
+      std::string name = words.size() > 1 ? std::string(words[1]) : std::string();
+      Material m;
+      m.name = name;
+      m.metallicFactor = 0.0f;  // OBJ materials are dielectrics unless Pm says otherwise
+      m.roughnessFactor = 0.8f;
+      byName[name] = uint32_t(materials.size());
+      materials.push_back(std::move(m));
+      current = &materials.back();
+      continue;
+    }
+    if (!current) continue;
+    auto number = [&](size_t i) {
+      float f = 0;
+      if (i >= words.size() || !parseFloat(words[i], f) || !std::isfinite(f))
+        throw Error(lineError(path, cursor.lineNumber(), "expected a number after '" + std::string(key) + "'"));
+      return f;
+    };
+    if (key == "Kd") {
+      current->baseColorFactor.head<3>() = Eigen::Vector3f(number(1), number(2), number(3));
+    } else if (key == "d") {
+      current->baseColorFactor.w() = number(1);
+    } else if (key == "Tr") {
+      current->baseColorFactor.w() = 1.0f - number(1);
+    } else if (key == "Pr") {
+      current->roughnessFactor = number(1);
+    } else if (key == "Pm") {
+      current->metallicFactor = number(1);
+    } else if (key == "Ns" ) {
+      // Blinn-Phong exponent to roughness: alpha = sqrt(2 / (Ns + 2)), roughness = sqrt(alpha).
+      current->roughnessFactor = std::sqrt(std::sqrt(2.0f / (std::max(number(1), 0.0f) + 2.0f)));
+    } else if (key == "map_Kd" || key == "norm" || key == "map_Pr" || key == "map_Pm" || key == "map_Bump" ||
+               key == "bump") {
+      const std::string file = mapFileName(words);
+      if (file.empty()) throw Error(lineError(path, cursor.lineNumber(), "'" + std::string(key) + "' names no file"));
+      if (key == "map_Kd") current->baseColorTexture = textures.load(path, file);
+      else if (key == "norm") current->normalTexture = textures.load(path, file);
+      // map_Bump/bump are height maps in classic OBJ: not a normal map, so not used. map_Pr and
+      // map_Pm are single channels that glTF packs into one texture: not combined here.
+      else (void)resolveModelReference(path, file);
+    }
+  }
+  for (Material& m : materials) {
+    m.baseColorFactor = m.baseColorFactor.cwiseMax(0.0f).cwiseMin(1.0f);
+    m.metallicFactor = std::clamp(m.metallicFactor, 0.0f, 1.0f);
+    m.roughnessFactor = std::clamp(m.roughnessFactor, 0.0f, 1.0f);
+  }
+}
+
+// One "v/vt/vn" reference; 0 = absent.
+struct CornerRef {
+  long long v = 0, vt = 0, vn = 0;
+};
+
+} // namespace
+
+Mesh readObj(const fs::path& path) {
+  const std::vector<uint8_t> bytes = readFileBytes(path);
+  TextCursor cursor(reinterpret_cast<const char*>(bytes.data()), reinterpret_cast<const char*>(bytes.data() + bytes.size()));
+  Mesh mesh;
+  std::vector<Eigen::Vector2f> vts;
+  std::vector<Eigen::Vector3f> vns;
+  std::vector<CornerRef> corners;            // 3 per triangle
+  std::map<std::string, uint32_t> byName;
+  TextureCache textures;
+  uint32_t currentMaterial = 0;
+  bool anyMaterialUsed = false;
+  std::vector<CornerRef> polygon;
+  while (!cursor.atEnd()) {
+    const std::string_view line = cursor.nextLine();
+    const auto words = splitWords(line);
+    if (words.empty() || words[0][0] == '#') continue;
+    const std::string_view key = words[0];
+    auto number = [&](size_t i) {
+      float f = 0;
+      if (i >= words.size() || !parseFloat(words[i], f))
+        throw Error(lineError(path, cursor.lineNumber(), "expected a number in '" + std::string(key) + "' statement"));
+      return f;
+    };
+    if (key == "v") {
+      mesh.positions.emplace_back(number(1), number(2), number(3));
+    } else if (key == "vt") {
+      vts.emplace_back(number(1), words.size() > 2 ? number(2) : 0.0f);
+    } else if (key == "vn") {
+      vns.emplace_back(number(1), number(2), number(3));
+    } else if (key == "f") {
+      polygon.clear();
+      for (size_t i = 1; i < words.size(); ++i) {
+        CornerRef ref;
+        std::string_view w = words[i];
+        long long* slots[3] = {&ref.v, &ref.vt, &ref.vn};
+        for (int s = 0; s < 3 && !w.empty(); ++s) {
+          const size_t slash = w.find('/');
+          const std::string_view part = w.substr(0, slash);
+          if (!part.empty() && !parseInt(part, *slots[s]))
+            throw Error(lineError(path, cursor.lineNumber(), "bad face index '" + std::string(words[i]) + "'"));
+          if (slash == std::string_view::npos) break;
+          w = w.substr(slash + 1);
+        }
+        // Negative indices count back from the end of the lists so far.
+        auto fix = [&](long long& idx, size_t count, const char* what) {
+          if (idx < 0) idx += (long long)count + 1;
+          else if (idx == 0 && slots[0] == &idx)
+            throw Error(lineError(path, cursor.lineNumber(), "face index 0 (OBJ indices start at 1)"));
+          if (idx < 0 || idx > (long long)count)
+            throw Error(lineError(path, cursor.lineNumber(), std::string(what) + " index " + std::to_string(idx) +
+                                                                 " out of range (" + std::to_string(count) + " defined)"));
+        };
+        fix(ref.v, mesh.positions.size(), "vertex");
+        if (ref.v == 0) throw Error(lineError(path, cursor.lineNumber(), "face corner without a vertex index"));
+        if (ref.vt != 0) fix(ref.vt, vts.size(), "texture coordinate");
+        if (ref.vn != 0) fix(ref.vn, vns.size(), "normal");
+        polygon.push_back(ref);
+      }
+      if (polygon.size() < 3) throw Error(lineError(path, cursor.lineNumber(), "face with fewer than 3 corners"));
+      // Fan triangulation (faces of OBJ files are convex in practice).
+      for (size_t k = 1; k + 1 < polygon.size(); ++k) {
+        corners.push_back(polygon[0]);
+        corners.push_back(polygon[k]);
+        corners.push_back(polygon[k + 1]);
+        mesh.faceMaterials.push_back(currentMaterial);
+      }
+    } else if (key == "mtllib") {
+      // A name may contain spaces; several libraries may be listed, but that is rare: try the whole
+      // rest of the line first, then each word.
+      if (words.size() < 2) continue;
+      const std::string rest(line.substr(size_t(words[1].data() - line.data())));
+      if (words.size() == 2 || fs::exists(path.parent_path() / rest)) {
+        readMtl(path, words.size() == 2 ? std::string(words[1]) : rest, mesh.materials, byName, textures);
+      } else {
+        for (size_t i = 1; i < words.size(); ++i) readMtl(path, std::string(words[i]), mesh.materials, byName, textures);
+      }
+    } else if (key == "usemtl") {
+      const std::string name = words.size() > 1 ? std::string(words[1]) : std::string();
+      const auto it = byName.find(name);
+      if (it == byName.end()) {
+        // Unknown material: a plain grey one (many exporters reference materials they did not write).
+        Material m;
+        m.name = name;
+        m.metallicFactor = 0.0f;
+        m.roughnessFactor = 0.8f;
+        m.baseColorFactor = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);
+        byName[name] = uint32_t(mesh.materials.size());
+        mesh.materials.push_back(std::move(m));
+      }
+      currentMaterial = byName[name];
+      anyMaterialUsed = true;
+    }
+    // o, g, s, l, p and other statements carry nothing texfab keeps.
+  }
+  mesh.triangles.resize(corners.size() / 3);
+  bool anyVt = false, anyVn = false;
+  for (const CornerRef& c : corners) {
+    anyVt |= c.vt != 0;
+    anyVn |= c.vn != 0;
+  }
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) mesh.triangles[t][size_t(k)] = uint32_t(corners[3 * t + size_t(k)].v - 1);
+  if (anyVt) {
+    mesh.uvs.resize(corners.size(), Eigen::Vector2f::Zero());
+    for (size_t c = 0; c < corners.size(); ++c)
+      if (corners[c].vt) mesh.uvs[c] = vts[size_t(corners[c].vt - 1)];
+  }
+  if (anyVn) {
+    mesh.normals.resize(corners.size());
+    for (size_t c = 0; c < corners.size(); ++c) {
+      Eigen::Vector3f n = corners[c].vn ? vns[size_t(corners[c].vn - 1)] : faceNormal(mesh, c / 3);
+      if (!n.allFinite()) throw Error(path.string() + ": a normal is NaN or infinite");
+      mesh.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh, c / 3);
+    }
+  }
+  if (mesh.materials.empty() || !anyMaterialUsed) mesh.faceMaterials.clear();
+  return mesh;
+}
+
+namespace {
+
+std::string safeName(const std::string& name, size_t index) {
+  std::string out;
+  for (char c : name) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
+  if (out.empty()) out = "material" + std::to_string(index);
+  return out;
+}
+
+std::string fmt(float v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", double(v));
+  return buf;
+}
+
+} // namespace
+
+void writeObj(const Mesh& mesh, const fs::path& path, const fs::path& tmp,
+              std::vector<std::pair<fs::path, fs::path>>& sideFiles) {
+  const std::string stem = path.stem().string();
+  const fs::path folder = path.parent_path();
+  std::ostringstream mtl;
+  std::map<const Image*, std::string> written;
+  auto textureFile = [&](const Texture& texture, const std::string& material, const char* kind) {
+    const auto it = written.find(texture.image.get());
+    if (it != written.end()) return it->second;
+    const std::string name = stem + "_" + material + "_" + kind + ".png";
+    const fs::path final = folder / name;
+    const fs::path side = temporaryPathFor(final);
+    sideFiles.emplace_back(side, final);
+    const std::vector<uint8_t> png = encodePng(*texture.image);
+    writeFileBytes(side, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()), final);
+    written[texture.image.get()] = name;
+    return name;
+  };
+  const size_t materialCount = std::max<size_t>(1, mesh.materials.size());
+  std::vector<std::string> names(materialCount);
+  if (!mesh.materials.empty()) {
+    mtl << "# texfab\n";
+    for (size_t i = 0; i < mesh.materials.size(); ++i) {
+      const Material& m = mesh.materials[i];
+      names[i] = safeName(m.name, i);
+      for (size_t j = 0; j < i; ++j)
+        if (names[j] == names[i]) names[i].append("_").append(std::to_string(i));
+      mtl << "\nnewmtl " << names[i] << "\n";
+      mtl << "Kd " << fmt(m.baseColorFactor.x()) << ' ' << fmt(m.baseColorFactor.y()) << ' ' << fmt(m.baseColorFactor.z()) << "\n";
+      mtl << "d " << fmt(m.baseColorFactor.w()) << "\n";
+      mtl << "Pr " << fmt(m.roughnessFactor) << "\nPm " << fmt(m.metallicFactor) << "\n";
+      if (m.baseColorTexture) mtl << "map_Kd " << textureFile(m.baseColorTexture, names[i], "basecolor") << "\n";
+      if (m.normalTexture) mtl << "norm " << textureFile(m.normalTexture, names[i], "normal") << "\n";
+      if (m.metallicRoughnessTexture)
+        mtl << "map_Pr " << textureFile(m.metallicRoughnessTexture, names[i], "metallicroughness") << "\n";
+    }
+    const fs::path final = folder / (stem + ".mtl");
+    const fs::path side = temporaryPathFor(final);
+    sideFiles.emplace_back(side, final);
+    writeFileBytes(side, mtl.str(), final);
+  }
+  std::string out;
+  out.reserve(mesh.positions.size() * 40 + mesh.triangles.size() * 60);
+  out += "# texfab\n";
+  if (!mesh.materials.empty()) out += "mtllib " + stem + ".mtl\n";
+  for (const auto& p : mesh.positions) out += "v " + fmt(p.x()) + ' ' + fmt(p.y()) + ' ' + fmt(p.z()) + '\n';
+  for (const auto& uv : mesh.uvs) {
+    const Eigen::Vector2f u = uv;
+    out += "vt " + fmt(u.x()) + ' ' + fmt(u.y()) + '\n';
+  }
+  for (const auto& n : mesh.normals) out += "vn " + fmt(n.x()) + ' ' + fmt(n.y()) + ' ' + fmt(n.z()) + '\n';
+  uint32_t current = UINT32_MAX;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!mesh.materials.empty() && mesh.materialOf(t) != current) {
+      current = mesh.materialOf(t);
+      out += "usemtl " + names[current] + '\n';
+    }
+    out += 'f';
+    for (int k = 0; k < 3; ++k) {
+      const size_t c = 3 * t + size_t(k);
+      out += ' ' + std::to_string(mesh.triangles[t][size_t(k)] + 1);
+      if (mesh.hasUvs() || mesh.hasNormals()) {
+        out += '/';
+        if (mesh.hasUvs()) out += std::to_string(c + 1);
+        if (mesh.hasNormals()) out += '/' + std::to_string(c + 1);
+      }
+    }
+    out += '\n';
+  }
+  writeFileBytes(tmp, out, path);
+}
+
+} // namespace texfab::geometry::detail

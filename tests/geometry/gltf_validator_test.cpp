@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Every glTF/GLB texfab writes must pass the Khronos glTF validator with zero errors and zero
+// warnings. The validator is the npm package gltf-validator, installed by scripts/install-deps.sh
+// into .tools/ (or found through $TEXFAB_GLTF_VALIDATOR = a node_modules folder).
+#include "geometry/mesh_io.h"
+#include "tests/geometry/test_meshes.h"
+
+#include <array>
+#include <cstdio>
+#include <memory>
+
+using namespace texfab;
+using namespace texfab::geometry;
+using texfab::testing::TempDir;
+
+namespace {
+
+std::filesystem::path validatorModules() {
+  if (const char* env = std::getenv("TEXFAB_GLTF_VALIDATOR"); env && *env) return env;
+  return std::filesystem::path(TEXFAB_SOURCE_DIR) / ".tools" / "node_modules";
+}
+
+// Runs the validator; returns its first output line ("errors=0 warnings=0 ...") and the rest.
+std::string validate(const std::filesystem::path& file) {
+  const std::string command = "node '" + std::string(TEXFAB_SOURCE_DIR) + "/tests/geometry/validate_gltf.js' '" +
+                              validatorModules().string() + "' '" + file.string() + "' 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), &pclose);
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (pipe && fgets(buffer.data(), int(buffer.size()), pipe.get())) out += buffer.data();
+  return out;
+}
+
+Mesh normalMappedMesh() {
+  Mesh m = texfab::testing::texturedCube();
+  m.materials[0].normalTexture.image = texfab::testing::gradientImage(8, 8);
+  m.materials[0].metallicRoughnessTexture.image = texfab::testing::gradientImage(4, 4);
+  m.materials[0].baseColorTexture.rotation = 0.5f;
+  m.materials[1].baseColorFactor.w() = 0.5f;
+  m.materials[1].doubleSided = true;
+  return m;
+}
+
+} // namespace
+
+class GltfValidator : public ::testing::TestWithParam<std::string> {
+protected:
+  void SetUp() override {
+    if (std::system("command -v node >/dev/null 2>&1") != 0) GTEST_SKIP() << "node not installed";
+    if (!std::filesystem::exists(validatorModules() / "gltf-validator"))
+      GTEST_SKIP() << "gltf-validator not installed (run scripts/install-deps.sh)";
+  }
+};
+
+TEST_P(GltfValidator, OutputHasNoErrorsOrWarnings) {
+  TempDir dir("texfab-validator");
+  const std::string name = GetParam();
+  const bool draco = name.find("draco") != std::string::npos;
+  MeshWriteOptions options;
+  options.draco = draco;
+  std::vector<std::pair<std::string, Mesh>> meshes = {{"cube", texfab::testing::texturedCube()},
+                                                      {"normalmapped", normalMappedMesh()}};
+  Mesh plain;  // no UVs, no normals, no materials
+  plain.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  plain.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  meshes.emplace_back("plain", plain);
+  const std::filesystem::path bundled = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/meshes/marble_cube.obj";
+  meshes.emplace_back("bundled", readMesh(bundled));
+  for (const auto& [label, mesh] : meshes) {
+    const std::filesystem::path file = dir / (label + name.substr(name.find('.')));
+    writeMesh(mesh, file, options);
+    const std::string report = validate(file);
+    EXPECT_EQ(report.rfind("errors=0 warnings=0 ", 0), 0u) << label << " " << name << ":\n" << report;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, GltfValidator, ::testing::Values("model.glb", "model.gltf", "draco.glb", "draco.gltf"),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           std::replace(n.begin(), n.end(), '.', '_');
+                           return n;
+                         });

@@ -1,0 +1,155 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The preview renderer on known scenes, checked by pixel statistics.
+#include "render/mip_pyramid.h"
+#include "render/preview_renderer.h"
+#include "tests/geometry/test_meshes.h"
+
+#include <cmath>
+
+using namespace texfab;
+using namespace texfab::render;
+using texfab::geometry::Mesh;
+
+namespace {
+
+// A square [-1,1]² in the z = 0 plane facing +Z, UVs covering [0,1]², one material whose base
+// colour texture is `texture`.
+Mesh texturedQuad(std::shared_ptr<const Image> texture) {
+  Mesh m;
+  m.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}};
+  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 0}, {1, 1}, {0, 1}};
+  geometry::Material material;
+  material.metallicFactor = 0.0f;
+  material.roughnessFactor = 1.0f;
+  material.baseColorTexture.image = std::move(texture);
+  m.materials = {material};
+  return m;
+}
+
+std::shared_ptr<const Image> solid(float r, float g, float b) {
+  auto image = std::make_shared<Image>(4, 4, 3);
+  for (int i = 0; i < 16; ++i) {
+    image->pixels[size_t(3 * i)] = r;
+    image->pixels[size_t(3 * i + 1)] = g;
+    image->pixels[size_t(3 * i + 2)] = b;
+  }
+  return image;
+}
+
+std::shared_ptr<const Image> checker(int size) {
+  auto image = std::make_shared<Image>(size, size, 3);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      for (int c = 0; c < 3; ++c) image->at(x, y, c) = float((x + y) % 2);
+  return image;
+}
+
+struct Stats {
+  double coverage = 0;  // fraction of pixels with alpha > 0
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // over fully covered pixels
+  double stddev = 0;    // of luminance over fully covered pixels
+};
+
+Stats statistics(const Image& image) {
+  Stats s;
+  double n = 0, sum2 = 0, sum = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const float* p = image.pixel(x, y);
+      if (p[3] > 0) s.coverage += 1;
+      if (p[3] < 1) continue;
+      const double l = (p[0] + p[1] + p[2]) / 3.0;
+      s.mean += Eigen::Vector3d(p[0], p[1], p[2]);
+      sum += l;
+      sum2 += l * l;
+      n += 1;
+    }
+  s.coverage /= double(image.width) * image.height;
+  if (n > 0) {
+    s.mean /= n;
+    s.stddev = std::sqrt(std::max(0.0, sum2 / n - (sum / n) * (sum / n)));
+  }
+  return s;
+}
+
+RenderOptions frontView(int size) {
+  RenderOptions o;
+  o.width = o.height = size;
+  o.azimuthDegrees = 0;
+  o.elevationDegrees = 0;
+  o.samplesPerPixel = 4;
+  o.transparentBackground = true;
+  o.threads = 2;
+  return o;
+}
+
+} // namespace
+
+TEST(PreviewRenderer, QuadCoverageAndColourMatchTheScene) {
+  const Mesh quad = texturedQuad(solid(0.8f, 0.2f, 0.1f));
+  const PreviewRenderer renderer(quad);
+  const RenderOptions o = frontView(128);
+  const Image image = renderer.render(o);
+  ASSERT_EQ(image.channels, 4);
+  // The bounding sphere (radius √2) fills the view with margin 1.08 at 35° fov: the quad's side
+  // covers 2 / (2 · d · tan(17.5°)) of the image, d = 1.08 √2 / sin(17.5°).
+  const double d = 1.08 * std::sqrt(2.0) / std::sin(17.5 * M_PI / 180);
+  const double side = 2.0 / (2.0 * d * std::tan(17.5 * M_PI / 180));
+  const Stats s = statistics(image);
+  EXPECT_NEAR(s.coverage, side * side, 0.02);
+  // Lit red texture: red dominates, in the same proportion order as the texture.
+  EXPECT_GT(s.mean.x(), 1.8 * s.mean.y());
+  EXPECT_GT(s.mean.y(), s.mean.z());
+  EXPECT_GT(s.mean.x(), 0.4);
+  // Flat quad, uniform texture, frontal key light: nearly uniform shading.
+  EXPECT_LT(s.stddev, 0.05);
+}
+
+TEST(PreviewRenderer, DeterministicAcrossThreadCounts) {
+  const Mesh quad = texturedQuad(checker(64));
+  const PreviewRenderer renderer(quad);
+  RenderOptions o = frontView(64);
+  o.azimuthDegrees = 25;
+  o.elevationDegrees = 35;
+  const Image a = renderer.render(o);
+  o.threads = 1;
+  const Image b = renderer.render(o);
+  EXPECT_EQ(a.pixels, b.pixels);
+}
+
+TEST(PreviewRenderer, MipMapsRemoveShimmerOfFineTextures) {
+  // A 512² one-texel checker seen from far away (the quad spans ~60 pixels): with mip mapping
+  // the pixels average to grey; point sampling would give a black/white noise.
+  const Mesh quad = texturedQuad(checker(512));
+  const PreviewRenderer renderer(quad);
+  RenderOptions o = frontView(128);
+  o.samplesPerPixel = 1;
+  o.aoSamples = 0;
+  const Stats s = statistics(renderer.render(o));
+  EXPECT_LT(s.stddev, 0.03);
+  EXPECT_GT(s.mean.x(), 0.3);
+}
+
+TEST(PreviewRenderer, OpaqueBackgroundAndTurntableViewsDiffer) {
+  const Mesh cube = texfab::testing::texturedCube();
+  const PreviewRenderer renderer(cube);
+  RenderOptions o = frontView(48);
+  o.transparentBackground = false;
+  o.background = {0.0f, 0.0f, 1.0f};
+  const Image a = renderer.render(o);
+  ASSERT_EQ(a.channels, 3);
+  EXPECT_EQ(a.at(0, 0, 2), 1.0f);  // corner pixel: background blue
+  EXPECT_EQ(a.at(0, 0, 0), 0.0f);
+  o.azimuthDegrees = 45;
+  EXPECT_NE(renderer.render(o).pixels, a.pixels);
+}
+
+TEST(MipPyramid, LevelsAverageInLinearLight) {
+  const MipPyramid p = buildMipPyramid(*checker(8), true);
+  ASSERT_EQ(p.levels.size(), 4u);
+  EXPECT_EQ(p.levels.back().width, 1);
+  EXPECT_NEAR(p.levels.back().at(0, 0, 0), 0.5f, 1e-6f);  // linear average of black and white
+  EXPECT_NEAR(sampleTrilinear(p, 0.3f, 0.7f, 10.0f).x(), 0.5f, 1e-6f);
+  EXPECT_NEAR(linearToSrgb(srgbToLinear(0.3f)), 0.3f, 1e-6f);
+}
