@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The atlas pipeline (staged as in xatlas, github.com/jpcy/xatlas); the metric is Sander et al.
+// 2001, "Texture Mapping Progressive Meshes".
+#include "atlas/generate_atlas.h"
+
+#include "atlas/chart_mesh.h"
+#include "atlas/measure_stretch.h"
+
+#include <chrono>
+
+namespace texfab::atlas {
+
+void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const Atlas& atlas, AtlasReport& report) {
+  // Atlas texel coordinates are y-down: flip to v-up for orientation.
+  const StretchStats s = measureStretch(mesh, {}, [&](size_t c) {
+    const Eigen::Vector2f p = atlas.texelUvs[c];
+    return Eigen::Vector2d(p.x(), -p.y());
+  });
+  report.l2Stretch = s.l2;
+  report.maxStretch = s.max;
+  report.flippedTriangles = s.flipped;
+  report.charts = atlas.charts.size();
+  report.texelsPerUnit = atlas.texelsPerUnit;
+  report.seamLength = 0;
+  report.boundaryLength = 0;
+  report.nonDiskCharts = 0;
+  for (const Chart& c : atlas.charts) {
+    report.boundaryLength += c.boundaryLength;
+    if (!c.disk) ++report.nonDiskCharts;
+  }
+  for (size_t t = 0; t < mesh.triangleCount(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int32_t g = adj.neighbor[t][size_t(k)];
+      if (g > int32_t(t) && atlas.faceChart[size_t(g)] != atlas.faceChart[t])
+        report.seamLength += double((mesh.corner(t, k) - mesh.corner(t, (k + 1) % 3)).norm());
+    }
+}
+
+GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options) {
+  options.segment.validate();
+  options.parameterize.validate();
+  options.pack.validate();
+  GenerateAtlasResult r;
+  auto clock = std::chrono::steady_clock::now();
+  auto lap = [&](const char* stage) {
+    const auto now = std::chrono::steady_clock::now();
+    r.report.seconds.push_back({stage, std::chrono::duration<double>(now - clock).count()});
+    clock = now;
+  };
+  r.report.triangles = mesh.triangleCount();
+  r.adjacency = computeMeshAdjacency(mesh);
+  lap("adjacency");
+  r.report.segment = segmentCharts(mesh, r.adjacency, r.atlas, options.segment);
+  lap("charts");
+  r.report.parameterize = parameterizeCharts(mesh, r.adjacency, r.atlas, options.parameterize, options.threads);
+  lap("parameterization");
+  r.report.pack = packCharts(mesh, r.atlas, options.pack, options.threads);
+  lap("packing");
+  r.fields = rasterizeAtlas(mesh, r.atlas, options.threads);
+  lap("texel fields");
+  measureAtlas(mesh, r.adjacency, r.atlas, r.report);
+  r.report.utilization = r.fields.utilization();
+  r.report.overlappingTexels = r.fields.overlappingTexels;
+  lap("measures");
+  const MeshAdjacency& a = r.adjacency;
+  if (a.degenerateCount)
+    r.report.repairs.push_back(std::to_string(a.degenerateCount) +
+                               " degenerate (zero-area) triangles mapped to a point (they cover no texel)");
+  if (a.nonManifoldEdges)
+    r.report.repairs.push_back(std::to_string(a.nonManifoldEdges) + " non-manifold edges made chart borders");
+  if (a.inconsistentEdges)
+    r.report.repairs.push_back(std::to_string(a.inconsistentEdges) +
+                               " edges between inconsistently oriented triangles made chart borders");
+  if (r.report.parameterize.chartsCutToTriangles)
+    r.report.repairs.push_back(std::to_string(r.report.parameterize.chartsCutToTriangles) +
+                               " charts that could not be flattened without flips were cut into single triangles");
+  if (r.report.pack.chartsBelowOneTexel)
+    r.report.repairs.push_back(std::to_string(r.report.pack.chartsBelowOneTexel) +
+                               " charts are smaller than one texel at this resolution");
+  return r;
+}
+
+} // namespace texfab::atlas

@@ -1,0 +1,40 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Packing: every chart at one texel density (texels per model unit) into a W×H atlas with at
+// least `gutter` empty texels between any two charts; quarter-turn rotations allowed after each
+// chart is turned to its minimal-area bounding rectangle. Packing places conservative raster
+// masks of the charts (every texel a chart touches, dilated by half the gutter), so charts cannot
+// overlap by construction; the density is the largest found to fit (a few packing passes).
+// Re-runnable: call again with other options without redoing charts or parameterizations.
+
+#include "atlas/atlas.h"
+#include "geometry/mesh.h"
+
+#include <cstddef>
+
+namespace texfab::atlas {
+
+struct PackChartsOptions {
+  int width = 2048;          ///< atlas width in texels (16 .. 16384)
+  int height = 2048;         ///< atlas height in texels (16 .. 16384)
+  int gutter = 4;            ///< minimum empty texels between two charts (0 .. 64)
+  bool powerOfTwo = true;    ///< require power-of-two width and height
+  double texelsPerUnit = 0;  ///< fixed density; 0 = the largest that fits
+  int maxPasses = 8;         ///< packing passes of the density search (>= 1)
+
+  void validate() const;
+};
+
+struct PackChartsReport {
+  double texelsPerUnit = 0;
+  int passes = 0;
+  int usedHeight = 0;          ///< rows used by the packed charts (<= height)
+  size_t chartsBelowOneTexel = 0; ///< charts whose extent is under one texel at the chosen density
+};
+
+/// Fills atlas.width/height/texelsPerUnit/texelUvs and each chart's placement. Throws
+/// texfab::Error when the charts cannot fit (e.g. more charts than the resolution can hold).
+PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const PackChartsOptions& options = {},
+                            int threads = 0);
+
+} // namespace texfab::atlas

@@ -1,0 +1,116 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Atlas rasterization (texel-center sampling) and gutter filling by nearest-texel propagation:
+//  - P.-E. Danielsson, "Euclidean distance mapping", CGIP 1980 (two-pass vector propagation).
+#include "atlas/rasterize_atlas.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace texfab::atlas {
+
+void atlasBarycentrics(const Atlas& atlas, uint32_t t, const Eigen::Vector2d& p, double& b1, double& b2) {
+  const Eigen::Vector2d a = atlas.texelUvs[3 * size_t(t)].cast<double>();
+  const Eigen::Vector2d e1 = atlas.texelUvs[3 * size_t(t) + 1].cast<double>() - a;
+  const Eigen::Vector2d e2 = atlas.texelUvs[3 * size_t(t) + 2].cast<double>() - a;
+  const double det = e1.x() * e2.y() - e1.y() * e2.x();
+  const Eigen::Vector2d d = p - a;
+  if (det == 0) {
+    b1 = b2 = 0;
+    return;
+  }
+  b1 = (d.x() * e2.y() - d.y() * e2.x()) / det;
+  b2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
+}
+
+AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, int threads) {
+  (void)threads;
+  const int W = atlas.width, H = atlas.height;
+  AtlasFields fields;
+  fields.samples = TexelField<SurfaceSample>(W, H);
+  fields.position = TexelField<Float3>(W, H);
+  fields.normal = TexelField<Float3>(W, H);
+  // Vertex normals when the mesh has none.
+  std::vector<Eigen::Vector3f> vertexNormal;
+  if (!mesh.hasNormals()) {
+    vertexNormal.assign(mesh.vertexCount(), Eigen::Vector3f::Zero());
+    for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+      const Eigen::Vector3f n = (mesh.corner(t, 1) - mesh.corner(t, 0)).cross(mesh.corner(t, 2) - mesh.corner(t, 0));
+      for (int k = 0; k < 3; ++k) vertexNormal[mesh.triangles[t][size_t(k)]] += n;
+    }
+    for (auto& n : vertexNormal)
+      if (n.squaredNorm() > 0) n.normalize();
+  }
+  auto cornerNormal = [&](size_t t, int k) -> Eigen::Vector3f {
+    return mesh.hasNormals() ? mesh.normals[3 * t + size_t(k)] : vertexNormal[mesh.triangles[t][size_t(k)]];
+  };
+  auto evaluate = [&](uint32_t t, float b1, float b2, Float3& pos, Float3& nrm) {
+    const float b0 = 1 - b1 - b2;
+    const Eigen::Vector3f p = b0 * mesh.corner(t, 0) + b1 * mesh.corner(t, 1) + b2 * mesh.corner(t, 2);
+    Eigen::Vector3f n = b0 * cornerNormal(t, 0) + b1 * cornerNormal(t, 1) + b2 * cornerNormal(t, 2);
+    if (n.squaredNorm() > 0) n.normalize();
+    pos = {p.x(), p.y(), p.z()};
+    nrm = {n.x(), n.y(), n.z()};
+  };
+  for (size_t c = 0; c < atlas.charts.size(); ++c)
+    for (uint32_t t : atlas.charts[c].faces) {
+      Eigen::Vector2d p[3];
+      for (int k = 0; k < 3; ++k) p[k] = atlas.texelUvs[3 * size_t(t) + size_t(k)].cast<double>();
+      const int x0 = std::max(0, int(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}) - 0.5)));
+      const int x1 = std::min(W - 1, int(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}) - 0.5)));
+      const int y0 = std::max(0, int(std::floor(std::min({p[0].y(), p[1].y(), p[2].y()}) - 0.5)));
+      const int y1 = std::min(H - 1, int(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}) - 0.5)));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          double b1, b2;
+          atlasBarycentrics(atlas, t, {x + 0.5, y + 0.5}, b1, b2);
+          const double b0 = 1 - b1 - b2;
+          const double eps = -1e-9;
+          if (b0 < eps || b1 < eps || b2 < eps) continue;
+          SurfaceSample& s = fields.samples.at(x, y);
+          if (s.chart >= 0) {
+            if (s.chart != int32_t(c)) ++fields.overlappingTexels;
+            continue;
+          }
+          s = {int32_t(c), t, float(b1), float(b2)};
+          evaluate(t, float(b1), float(b2), fields.position.at(x, y), fields.normal.at(x, y));
+          ++fields.chartTexels;
+        }
+    }
+  // Gutter fill: nearest chart texel by two-pass propagation of source coordinates.
+  std::vector<int32_t> srcX(size_t(W) * size_t(H), -1), srcY(size_t(W) * size_t(H), -1);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (fields.samples.at(x, y).chart >= 0) srcX[fields.samples.index(x, y)] = x, srcY[fields.samples.index(x, y)] = y;
+  auto relax = [&](int x, int y, int nx, int ny) {
+    if (nx < 0 || ny < 0 || nx >= W || ny >= H) return;
+    const size_t i = size_t(y) * size_t(W) + size_t(x), j = size_t(ny) * size_t(W) + size_t(nx);
+    if (srcX[j] < 0) return;
+    const long long d = (long long)(srcX[j] - x) * (srcX[j] - x) + (long long)(srcY[j] - y) * (srcY[j] - y);
+    if (srcX[i] >= 0) {
+      const long long e = (long long)(srcX[i] - x) * (srcX[i] - x) + (long long)(srcY[i] - y) * (srcY[i] - y);
+      if (e <= d) return;
+    }
+    srcX[i] = srcX[j], srcY[i] = srcY[j];
+  };
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1), relax(x, y, x + 1, y - 1);
+    for (int x = W - 1; x >= 0; --x) relax(x, y, x + 1, y);
+  }
+  for (int y = H - 1; y >= 0; --y) {
+    for (int x = W - 1; x >= 0; --x) relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1), relax(x, y, x - 1, y + 1);
+    for (int x = 0; x < W; ++x) relax(x, y, x - 1, y);
+  }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const size_t i = fields.samples.index(x, y);
+      if (fields.samples.values[i].chart >= 0 || srcX[i] < 0) continue;
+      const size_t j = fields.samples.index(srcX[i], srcY[i]);
+      fields.samples.values[i] = fields.samples.values[j];
+      fields.samples.values[i].chart = -1;
+      fields.position.values[i] = fields.position.values[j];
+      fields.normal.values[i] = fields.normal.values[j];
+    }
+  return fields;
+}
+
+} // namespace texfab::atlas

@@ -1,0 +1,232 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Smooth tangent fields by a sparse linear solve over a discrete connection:
+//  - F. Knöppel, K. Crane, U. Pinkall, P. Schröder, "Globally Optimal Direction Fields",
+//    SIGGRAPH 2013 (complex representation in per-vertex frames, parallel transport across edges,
+//    smoothness + alignment energy; n-direction fields as z^n).
+//  - G. Taubin, "Estimating the Tensor of Curvature of a Surface from a Polyhedral
+//    Approximation", ICCV 1995 (per-vertex principal directions for the curvature option).
+#include "geometry/tangent_field.h"
+
+#include "render/error.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <queue>
+
+namespace texfab::geometry {
+
+void TangentFieldOptions::validate() const {
+  if (!(smoothness > 0) || !std::isfinite(smoothness)) throw Error("tangent field smoothness must be > 0");
+  if (kind == TangentFieldKind::Direction && !(direction.norm() > 0) )
+    throw Error("tangent field direction must be a non-zero vector");
+  if (!direction.allFinite()) throw Error("tangent field direction must be finite");
+}
+
+namespace {
+
+using Complex = std::complex<double>;
+
+double wrapAngle(double a) {
+  a = std::fmod(a + M_PI, 2 * M_PI);
+  if (a < 0) a += 2 * M_PI;
+  return a - M_PI;
+}
+
+} // namespace
+
+Eigen::Vector3f TangentField::at(const Mesh& mesh, size_t t, float b1, float b2) const {
+  const auto& tri = mesh.triangles[t];
+  Eigen::Vector3f v = (1 - b1 - b2) * tangents[tri[0]] + b1 * tangents[tri[1]] + b2 * tangents[tri[2]];
+  Eigen::Vector3f n = (mesh.corner(t, 1) - mesh.corner(t, 0)).cross(mesh.corner(t, 2) - mesh.corner(t, 0));
+  if (n.squaredNorm() > 0) n.normalize();
+  v -= n * n.dot(v);
+  if (v.squaredNorm() < 1e-20f) { // the field cancels here (a singularity): any tangent
+    v = (mesh.corner(t, 1) - mesh.corner(t, 0));
+    v -= n * n.dot(v);
+  }
+  return v.squaredNorm() > 0 ? Eigen::Vector3f(v.normalized()) : Eigen::Vector3f(1, 0, 0);
+}
+
+TangentField computeTangentField(const Mesh& mesh, const TangentFieldOptions& options) {
+  options.validate();
+  const size_t nv = mesh.vertexCount(), nt = mesh.triangleCount();
+  TangentField field;
+  field.normals.assign(nv, Eigen::Vector3f::Zero());
+  std::vector<double> vertexArea(nv, 0.0);
+  std::vector<Eigen::Vector3d> N(nv, Eigen::Vector3d::Zero());
+  for (size_t t = 0; t < nt; ++t) {
+    const Eigen::Vector3d a = mesh.corner(t, 0).cast<double>(), b = mesh.corner(t, 1).cast<double>(),
+                          c = mesh.corner(t, 2).cast<double>();
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    for (int k = 0; k < 3; ++k) {
+      N[mesh.triangles[t][size_t(k)]] += n;
+      vertexArea[mesh.triangles[t][size_t(k)]] += n.norm() / 6;
+    }
+  }
+  double meanArea = 0;
+  size_t used = 0;
+  for (size_t v = 0; v < nv; ++v) {
+    if (N[v].squaredNorm() > 0) N[v].normalize(), ++used;
+    else N[v] = Eigen::Vector3d::UnitZ();
+    meanArea += vertexArea[v];
+    field.normals[v] = N[v].cast<float>();
+  }
+  meanArea = used ? meanArea / double(used) : 1.0;
+  if (!(meanArea > 0)) meanArea = 1;
+  // Per-vertex frames (e1, e2 = n × e1).
+  std::vector<Eigen::Vector3d> e1(nv), e2(nv);
+  for (size_t v = 0; v < nv; ++v) {
+    const Eigen::Vector3d& n = N[v];
+    const Eigen::Vector3d axis = std::abs(n.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    e1[v] = (axis - n * n.dot(axis)).normalized();
+    e2[v] = n.cross(e1[v]);
+  }
+  auto angleIn = [&](size_t v, const Eigen::Vector3d& d) { return std::atan2(d.dot(e2[v]), d.dot(e1[v])); };
+  // Undirected edges with their transport angle (from i to j).
+  struct Edge {
+    uint32_t i, j;
+    double rho;
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> keys;
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = mesh.triangles[t][size_t(k)], b = mesh.triangles[t][size_t((k + 1) % 3)];
+      if (a == b) continue;
+      keys.push_back({std::min(a, b), std::max(a, b)});
+    }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  auto transport = [&](uint32_t i, uint32_t j) {
+    const Eigen::Vector3d d = (mesh.positions[j] - mesh.positions[i]).cast<double>();
+    return angleIn(j, d) - angleIn(i, d); // angle of a vector at j = angle at i + rho
+  };
+  std::vector<Edge> edges;
+  edges.reserve(keys.size());
+  for (auto [i, j] : keys) edges.push_back({i, j, transport(i, j)});
+
+  const int power = options.kind == TangentFieldKind::Curvature ? 2 : 1;
+  // Targets d_i (complex, in the vertex frame; magnitude = confidence).
+  std::vector<Complex> target(nv, Complex(0, 0));
+  if (options.kind == TangentFieldKind::Direction) {
+    const Eigen::Vector3d dir = options.direction.cast<double>().normalized();
+    for (size_t v = 0; v < nv; ++v) target[v] = Complex(dir.dot(e1[v]), dir.dot(e2[v]));
+  } else {
+    // Taubin's tensor: M = Σ w_ij κ_ij T_ij T_ijᵀ; its eigenvectors in the tangent plane are the
+    // principal directions. We take the minimum-curvature direction, doubled angle (line field).
+    std::vector<Eigen::Matrix3d> M(nv, Eigen::Matrix3d::Zero());
+    std::vector<double> wsum(nv, 0.0);
+    for (const Edge& e : edges)
+      for (int side = 0; side < 2; ++side) {
+        const uint32_t i = side ? e.j : e.i, j = side ? e.i : e.j;
+        const Eigen::Vector3d d = (mesh.positions[j] - mesh.positions[i]).cast<double>();
+        const double len2 = d.squaredNorm();
+        if (!(len2 > 0)) continue;
+        const double kappa = 2 * N[i].dot(-d) / len2;
+        Eigen::Vector3d T = d - N[i] * N[i].dot(d);
+        if (T.squaredNorm() <= 0) continue;
+        T.normalize();
+        const double w = std::sqrt(len2);
+        M[i] += w * kappa * T * T.transpose();
+        wsum[i] += w;
+      }
+    for (size_t v = 0; v < nv; ++v) {
+      if (!(wsum[v] > 0)) continue;
+      Eigen::Matrix2d m;
+      const Eigen::Matrix3d Mv = M[v] / wsum[v];
+      m << e1[v].dot(Mv * e1[v]), e1[v].dot(Mv * e2[v]), e2[v].dot(Mv * e1[v]), e2[v].dot(Mv * e2[v]);
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(m);
+      const Eigen::Vector2d ev = es.eigenvalues();
+      // Eigenvalue of the tensor is proportional to curvature; minimum |curvature| direction.
+      const int idx = std::abs(ev(0)) <= std::abs(ev(1)) ? 0 : 1;
+      const Eigen::Vector2d dir = es.eigenvectors().col(idx);
+      const double anis = std::abs(std::abs(ev(0)) - std::abs(ev(1)));
+      target[v] = std::pow(Complex(dir.x(), dir.y()), power) * anis;
+    }
+    // Normalize confidences to a mean of 1.
+    double mean = 0;
+    for (const Complex& z : target) mean += std::abs(z);
+    mean /= double(std::max<size_t>(nv, 1));
+    if (mean > 0)
+      for (Complex& z : target) z /= mean;
+  }
+  // Energy: Σ_edges |z_j - r_ij z_i|² + λ Σ_i (a_i / ā) |z_i - d_i|², λ = 1 / smoothness.
+  const double lambda = 1.0 / options.smoothness;
+  std::vector<Eigen::Triplet<Complex>> trip;
+  trip.reserve(4 * edges.size() + nv);
+  std::vector<double> diag(nv, 0.0);
+  for (const Edge& e : edges) {
+    const Complex r = std::polar(1.0, power * e.rho);
+    diag[e.i] += 1, diag[e.j] += 1;
+    trip.emplace_back(e.j, e.i, -r);
+    trip.emplace_back(e.i, e.j, -std::conj(r));
+  }
+  const Eigen::Index n = Eigen::Index(nv);
+  Eigen::VectorX<Complex> rhs(n);
+  for (size_t v = 0; v < nv; ++v) {
+    const double w = lambda * vertexArea[v] / meanArea + 1e-9;
+    trip.emplace_back(v, v, Complex(diag[v] + w, 0));
+    rhs(Eigen::Index(v)) = w * target[v];
+  }
+  Eigen::SparseMatrix<Complex> A(n, n);
+  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<Complex>> solver(A);
+  Eigen::VectorX<Complex> z = rhs;
+  if (solver.info() == Eigen::Success) z = solver.solve(rhs);
+  if (!z.allFinite()) z = rhs;
+  // Back to vectors; a line field takes the square root, signs propagated for consistency.
+  std::vector<double> angle(nv, 0.0);
+  for (size_t v = 0; v < nv; ++v) angle[v] = std::arg(z(Eigen::Index(v))) / power;
+  if (power == 2) {
+    std::vector<std::vector<std::pair<uint32_t, double>>> nbr(nv);
+    for (const Edge& e : edges) nbr[e.i].push_back({e.j, e.rho}), nbr[e.j].push_back({e.i, -e.rho});
+    std::vector<uint8_t> seen(nv, 0);
+    for (size_t s = 0; s < nv; ++s) {
+      if (seen[s]) continue;
+      seen[s] = 1;
+      std::queue<uint32_t> q;
+      q.push(uint32_t(s));
+      while (!q.empty()) {
+        const uint32_t i = q.front();
+        q.pop();
+        for (auto [j, rho] : nbr[i]) {
+          if (seen[j]) continue;
+          seen[j] = 1;
+          if (std::abs(wrapAngle(angle[j] - (angle[i] + rho))) > M_PI / 2) angle[j] += M_PI;
+          q.push(j);
+        }
+      }
+    }
+  }
+  field.tangents.assign(nv, Eigen::Vector3f::Zero());
+  for (size_t v = 0; v < nv; ++v)
+    field.tangents[v] = (std::cos(angle[v]) * e1[v] + std::sin(angle[v]) * e2[v]).cast<float>();
+  // Singularities: turning of the (power-)field around each triangle, corrected by the holonomy.
+  for (size_t t = 0; t < nt; ++t) {
+    double turn = 0, holonomy = 0;
+    bool ok = true;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = mesh.triangles[t][size_t(k)], j = mesh.triangles[t][size_t((k + 1) % 3)];
+      if (i == j) ok = false;
+      const double rho = transport(i, j);
+      holonomy += rho;
+      turn += wrapAngle(power * (angle[j] - angle[i] - rho));
+    }
+    if (!ok) continue;
+    // The holonomy of a flat-enough triangle is the angle defect; the field's index is the turn
+    // plus that defect over 2π (per power).
+    const double defect = wrapAngle(holonomy);
+    const double idx = std::round((turn + power * defect) / (2 * M_PI));
+    if (idx != 0) {
+      field.singularTriangles.push_back(uint32_t(t));
+      field.singularIndex.push_back(float(idx / power));
+    }
+  }
+  return field;
+}
+
+} // namespace texfab::geometry
