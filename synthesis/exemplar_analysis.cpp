@@ -9,6 +9,7 @@
 #include "render/image_io.h"
 #include "render/parallel.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/hash.h"
 
 #include <Eigen/Dense>
 #include <nanoflann.hpp>
@@ -240,15 +241,6 @@ std::vector<uint32_t> coherenceCandidates(const std::vector<int8_t>& appearance,
   }, 256);
   return out;
 }
-
-struct Fnv1a {
-  uint64_t h = 1469598103934665603ull;
-  void add(const void* data, size_t size) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  }
-  template <class T> void add(const T& value) { add(&value, sizeof(T)); }
-};
 
 } // namespace
 

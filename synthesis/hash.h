@@ -7,6 +7,7 @@
 //
 // Based on: M. Jarzynski, M. Olano. Hash Functions for GPU Rendering. JCGT 9(3), 2020 (PCG hash).
 
+#include <cstddef>
 #include <cstdint>
 
 namespace texfab::synthesis {
@@ -22,5 +23,22 @@ constexpr uint32_t texelHash(uint32_t seed, uint32_t level, int32_t x, int32_t y
   return pcgHash(seed ^ pcgHash(level ^ pcgHash(static_cast<uint32_t>(x) ^
                                                 pcgHash(static_cast<uint32_t>(y) ^ pcgHash(purpose)))));
 }
+
+/// A 3-D variant of texelHash: one voxel of one level, for one purpose.
+constexpr uint32_t voxelHash(uint32_t seed, uint32_t level, int32_t x, int32_t y, int32_t z, uint32_t purpose) {
+  return pcgHash(seed ^ pcgHash(level ^ pcgHash(static_cast<uint32_t>(x) ^
+                                                pcgHash(static_cast<uint32_t>(y) ^
+                                                        pcgHash(static_cast<uint32_t>(z) ^ pcgHash(purpose))))));
+}
+
+/// FNV-1a, 64 bits: the content hash behind the on-disk analysis cache keys (not for randomness).
+struct Fnv1a {
+  uint64_t h = 1469598103934665603ull;
+  void add(const void* data, size_t size) {
+    const auto* p = static_cast<const uint8_t*>(data);
+    for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  }
+  template <class T> void add(const T& value) { add(&value, sizeof(T)); }
+};
 
 } // namespace texfab::synthesis

@@ -1,0 +1,292 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis. EGSR 2008,
+//           §4.3 (candidate slab), §5.1 (initialization, jitter, upsampling, correction with the
+//           two-step search), §5.2 (dependency masks).
+#include "synthesis/cpu/solid_kernels.h"
+
+#include "synthesis/coord_map.h"
+#include "synthesis/cpu/synthesis_kernels.h"
+#include "synthesis/hash.h"
+#include "synthesis/solid_analysis.h"
+
+#include <atomic>
+#include <climits>
+
+namespace texfab::synthesis::cpu {
+
+namespace {
+
+constexpr int kAxisU[3] = {1, 2, 0};  // as in solid_analysis.h: E_x (y, z), E_y (z, x), E_z (x, y)
+constexpr int kAxisV[3] = {2, 0, 1};
+constexpr int kSlabThickness = kSolidNeighborhoodSide;
+
+struct CrossLayout {
+  int64_t linear[kSolidCrossVoxels];  // buffer index offsets of the cross
+  int plane[3][25];                   // cross index of plane e's (u, v) offsets, v outer
+};
+
+CrossLayout layoutFor(const VolumeGrid& g) {
+  CrossLayout l{};
+  const auto& cross = solidCrossOffsets();
+  for (int i = 0; i < kSolidCrossVoxels; ++i)
+    l.linear[i] = (int64_t(cross[size_t(i)][2]) * g.ny + cross[size_t(i)][1]) * g.nx + cross[size_t(i)][0];
+  for (int e = 0; e < 3; ++e) {
+    int k = 0;
+    for (int j = -2; j <= 2; ++j)
+      for (int i = -2; i <= 2; ++i) {
+        int o[3] = {0, 0, 0};
+        o[kAxisU[e]] += i;
+        o[kAxisV[e]] += j;
+        for (int c = 0; c < kSolidCrossVoxels; ++c)
+          if (cross[size_t(c)][0] == o[0] && cross[size_t(c)][1] == o[1] && cross[size_t(c)][2] == o[2])
+            l.plane[e][k] = c;
+        ++k;
+      }
+  }
+  return l;
+}
+
+inline uint32_t wrapCoord(int64_t u, int64_t v, int w, int h) {
+  return packCoord(uint32_t(floorMod(u, w)), uint32_t(floorMod(v, h)));
+}
+
+// Integer projection. |basis| <= 2^12 and |x - mean| <= 6 * 255, so 183 products fit in int32.
+inline void project(const int32_t* values, int inputs, const int32_t* mean, const int16_t* basis, int dims,
+                    int32_t divisor, int8_t* out) {
+  int16_t centred[kSolidCrossVoxels * 3];
+  for (int j = 0; j < inputs; ++j) centred[j] = int16_t(values[j] - mean[j]);
+  for (int d = 0; d < dims; ++d) {
+    const int16_t* b = basis + size_t(d) * size_t(inputs);
+    int32_t acc = 0;
+    for (int j = 0; j < inputs; ++j) acc += int32_t(b[j]) * int32_t(centred[j]);
+    const int32_t half = divisor / 2;
+    const int32_t q = acc >= 0 ? (acc + half) / divisor : -((-acc + half) / divisor);
+    out[d] = int8_t(q < -127 ? -127 : q > 127 ? 127 : q);
+  }
+}
+
+template <int N> inline int32_t ssdN(const int8_t* a, const int8_t* b) {
+  int32_t s = 0;
+  for (int i = 0; i < N; ++i) {
+    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
+    s += d * d;
+  }
+  return s;
+}
+
+inline int32_t ssd(const int8_t* a, const int8_t* b, int n) {
+  if (n == 8) return ssdN<8>(a, b);
+  if (n == 12) return ssdN<12>(a, b);
+  int32_t s = 0;
+  for (int i = 0; i < n; ++i) {
+    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
+    s += d * d;
+  }
+  return s;
+}
+
+// The sub-pass class of step t and the row's first voxel of that class; false if the row has none.
+// interleave 2: 8 classes (x, y, z parities); interleave 1: every voxel in every step.
+inline bool classRow(const VolumeGrid& g, int interleave, int step, int row, int& y, int& z, int& firstX) {
+  y = row % g.ny;
+  z = row / g.ny;
+  if (interleave == 1) {
+    firstX = 0;
+    return true;
+  }
+  const int cls = (step - 1) % 8;
+  if (floorMod(g.y0 + y, 2) != ((cls >> 1) & 1) || floorMod(g.z0 + z, 2) != ((cls >> 2) & 1)) return false;
+  firstX = int(floorMod((cls & 1) - g.x0, 2));
+  return true;
+}
+
+} // namespace
+
+void solidDilateKernel(int8_t* last, const VolumeGrid& g, int interleave, int step, int rowBegin, int rowEnd) {
+  const CrossLayout l = layoutFor(g);
+  const auto target = int8_t(step - 1);
+  for (int r = rowBegin; r < rowEnd; ++r) {
+    int y, z, x0;
+    if (!classRow(g, interleave, step, r, y, z, x0)) continue;
+    if (y < 2 || z < 2 || y >= g.ny - 2 || z >= g.nz - 2) continue;
+    for (int x = x0; x < g.nx; x += interleave) {
+      const size_t v = size_t(r) * size_t(g.nx) + size_t(x);
+      if (std::atomic_ref<int8_t>(last[v]).load(std::memory_order_relaxed) < step) continue;
+      if (x < 2 || x >= g.nx - 2) continue;
+      for (int i = 0; i < kSolidCrossVoxels; ++i) {
+        std::atomic_ref<int8_t> w(last[int64_t(v) + l.linear[i]]);
+        if (w.load(std::memory_order_relaxed) < target) w.store(target, std::memory_order_relaxed);
+      }
+    }
+  }
+}
+
+void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& g, const SolidTables& t, uint32_t seed,
+                     int64_t jitter256, int rowBegin, int rowEnd) {
+  const int w = t.exemplarWidth, h = t.exemplarHeight;
+  constexpr int kCells[2] = {4, 8};          // warp grids, voxels
+  constexpr int64_t kAmplitude[2] = {384, 256};  // x jitter/256: stronger at the small scale (§5.1)
+  for (int r = rowBegin; r < rowEnd; ++r) {
+    const int y = r % g.ny, z = r / g.ny;
+    for (int x = 0; x < g.nx; ++x) {
+      const size_t v = size_t(r) * size_t(g.nx) + size_t(x);
+      if (last[v] < 0) continue;
+      const int64_t q[3] = {g.x0 + x, g.y0 + y, g.z0 + z};
+      int64_t disp[3] = {0, 0, 0};  // 1/256 voxel
+      if (jitter256 > 0)
+        for (int octave = 0; octave < 2; ++octave) {
+          const int cell = kCells[octave];
+          const int64_t amp = jitter256 * kAmplitude[octave] / 256;
+          const int64_t radius2 = int64_t(cell * 256) * (cell * 256);
+          int64_t c[3];
+          for (int a = 0; a < 3; ++a) c[a] = q[a] >= 0 ? q[a] / cell : -((-q[a] + cell - 1) / cell);
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                const int32_t cc[3] = {int32_t(c[0] + dx), int32_t(c[1] + dy), int32_t(c[2] + dz)};
+                // One hash per bump: its centre (3 x 10 bits inside the cell), a second for its
+                // direction (3 x 9 bits, each component in [-256, 256)).
+                const uint32_t hc = voxelHash(seed, uint32_t(octave), cc[0], cc[1], cc[2], 0);
+                const uint32_t hd = pcgHash(hc);
+                int64_t r2 = 0;
+                int64_t dir[3];
+                for (int a = 0; a < 3; ++a) {
+                  const int64_t frac = (hc >> (10 * a)) & 0x3ffu;
+                  const int64_t centre = int64_t(cc[a]) * cell * 256 + ((frac * cell * 256) >> 10);
+                  const int64_t d = q[a] * 256 - centre;
+                  r2 += d * d;
+                  dir[a] = int64_t((hd >> (9 * a)) & 0x1ffu) - 256;
+                }
+                if (r2 >= radius2) continue;
+                const int64_t s = (radius2 - r2) * 65536 / radius2;
+                const int64_t weight = (s * s) >> 16;
+                for (int a = 0; a < 3; ++a) disp[a] += (amp * dir[a] * weight) >> 24;
+              }
+        }
+      int64_t p[3];
+      for (int a = 0; a < 3; ++a) p[a] = q[a] + ((disp[a] + 128) >> 8);
+      // The slab: E_z pixel under (x, y), thickened along z by its best candidate's E_x and E_y
+      // neighborhoods (E_x's v axis and E_y's u axis are z).
+      const uint32_t pixel = wrapCoord(p[0] * t.spacing, p[1] * t.spacing, w, h);
+      const int64_t dz = floorMod(p[2], kSlabThickness) - kSlabThickness / 2;
+      const uint32_t* best = t.triples[2] + (size_t(coordV(pixel)) * size_t(w) + coordU(pixel)) * kSolidMaxCandidates * 3;
+      uint32_t* o = out + v * 3;
+      o[0] = wrapCoord(coordU(best[0]), int64_t(coordV(best[0])) + dz * t.spacing, w, h);
+      o[1] = wrapCoord(int64_t(coordU(best[1])) + dz * t.spacing, coordV(best[1]), w, h);
+      o[2] = pixel;
+    }
+  }
+}
+
+void solidUpsampleKernel(const uint32_t* parent, const VolumeGrid& pg, uint32_t* out, const int8_t* last,
+                         const VolumeGrid& g, int spacing, int w, int h, int rowBegin, int rowEnd) {
+  for (int r = rowBegin; r < rowEnd; ++r) {
+    const int y = r % g.ny, z = r / g.ny;
+    for (int x = 0; x < g.nx; ++x) {
+      const size_t v = size_t(r) * size_t(g.nx) + size_t(x);
+      if (last[v] < 0) continue;
+      const int64_t q[3] = {g.x0 + x, g.y0 + y, g.z0 + z};
+      const size_t pv = (size_t(floorShift(q[2], 1) - pg.z0) * size_t(pg.ny) + size_t(floorShift(q[1], 1) - pg.y0)) *
+                            size_t(pg.nx) +
+                        size_t(floorShift(q[0], 1) - pg.x0);
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t s = parent[pv * 3 + size_t(e)];
+        out[v * 3 + size_t(e)] = wrapCoord(int64_t(coordU(s)) + spacing * (q[kAxisU[e]] & 1),
+                                           int64_t(coordV(s)) + spacing * (q[kAxisV[e]] & 1), w, h);
+      }
+    }
+  }
+}
+
+void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, const VolumeGrid& g,
+                        const SolidTables& t, int interleave, int step, int rowBegin, int rowEnd) {
+  const CrossLayout l = layoutFor(g);
+  const int w = t.exemplarWidth, h = t.exemplarHeight;
+  for (int r = rowBegin; r < rowEnd; ++r) {
+    int y, z, x0;
+    if (!classRow(g, interleave, step, r, y, z, x0)) continue;
+    for (int x = x0; x < g.nx; x += interleave) {
+      const size_t v = size_t(r) * size_t(g.nx) + size_t(x);
+      if (last[v] < step) continue;
+
+      // The current 3-neighborhood: 2 x the sum of each voxel's three exemplar colours.
+      int32_t values[kSolidCrossVoxels * 3];
+      for (int i = 0; i < kSolidCrossVoxels; ++i) {
+        const uint32_t* s = in + (int64_t(v) + l.linear[i]) * 3;
+        for (int ch = 0; ch < 3; ++ch) values[i * 3 + ch] = 0;
+        for (int e = 0; e < 3; ++e) {
+          const uint8_t* c = t.colors[e] + (size_t(coordV(s[e])) * size_t(w) + coordU(s[e])) * 3;
+          for (int ch = 0; ch < 3; ++ch) values[i * 3 + ch] += 2 * c[ch];
+        }
+      }
+      int8_t target3d[kSolidMaxDims];
+      project(values, kSolidCrossVoxels * 3, t.mean3d, t.basis3d, t.dims, t.divisor3d, target3d);
+
+      // Step 1: the best 2-D candidate in each direction.
+      uint32_t bestPixel[3];
+      for (int e = 0; e < 3; ++e) {
+        int32_t plane[75];
+        for (int k = 0; k < 25; ++k)
+          for (int ch = 0; ch < 3; ++ch) plane[k * 3 + ch] = values[l.plane[e][k] * 3 + ch];
+        int8_t target2d[kSolid2dDims];
+        project(plane, 75, t.mean2d, t.basis2d, kSolid2dDims, t.divisor2d, target2d);
+        int32_t best = INT32_MAX;
+        uint32_t bestC = 0;
+        uint32_t seen[9];  // coherent neighbors often point at the same pixel: visit it once
+        int seenCount = 0;
+        for (int j = -1; j <= 1; ++j)
+          for (int i = -1; i <= 1; ++i) {
+            const int c = l.plane[e][(j + 2) * 5 + (i + 2)];
+            const uint32_t s = in[(int64_t(v) + l.linear[c]) * 3 + e];
+            const uint32_t base = wrapCoord(int64_t(coordU(s)) - i * t.spacing, int64_t(coordV(s)) - j * t.spacing, w, h);
+            bool visited = false;
+            for (int k = 0; k < seenCount && !visited; ++k) visited = seen[k] == base;
+            if (visited) continue;
+            seen[seenCount++] = base;
+            const uint32_t* cand = t.candidates2d[e] + (size_t(coordV(base)) * size_t(w) + coordU(base)) * size_t(t.k2dStride);
+            for (int k = 0; k < t.k2d; ++k) {
+              const uint32_t p = cand[k];
+              const int32_t d =
+                  ssdN<kSolid2dDims>(target2d, t.descriptors2d[e] + (size_t(coordV(p)) * size_t(w) + coordU(p)) * kSolid2dDims);
+              if (d < best || (d == best && p < bestC)) {  // order-independent minimum of (d, p)
+                best = d;
+                bestC = p;
+              }
+            }
+          }
+        bestPixel[e] = bestC;
+      }
+
+      // Step 2: the best 3-D candidate of those three pixels.
+      int32_t best = INT32_MAX;
+      const uint32_t* bestTriple = nullptr;
+      for (int e = 0; e < 3; ++e) {
+        const size_t p = size_t(coordV(bestPixel[e])) * size_t(w) + coordU(bestPixel[e]);
+        for (int k = 0; k < t.k3d; ++k) {
+          const size_t slot = p * kSolidMaxCandidates + size_t(k);
+          const int32_t d = ssd(target3d, t.descriptors3d[e] + slot * size_t(t.dims), t.dims);
+          if (d < best) {
+            best = d;
+            bestTriple = t.triples[e] + slot * 3;
+          }
+        }
+      }
+      for (int e = 0; e < 3; ++e) out[v * 3 + size_t(e)] = bestTriple[e];
+    }
+  }
+}
+
+void solidCommitKernel(const uint32_t* from, uint32_t* to, const int8_t* last, const VolumeGrid& g, int interleave, int step,
+                       int rowBegin, int rowEnd) {
+  for (int r = rowBegin; r < rowEnd; ++r) {
+    int y, z, x0;
+    if (!classRow(g, interleave, step, r, y, z, x0)) continue;
+    for (int x = x0; x < g.nx; x += interleave) {
+      const size_t v = size_t(r) * size_t(g.nx) + size_t(x);
+      if (last[v] < step) continue;
+      for (int e = 0; e < 3; ++e) to[v * 3 + size_t(e)] = from[v * 3 + size_t(e)];
+    }
+  }
+}
+
+} // namespace texfab::synthesis::cpu

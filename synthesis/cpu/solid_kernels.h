@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The per-voxel kernels of lazy solid synthesis (Dong, Lefebvre, Tong, Drettakis 2008, §5.1-5.2),
+// on plain integer arrays, in the style of synthesis/cpu/synthesis_kernels.h: each kernel reads
+// only its input buffers and writes only its output buffer, processes the rows [rowBegin, rowEnd)
+// it is given, and uses integer arithmetic only, so that the Vulkan compute shaders are ports.
+//
+// A level buffer holds, per voxel, three packed exemplar coordinates (coord_map.h packCoord):
+// the coordinates in E_x, E_y and E_z. Voxel (x, y, z) of a buffer is level position
+// (grid.x0 + x, grid.y0 + y, grid.z0 + z), index (z * ny + y) * nx + x; row r is (y, z) =
+// (r mod ny, r div ny). A mask buffer (`last`, int8 per voxel) says up to which correction step t
+// a voxel is needed: -1 = not at all, 0 = after upsampling, T = after the last sub-pass.
+
+#include <cstddef>
+#include <cstdint>
+
+namespace texfab::synthesis::cpu {
+
+struct VolumeGrid {
+  int64_t x0 = 0, y0 = 0, z0 = 0;  ///< level position of buffer voxel (0, 0, 0)
+  int nx = 0, ny = 0, nz = 0;
+
+  size_t size() const { return size_t(nx) * size_t(ny) * size_t(nz); }
+  int rows() const { return ny * nz; }
+};
+
+/// What the correction kernel reads about one synthesized level (views into SolidLevel).
+struct SolidTables {
+  int exemplarWidth = 0;
+  int exemplarHeight = 0;
+  int spacing = 1;      ///< h_l
+  int dims = 0;         ///< dimensions of a projected 3-neighborhood
+  int k2d = 1;          ///< 2-D candidates compared per pixel
+  int k2dStride = 1;    ///< 2-D candidates stored per pixel
+  int k3d = 1;          ///< 3-D candidates compared per pixel
+  const uint8_t* colors[3] = {};         ///< per exemplar: w*h*3 8-bit colours of this level
+  const uint32_t* candidates2d[3] = {};  ///< per exemplar: w*h*k2dStride packed coordinates
+  const int8_t* descriptors2d[3] = {};   ///< per exemplar: w*h*8
+  const uint32_t* triples[3] = {};       ///< per exemplar: w*h*12*3 packed coordinates
+  const int8_t* descriptors3d[3] = {};   ///< per exemplar: w*h*12*dims
+  const int32_t* mean2d = nullptr;       ///< 75
+  const int16_t* basis2d = nullptr;      ///< 8 * 75
+  int32_t divisor2d = 1;
+  const int32_t* mean3d = nullptr;       ///< 183
+  const int16_t* basis3d = nullptr;      ///< dims * 183
+  int32_t divisor3d = 1;
+};
+
+/// `interleave` is 2 (sub-pass t corrects the voxels of parity class (t-1) mod 8, §5.1) or 1
+/// (every step corrects every voxel from the previous step's values: plain Jacobi passes).
+///
+/// Backward dependency step t (sub-pass class (t-1) mod 8): every voxel of that class with
+/// last >= t needs its 3-neighborhood (the 61-voxel cross, which contains the 3x3 plane
+/// neighbors candidates come from) after step t-1: last = max(last, t-1) there. Scatter with
+/// relaxed atomic byte stores: all writers of a step store the same value, and they never change
+/// which voxels of the step are active. Voxels within 2 of the buffer border must be inactive.
+void solidDilateKernel(int8_t* last, const VolumeGrid& grid, int interleave, int step, int rowBegin, int rowEnd);
+
+/// Initialization (§5.1): the candidate slab of E_z (best triple of each pixel, thickened by
+/// +-2 voxels along z, §4.3) tiled over the volume, read through the random warp ("jitter once"):
+/// voxel q shows the slab at round(q + d(q)), d a sum of compactly supported bumps on two hashed
+/// grids (4 and 8 voxels), amplitude jitter256/256 voxels. Writes voxels with last >= 0.
+void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& grid, const SolidTables& tables,
+                     uint32_t seed, int64_t jitter256, int rowBegin, int rowEnd);
+
+/// Upsampling by coordinate inheritance with a stack (§5.1, errata §20.2): the child voxel q takes
+/// its parent's triple plus spacing * (bits of q along each exemplar's u and v axes).
+/// Writes voxels with last >= 0; `parent` must cover their parents.
+void solidUpsampleKernel(const uint32_t* parent, const VolumeGrid& parentGrid, uint32_t* out, const int8_t* last,
+                         const VolumeGrid& grid, int spacing, int exemplarWidth, int exemplarHeight, int rowBegin,
+                         int rowEnd);
+
+/// Correction sub-pass `step` (class (step-1) mod 8 of the 2x2x2 interleave): for every voxel of
+/// that class with last >= step, the two-step search (§5.1): the best 2-D candidate in each
+/// direction among the k-coherence candidates of its 3x3 plane neighbors, then the best of the
+/// 3-D candidates of those three pixels, by integer SSD of projected neighborhoods; ties go to the
+/// earliest candidate (direction x, y, z; then rank). Writes only those voxels of `out`.
+void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, const VolumeGrid& grid,
+                        const SolidTables& tables, int interleave, int step, int rowBegin, int rowEnd);
+
+/// Copies the voxels corrected at `step` from `from` to `to`.
+void solidCommitKernel(const uint32_t* from, uint32_t* to, const int8_t* last, const VolumeGrid& grid, int interleave,
+                       int step, int rowBegin, int rowEnd);
+
+} // namespace texfab::synthesis::cpu

@@ -1,0 +1,673 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis. EGSR 2008,
+//           §4 (3-D candidate selection) and §6.1-6.2 (shared candidates, PCA, 8-bit storage).
+#include "synthesis/solid_analysis.h"
+
+#include "render/error.h"
+#include "render/image_io.h"
+#include "render/parallel.h"
+#include "synthesis/coord_map.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/hash.h"
+
+#include <Eigen/Dense>
+#include <nanoflann.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <numeric>
+
+namespace texfab::synthesis {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr uint32_t kSolidMagic = 0x444c5354;  // "TSLD"
+constexpr uint32_t kSolidVersion = 1;         // bump whenever the analysis changes
+constexpr int kStripLength = kSolidNeighborhoodSide;
+constexpr int kStripDims = kStripLength * 3;
+constexpr int kRadius = kSolidNeighborhoodSide / 2;
+constexpr int kBasisBits = 12;
+
+int wrap(int a, int m) {
+  const int r = a % m;
+  return r < 0 ? r + m : r;
+}
+
+// Axis unit vectors of each exemplar's (u, v) in the volume (the header's cyclic orientation).
+constexpr int kAxisU[3] = {1, 2, 0};
+constexpr int kAxisV[3] = {2, 0, 1};
+
+// 8-bit RGB of a stack level (grey is replicated).
+std::vector<uint8_t> levelColors(const Image& level) {
+  std::vector<uint8_t> out(size_t(level.width) * level.height * 3);
+  for (int y = 0; y < level.height; ++y)
+    for (int x = 0; x < level.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float v = level.at(x, y, level.channels >= 3 ? c : 0);
+        out[(size_t(y) * level.width + x) * 3 + size_t(c)] = uint8_t(std::lrint(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+      }
+  return out;
+}
+
+struct Exemplar8 {
+  int w = 0, h = 0;
+  const uint8_t* rgb = nullptr;
+  const uint8_t* at(int u, int v) const { return rgb + (size_t(wrap(v, h)) * w + size_t(wrap(u, w))) * 3; }
+};
+
+// The strip through p along u (row) or v (column), taps `spacing` apart.
+void strip(const Exemplar8& e, int u, int v, bool column, int spacing, int32_t* out) {
+  for (int t = -kRadius; t <= kRadius; ++t) {
+    const uint8_t* c = column ? e.at(u, v + t * spacing) : e.at(u + t * spacing, v);
+    for (int ch = 0; ch < 3; ++ch) *out++ = c[ch];
+  }
+}
+
+int32_t stripDistance(const int32_t* a, const int32_t* b) {
+  int32_t s = 0;
+  for (int i = 0; i < kStripDims; ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
+  return s;
+}
+
+struct StripCloud {
+  std::vector<float> points;  // n * kStripDims
+  size_t kdtree_get_point_count() const { return points.size() / kStripDims; }
+  float kdtree_get_pt(size_t i, size_t d) const { return points[i * kStripDims + d]; }
+  template <class Box> bool kdtree_get_bbox(Box&) const { return false; }
+};
+using StripTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, StripCloud>, StripCloud,
+                                                      kStripDims, uint32_t>;
+
+struct Strips {
+  std::vector<int32_t> rows, cols;  // n * kStripDims each
+};
+
+Strips stripsOf(const Exemplar8& e, int spacing) {
+  Strips s;
+  const size_t n = size_t(e.w) * e.h;
+  s.rows.resize(n * kStripDims);
+  s.cols.resize(n * kStripDims);
+  for (int v = 0; v < e.h; ++v)
+    for (int u = 0; u < e.w; ++u) {
+      strip(e, u, v, false, spacing, &s.rows[(size_t(v) * e.w + u) * kStripDims]);
+      strip(e, u, v, true, spacing, &s.cols[(size_t(v) * e.w + u) * kStripDims]);
+    }
+  return s;
+}
+
+struct Triple {  // relative to the exemplar it belongs to: the pixel, then next, then previous
+  int32_t cb;
+  uint32_t q, r;  // pixel indices in the next and previous exemplars
+};
+
+// §4.1: in every pixel of exemplar `self`, the `kept` triples of least crossbar error built from
+// the S best strips of the next and previous exemplars.
+std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strips& next, const Strips& prev, int n,
+                                                 const SolidAnalysisOptions& o, int threads) {
+  StripCloud nextRows, prevCols;
+  nextRows.points.assign(next.rows.begin(), next.rows.end());
+  prevCols.points.assign(prev.cols.begin(), prev.cols.end());
+  StripTree nextTree(kStripDims, nextRows, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  StripTree prevTree(kStripDims, prevCols, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  const size_t s = std::min<size_t>(size_t(o.strips), size_t(n));
+  std::vector<std::vector<Triple>> out(static_cast<size_t>(n));
+  parallelFor(0, n, threads, [&](int begin, int end) {
+    std::vector<uint32_t> qi(s), ri(s);
+    std::vector<float> qd(s), rd(s);
+    std::vector<int32_t> d1(s), d2(s);
+    float query[kStripDims];
+    std::vector<Triple> all;
+    for (int p = begin; p < end; ++p) {
+      const int32_t* col = &self.cols[size_t(p) * kStripDims];
+      const int32_t* row = &self.rows[size_t(p) * kStripDims];
+      for (int i = 0; i < kStripDims; ++i) query[i] = float(col[i]);
+      const size_t nq = nextTree.knnSearch(query, s, qi.data(), qd.data());
+      for (int i = 0; i < kStripDims; ++i) query[i] = float(row[i]);
+      const size_t nr = prevTree.knnSearch(query, s, ri.data(), rd.data());
+      // Exact integer strip distances (the tree's float distances only rank).
+      for (size_t i = 0; i < nq; ++i) d1[i] = stripDistance(col, &next.rows[size_t(qi[i]) * kStripDims]);
+      for (size_t i = 0; i < nr; ++i) d2[i] = stripDistance(row, &prev.cols[size_t(ri[i]) * kStripDims]);
+      // The third crossbar term for all S^2 pairs at once: |a|^2 + |b|^2 - 2 a.b as a small
+      // matrix product. Exact in float: every term is an integer below 2^24.
+      Eigen::MatrixXf qa(Eigen::Index(nq), kStripDims), rb(Eigen::Index(nr), kStripDims);
+      for (size_t a = 0; a < nq; ++a)
+        for (int i = 0; i < kStripDims; ++i) qa(Eigen::Index(a), i) = float(next.cols[size_t(qi[a]) * kStripDims + size_t(i)]);
+      for (size_t b = 0; b < nr; ++b)
+        for (int i = 0; i < kStripDims; ++i) rb(Eigen::Index(b), i) = float(prev.rows[size_t(ri[b]) * kStripDims + size_t(i)]);
+      const Eigen::VectorXf qn = qa.rowwise().squaredNorm(), rn = rb.rowwise().squaredNorm();
+      const Eigen::MatrixXf dot = qa * rb.transpose();
+      all.clear();
+      for (size_t a = 0; a < nq; ++a)
+        for (size_t b = 0; b < nr; ++b) {
+          const auto d3 = int32_t(qn(Eigen::Index(a)) + rn(Eigen::Index(b)) - 2.0f * dot(Eigen::Index(a), Eigen::Index(b)));
+          all.push_back({d1[a] + d2[b] + d3, qi[a], ri[b]});
+        }
+      auto less = [](const Triple& x, const Triple& y) {
+        return x.cb != y.cb ? x.cb < y.cb : x.q != y.q ? x.q < y.q : x.r < y.r;
+      };
+      const size_t keep = std::min(all.size(), size_t(o.kept));
+      std::partial_sort(all.begin(), all.begin() + std::ptrdiff_t(keep), all.end(), less);
+      out[size_t(p)].assign(all.begin(), all.begin() + std::ptrdiff_t(keep));
+    }
+  }, 64);
+  return out;
+}
+
+// §4.2: keep a triple only if, for each foreign coordinate, a candidate of a 4-neighbor pixel has
+// that coordinate one tap (h) away. Iterates until no pixel has more than 12 candidates.
+void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int spacing, int iterations, int threads) {
+  const int n = w * h;
+  auto stepsOf = [&](uint32_t a, uint32_t* out) {
+    const int u = int(a % uint32_t(w)), v = int(a / uint32_t(w));
+    out[0] = uint32_t(v * w + wrap(u + spacing, w));
+    out[1] = uint32_t(v * w + wrap(u - spacing, w));
+    out[2] = uint32_t(wrap(v + spacing, h) * w + u);
+    out[3] = uint32_t(wrap(v - spacing, h) * w + u);
+  };
+  for (int it = 0; it < iterations; ++it) {
+    bool over = false;
+    for (const auto& s : sets) over = over || s.size() > size_t(kSolidMaxCandidates);
+    if (!over) break;
+    std::vector<std::vector<uint32_t>> qs(static_cast<size_t>(n)), rs(static_cast<size_t>(n));
+    for (int p = 0; p < n; ++p) {
+      for (const Triple& t : sets[size_t(p)]) {
+        qs[size_t(p)].push_back(t.q);
+        rs[size_t(p)].push_back(t.r);
+      }
+      std::sort(qs[size_t(p)].begin(), qs[size_t(p)].end());
+      std::sort(rs[size_t(p)].begin(), rs[size_t(p)].end());
+    }
+    std::vector<std::vector<Triple>> next(static_cast<size_t>(n));
+    parallelFor(0, n, threads, [&](int begin, int end) {
+      for (int p = begin; p < end; ++p) {
+        const int u = p % w, v = p / w;
+        const int neighbors[4] = {v * w + wrap(u + spacing, w), v * w + wrap(u - spacing, w),
+                                  wrap(v + spacing, h) * w + u, wrap(v - spacing, h) * w + u};
+        auto found = [&](const std::vector<std::vector<uint32_t>>& lists, uint32_t coord) {
+          uint32_t steps[4];
+          stepsOf(coord, steps);
+          for (int nb : neighbors)
+            for (uint32_t s : steps)
+              if (std::binary_search(lists[size_t(nb)].begin(), lists[size_t(nb)].end(), s)) return true;
+          return false;
+        };
+        std::vector<Triple>& kept = next[size_t(p)];
+        for (const Triple& t : sets[size_t(p)])
+          if (found(qs, t.q) && found(rs, t.r)) kept.push_back(t);
+        if (kept.empty()) kept = sets[size_t(p)];  // never empty a pixel
+      }
+    }, 256);
+    sets.swap(next);
+  }
+}
+
+// Fits an integer PCA projection to `samples` (rows of `inputs` integers).
+SolidProjection fitProjection(const std::vector<int32_t>& samples, int inputs, int dims) {
+  const int n = int(samples.size() / size_t(inputs));
+  SolidProjection p;
+  p.inputs = inputs;
+  p.dims = dims;
+  Eigen::MatrixXd m(n, inputs);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < inputs; ++j) m(i, j) = samples[size_t(i) * inputs + size_t(j)];
+  const Eigen::RowVectorXd mean = m.colwise().mean();
+  p.mean.resize(size_t(inputs));
+  for (int j = 0; j < inputs; ++j) p.mean[size_t(j)] = int32_t(std::lrint(mean(j)));
+  for (int j = 0; j < inputs; ++j) m.col(j).array() -= double(p.mean[size_t(j)]);
+  const Eigen::MatrixXd covariance = (m.transpose() * m) / double(std::max(1, n - 1));
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
+  p.basis.assign(size_t(dims) * inputs, 0);
+  for (int d = 0; d < dims && d < inputs; ++d) {
+    Eigen::VectorXd v = solver.eigenvectors().col(inputs - 1 - d);
+    Eigen::Index arg;
+    v.cwiseAbs().maxCoeff(&arg);
+    if (v(arg) < 0) v = -v;  // a reproducible sign
+    for (int j = 0; j < inputs; ++j)
+      p.basis[size_t(d) * inputs + size_t(j)] = int16_t(std::lrint(v(j) * double(1 << kBasisBits)));
+  }
+  // The divisor maps the largest projected sample to 127.
+  int64_t maxAbs = 1;
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < dims; ++d) {
+      int64_t acc = 0;
+      for (int j = 0; j < inputs; ++j)
+        acc += int64_t(p.basis[size_t(d) * inputs + size_t(j)]) * (samples[size_t(i) * inputs + size_t(j)] - p.mean[size_t(j)]);
+      maxAbs = std::max(maxAbs, acc < 0 ? -acc : acc);
+    }
+  p.divisor = int32_t(std::max<int64_t>(1, (maxAbs + 126) / 127));
+  return p;
+}
+
+// Projection inputs of a candidate's 3-neighborhood: 6x the mean exemplar colour of the planes
+// through each voxel (so that runtime voxels, 2x the sum of their three colours, match in scale).
+void candidateNeighborhood(const std::array<Exemplar8, 3>& ex, const uint32_t* triple, int spacing, int32_t* out) {
+  const auto& cross = solidCrossOffsets();
+  for (int i = 0; i < kSolidCrossVoxels; ++i) {
+    const auto& o = cross[size_t(i)];
+    int32_t sum[3] = {0, 0, 0};
+    int count = 0;
+    for (int e = 0; e < 3; ++e) {
+      if (o[size_t(e)] != 0) continue;  // plane e is normal to axis e
+      const uint8_t* c = ex[size_t(e)].at(int(coordU(triple[e])) + spacing * o[size_t(kAxisU[e])],
+                                          int(coordV(triple[e])) + spacing * o[size_t(kAxisV[e])]);
+      for (int ch = 0; ch < 3; ++ch) sum[ch] += c[ch];
+      ++count;
+    }
+    for (int ch = 0; ch < 3; ++ch) out[i * 3 + ch] = sum[ch] * (6 / count);
+  }
+}
+
+void exemplarNeighborhood2d(const Exemplar8& e, int u, int v, int spacing, int32_t* out) {
+  for (int j = -kRadius; j <= kRadius; ++j)
+    for (int i = -kRadius; i <= kRadius; ++i) {
+      const uint8_t* c = e.at(u + i * spacing, v + j * spacing);
+      for (int ch = 0; ch < 3; ++ch) *out++ = 6 * c[ch];
+    }
+}
+
+Image firstChannels(const Image& image) {
+  const int c = image.channels >= 3 ? 3 : 1;
+  Image out(image.width, image.height, c, PixelFormat::Float);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int i = 0; i < c; ++i) out.at(x, y, i) = image.at(x, y, i);
+  return out;
+}
+
+bool samePixels(const Image& a, const Image& b) {
+  return a.width == b.width && a.height == b.height && a.channels == b.channels && a.pixels == b.pixels;
+}
+
+} // namespace
+
+void SolidProjection::project(const int32_t* values, int8_t* out) const {
+  // |basis| <= 2^12 and |x - mean| <= 6 * 255: 183 products fit in int32 (as in the kernels).
+  int16_t centred[kSolidCrossVoxels * 3];
+  for (int j = 0; j < inputs; ++j) centred[j] = int16_t(values[j] - mean[size_t(j)]);
+  for (int d = 0; d < dims; ++d) {
+    const int16_t* b = basis.data() + size_t(d) * inputs;
+    int32_t acc = 0;
+    for (int j = 0; j < inputs; ++j) acc += int32_t(b[j]) * int32_t(centred[j]);
+    const int32_t half = divisor / 2;
+    const int32_t q = acc >= 0 ? (acc + half) / divisor : -((-acc + half) / divisor);
+    out[d] = int8_t(std::clamp(q, -127, 127));
+  }
+}
+
+const std::array<std::array<int, 3>, kSolidCrossVoxels>& solidCrossOffsets() {
+  static const auto offsets = [] {
+    std::array<std::array<int, 3>, kSolidCrossVoxels> o{};
+    int k = 0;
+    for (int y = -kRadius; y <= kRadius; ++y)  // (x, y) plane
+      for (int x = -kRadius; x <= kRadius; ++x) o[size_t(k++)] = {x, y, 0};
+    for (int x = -kRadius; x <= kRadius; ++x)  // (z, x) plane, off the x axis
+      for (int z = -kRadius; z <= kRadius; ++z)
+        if (z != 0) o[size_t(k++)] = {x, 0, z};
+    for (int z = -kRadius; z <= kRadius; ++z)  // (y, z) plane, off both axes
+      for (int y = -kRadius; y <= kRadius; ++y)
+        if (y != 0 && z != 0) o[size_t(k++)] = {0, y, z};
+    return o;
+  }();
+  return offsets;
+}
+
+void SolidAnalysisOptions::validate() const {
+  if (strips < 4 || strips > 256) throw Error("strips (S) must be in [4, 256], got " + std::to_string(strips));
+  if (kept < kSolidMaxCandidates || kept > strips * strips)
+    throw Error("kept triples must be in [12, S^2], got " + std::to_string(kept));
+  if (coherenceIterations < 0 || coherenceIterations > 8)
+    throw Error("coherence iterations must be in [0, 8], got " + std::to_string(coherenceIterations));
+  if (levels < 1 || levels > 8) throw Error("synthesized levels must be in [1, 8], got " + std::to_string(levels));
+  if (candidates2d < 1 || candidates2d > 8)
+    throw Error("2-D candidates must be in [1, 8], got " + std::to_string(candidates2d));
+}
+
+void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez, const std::array<std::string, 3>& names) {
+  const Image* images[3] = {&ex, &ey, &ez};
+  for (int e = 0; e < 3; ++e) {
+    const Image& i = *images[e];
+    if (i.width < 8 || i.height < 8 || i.width > 1024 || i.height > 1024)
+      throw Error(names[size_t(e)] + ": exemplar is " + std::to_string(i.width) + "x" + std::to_string(i.height) +
+                  ", outside the 8x8 to 1024x1024 that solid synthesis supports");
+  }
+  for (int e = 1; e < 3; ++e)
+    if (images[e]->width != ex.width || images[e]->height != ex.height)
+      throw Error(names[size_t(e)] + ": exemplar is " + std::to_string(images[e]->width) + "x" +
+                  std::to_string(images[e]->height) + " but " + names[0] + " is " + std::to_string(ex.width) + "x" +
+                  std::to_string(ex.height) + " (the three exemplars must have the same size)");
+}
+
+uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& o) {
+  Fnv1a hash;
+  hash.add(kSolidMagic);
+  hash.add(kSolidVersion);
+  for (const Image* i : {&ex, &ey, &ez}) {
+    hash.add(i->width);
+    hash.add(i->height);
+    hash.add(i->channels);
+    hash.add(i->pixels.data(), i->pixels.size() * sizeof(float));
+  }
+  hash.add(o.strips);
+  hash.add(o.kept);
+  hash.add(o.coherenceIterations);
+  hash.add(o.levels);
+  hash.add(o.candidates2d);
+  return hash.h;
+}
+
+SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ezIn, const SolidAnalysisOptions& options,
+                           int threads) {
+  const auto started = std::chrono::steady_clock::now();
+  options.validate();
+  validateSolidExemplars(exIn, eyIn, ezIn);
+  const Image* inputs[3] = {&exIn, &eyIn, &ezIn};
+  const bool shared = samePixels(exIn, eyIn) && samePixels(exIn, ezIn);
+  const int w = exIn.width, h = exIn.height, n = w * h;
+
+  SolidAnalysis a;
+  a.width = w;
+  a.height = h;
+  a.shared = shared;
+  a.key = solidAnalysisKey(exIn, eyIn, ezIn, options);
+  const int stackLevels = stackLevelCount(w, h);
+  a.finestStackLevel = stackLevels - 1;
+  const int levelCount = std::min(options.levels, stackLevels);
+
+  // Stacks and 2-D k-coherence candidates, once per distinct exemplar.
+  const int distinct = shared ? 1 : 3;
+  std::vector<std::vector<Image>> stacks(static_cast<size_t>(distinct));
+  std::vector<ExemplarAnalysis> analyses2d(static_cast<size_t>(distinct));
+  AnalysisOptions options2d;
+  options2d.k = options.candidates2d;
+  options2d.searchNeighbors = std::max(options2d.searchNeighbors, options.candidates2d);
+  for (int e = 0; e < distinct; ++e) {
+    stacks[size_t(e)] = gaussianStack(firstChannels(*inputs[e]));
+    analyses2d[size_t(e)] = analyzeExemplar(*inputs[e], options2d, threads);
+  }
+  auto src = [&](int e) { return shared ? 0 : e; };
+
+  a.levels.resize(size_t(levelCount));
+  for (int li = 0; li < levelCount; ++li) {
+    SolidLevel& level = a.levels[size_t(li)];
+    const int sl = a.finestStackLevel - (levelCount - 1 - li);
+    const bool finest = li == levelCount - 1;
+    level.stackLevel = sl;
+    level.spacing = 1 << (a.finestStackLevel - sl);
+    level.dims = finest ? 8 : kSolidMaxDims;
+    level.k2d = finest ? std::min(2, options.candidates2d) : options.candidates2d;
+    level.k3d = finest ? 4 : kSolidMaxCandidates;
+    std::vector<std::vector<uint8_t>> colors(static_cast<size_t>(distinct));
+    for (int e = 0; e < distinct; ++e) colors[size_t(e)] = levelColors(stacks[size_t(e)][size_t(sl)]);
+    std::array<Exemplar8, 3> ex;
+    for (int e = 0; e < 3; ++e) {
+      ex[size_t(e)] = {w, h, colors[size_t(src(e))].data()};
+      level.colors[size_t(e)] = colors[size_t(src(e))];
+      level.candidates2d[size_t(e)] = analyses2d[size_t(src(e))].levels[size_t(sl)].candidates;
+    }
+
+    // Candidate triples, relative to their own exemplar, then stored with absolute axes.
+    std::vector<Strips> strips(static_cast<size_t>(distinct));
+    for (int e = 0; e < distinct; ++e) strips[size_t(e)] = stripsOf(ex[size_t(e)], level.spacing);
+    for (int e = 0; e < distinct; ++e) {
+      const Strips& next = strips[size_t(src((e + 1) % 3))];
+      const Strips& prev = strips[size_t(src((e + 2) % 3))];
+      std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, options, threads);
+      if (finest) {
+        double kept = 0, best = 0;
+        for (const auto& s : sets) {
+          kept += double(s.size());
+          best += s.empty() ? 0.0 : double(s[0].cb);
+        }
+        a.stats.meanCandidatesBeforeFilter += kept / n / distinct;
+        a.stats.meanBestCrossbarError += best / n / distinct;
+      }
+      coherenceFilter(sets, w, h, level.spacing, options.coherenceIterations, threads);
+      if (finest) {
+        double kept = 0;
+        for (const auto& s : sets) kept += double(s.size());
+        a.stats.meanCandidatesAfterFilter += kept / n / distinct;
+      }
+      // Every exemplar that shares these candidates (all three when shared) gets them, rotated.
+      for (int target = 0; target < 3; ++target) {
+        if (src(target) != e) continue;
+        std::vector<uint32_t>& out = level.triples[size_t(target)];
+        out.resize(size_t(n) * kSolidMaxCandidates * 3);
+        for (int p = 0; p < n; ++p) {
+          const auto& s = sets[size_t(p)];
+          for (int k = 0; k < kSolidMaxCandidates; ++k) {
+            const Triple& t = s[size_t(k) < s.size() ? size_t(k) : 0];
+            uint32_t* slot = &out[(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3];
+            auto pack = [&](uint32_t index) { return packCoord(index % uint32_t(w), index / uint32_t(w)); };
+            slot[target] = pack(uint32_t(p));
+            slot[(target + 1) % 3] = pack(t.q);
+            slot[(target + 2) % 3] = pack(t.r);
+          }
+        }
+      }
+    }
+
+    // PCA of 2-D neighborhoods (all pixels of the distinct exemplars) and of 3-neighborhoods
+    // (the two best candidates of every pixel of every exemplar, at most 16384 samples).
+    std::vector<int32_t> samples;
+    for (int e = 0; e < distinct; ++e)
+      for (int p = 0; p < n; ++p) {
+        samples.resize(samples.size() + 75);
+        exemplarNeighborhood2d(ex[size_t(e)], p % w, p / w, level.spacing, &samples[samples.size() - 75]);
+      }
+    level.projection2d = fitProjection(samples, 75, kSolid2dDims);
+    samples.clear();
+    const int64_t total = int64_t(n) * 3 * 2;
+    const int64_t stride = std::max<int64_t>(1, total / 16384);
+    for (int64_t i = 0; i < total; i += stride) {
+      const int e = int(i / (int64_t(n) * 2)), p = int((i / 2) % n), k = int(i % 2);
+      samples.resize(samples.size() + kSolidCrossVoxels * 3);
+      candidateNeighborhood(ex, &level.triples[size_t(e)][(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3],
+                            level.spacing, &samples[samples.size() - kSolidCrossVoxels * 3]);
+    }
+    level.projection3d = fitProjection(samples, kSolidCrossVoxels * 3, level.dims);
+
+    for (int e = 0; e < 3; ++e) {
+      level.descriptors2d[size_t(e)].resize(size_t(n) * kSolid2dDims);
+      level.descriptors3d[size_t(e)].resize(size_t(n) * kSolidMaxCandidates * size_t(level.dims));
+    }
+    parallelFor(0, n, threads, [&](int begin, int end) {
+      int32_t values[kSolidCrossVoxels * 3];
+      for (int p = begin; p < end; ++p)
+        for (int e = 0; e < 3; ++e) {
+          exemplarNeighborhood2d(ex[size_t(e)], p % w, p / w, level.spacing, values);
+          level.projection2d.project(values, &level.descriptors2d[size_t(e)][size_t(p) * kSolid2dDims]);
+          for (int k = 0; k < kSolidMaxCandidates; ++k) {
+            const size_t slot = size_t(p) * kSolidMaxCandidates + size_t(k);
+            candidateNeighborhood(ex, &level.triples[size_t(e)][slot * 3], level.spacing, values);
+            level.projection3d.project(values, &level.descriptors3d[size_t(e)][slot * size_t(level.dims)]);
+          }
+        }
+    }, 64);
+  }
+  a.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return a;
+}
+
+// ---- the on-disk cache ----
+
+namespace {
+
+struct Writer {
+  std::ofstream& out;
+  void raw(const void* d, size_t n) { out.write(static_cast<const char*>(d), std::streamsize(n)); }
+  template <class T> void value(const T& v) { raw(&v, sizeof v); }
+  template <class T> void vec(const std::vector<T>& v) {
+    value(uint64_t(v.size()));
+    raw(v.data(), v.size() * sizeof(T));
+  }
+};
+
+struct Reader {
+  std::ifstream& in;
+  bool ok = true;
+  void raw(void* d, size_t n) { ok = ok && bool(in.read(static_cast<char*>(d), std::streamsize(n))); }
+  template <class T> void value(T& v) { raw(&v, sizeof v); }
+  template <class T> void vec(std::vector<T>& v, size_t expected) {
+    uint64_t n = 0;
+    value(n);
+    if (!ok || n != expected) {
+      ok = false;
+      return;
+    }
+    v.resize(n);
+    raw(v.data(), n * sizeof(T));
+  }
+};
+
+void writeProjection(Writer& w, const SolidProjection& p) {
+  w.value(p.inputs);
+  w.value(p.dims);
+  w.value(p.divisor);
+  w.vec(p.mean);
+  w.vec(p.basis);
+}
+
+void readProjection(Reader& r, SolidProjection& p, int inputs, int dims) {
+  r.value(p.inputs);
+  r.value(p.dims);
+  r.value(p.divisor);
+  if (p.inputs != inputs || p.dims != dims || p.divisor < 1) r.ok = false;
+  r.vec(p.mean, size_t(inputs));
+  r.vec(p.basis, size_t(inputs) * size_t(dims));
+}
+
+} // namespace
+
+void writeSolidAnalysis(const SolidAnalysis& a, const fs::path& path) {
+  const fs::path tmp = temporaryPathFor(path);
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error(path.string() + ": cannot create solid analysis cache file");
+    Writer w{out};
+    w.value(kSolidMagic);
+    w.value(kSolidVersion);
+    w.value(a.key);
+    w.value(a.width);
+    w.value(a.height);
+    w.value(uint8_t(a.shared));
+    w.value(a.finestStackLevel);
+    w.value(int32_t(a.levels.size()));
+    w.value(a.stats);
+    for (const SolidLevel& l : a.levels) {
+      w.value(l.stackLevel);
+      w.value(l.spacing);
+      w.value(l.dims);
+      w.value(l.k2d);
+      w.value(l.k3d);
+      for (int e = 0; e < 3; ++e) {
+        w.vec(l.colors[size_t(e)]);
+        w.vec(l.candidates2d[size_t(e)]);
+        w.vec(l.descriptors2d[size_t(e)]);
+        w.vec(l.triples[size_t(e)]);
+        w.vec(l.descriptors3d[size_t(e)]);
+      }
+      writeProjection(w, l.projection2d);
+      writeProjection(w, l.projection3d);
+    }
+    out.flush();
+    if (!out) {
+      out.close();
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw Error(path.string() + ": cannot write solid analysis cache file");
+    }
+  }
+  commitFile(tmp, path);
+}
+
+std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t expectedKey) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  Reader r{in};
+  uint32_t magic = 0, version = 0;
+  SolidAnalysis a;
+  uint8_t shared = 0;
+  int32_t count = 0;
+  r.value(magic);
+  r.value(version);
+  r.value(a.key);
+  r.value(a.width);
+  r.value(a.height);
+  r.value(shared);
+  r.value(a.finestStackLevel);
+  r.value(count);
+  r.value(a.stats);
+  if (!r.ok || magic != kSolidMagic || version != kSolidVersion || a.key != expectedKey) return std::nullopt;
+  if (a.width < 8 || a.height < 8 || a.width > 1024 || a.height > 1024 ||
+      a.finestStackLevel != stackLevelCount(a.width, a.height) - 1 || count < 1 || count > a.finestStackLevel + 1)
+    return std::nullopt;
+  a.shared = shared != 0;
+  const size_t n = size_t(a.width) * size_t(a.height);
+  a.levels.resize(size_t(count));
+  for (int li = 0; li < count && r.ok; ++li) {
+    SolidLevel& l = a.levels[size_t(li)];
+    r.value(l.stackLevel);
+    r.value(l.spacing);
+    r.value(l.dims);
+    r.value(l.k2d);
+    r.value(l.k3d);
+    if (l.stackLevel != a.finestStackLevel - (count - 1 - li) || l.spacing != 1 << (a.finestStackLevel - l.stackLevel) ||
+        l.dims < 1 || l.dims > kSolidMaxDims || l.k2d < 1 || l.k2d > 8 || l.k3d < 1 || l.k3d > kSolidMaxCandidates)
+      return std::nullopt;
+    for (int e = 0; e < 3; ++e) {
+      r.vec(l.colors[size_t(e)], n * 3);
+      uint64_t k2 = 0;
+      {
+        // the 2-D candidate count is options.candidates2d; read its length first
+        const auto pos = in.tellg();
+        r.value(k2);
+        in.seekg(pos);
+      }
+      if (k2 == 0 || k2 % n != 0 || k2 / n < size_t(l.k2d) || k2 / n > 8) return std::nullopt;
+      r.vec(l.candidates2d[size_t(e)], size_t(k2));
+      r.vec(l.descriptors2d[size_t(e)], n * kSolid2dDims);
+      r.vec(l.triples[size_t(e)], n * kSolidMaxCandidates * 3);
+      r.vec(l.descriptors3d[size_t(e)], n * kSolidMaxCandidates * size_t(l.dims));
+      if (!r.ok) return std::nullopt;
+      for (uint32_t c : l.candidates2d[size_t(e)])
+        if (coordU(c) >= uint32_t(a.width) || coordV(c) >= uint32_t(a.height)) return std::nullopt;
+      for (uint32_t c : l.triples[size_t(e)])
+        if (coordU(c) >= uint32_t(a.width) || coordV(c) >= uint32_t(a.height)) return std::nullopt;
+    }
+    readProjection(r, l.projection2d, 75, kSolid2dDims);
+    readProjection(r, l.projection3d, kSolidCrossVoxels * 3, l.dims);
+  }
+  if (!r.ok || in.peek() != std::char_traits<char>::eof()) return std::nullopt;
+  return a;
+}
+
+SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
+                                 const fs::path& cacheDir, int threads, bool* fromCache) {
+  options.validate();
+  validateSolidExemplars(ex, ey, ez);
+  const uint64_t key = solidAnalysisKey(ex, ey, ez, options);
+  char name[40];
+  std::snprintf(name, sizeof name, "%016llx.solid", static_cast<unsigned long long>(key));
+  const fs::path path = cacheDir / name;
+  if (auto cached = readSolidAnalysis(path, key)) {
+    if (fromCache) *fromCache = true;
+    return std::move(*cached);
+  }
+  SolidAnalysis analysis = analyzeSolid(ex, ey, ez, options, threads);
+  if (fromCache) *fromCache = false;
+  try {
+    std::error_code ec;
+    fs::create_directories(cacheDir, ec);
+    writeSolidAnalysis(analysis, path);
+  } catch (const Error&) {
+    // A read-only or full cache folder costs time on the next run, not correctness.
+  }
+  return analysis;
+}
+
+} // namespace texfab::synthesis

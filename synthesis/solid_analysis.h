@@ -1,0 +1,136 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Precomputation for lazy solid texture synthesis: 3-D candidates (coordinate triples) per
+// exemplar pixel, and the PCA-projected, int8-quantized neighborhoods synthesis compares.
+//
+// Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis.
+//   EGSR 2008: §3 (3-neighborhoods of three interleaved NxN neighborhoods, N = 5), §4.1 (crossbar
+//   error CB; the S best strips of each other exemplar, all S^2 triples ranked by CB, 100 kept),
+//   §4.2 (coherence filter down to <= 12 candidates), §4.3 (candidate slab), §6.1 (one image
+//   used for all three axes shares one candidate set), §6.2 (PCA to 12..8 dimensions, 8-bit).
+// Notes: ../shared/notes/lefebvre-hdr-notes.md §9 and errata §20.2 (stack upsampling).
+//
+// Orientation (fixed, cyclic, so one candidate set serves all three axes, Fig. 3 / §6.1):
+//   E_x lies in the (y, z) plane: exemplar u = volume y, v = volume z;
+//   E_y lies in the (z, x) plane: u = z, v = x;
+//   E_z lies in the (x, y) plane: u = x, v = y.
+// Exemplar e's column strip (v varies) is its crossbar with exemplar (e+1)%3's row strip.
+//
+// Deviations from the paper, on purpose:
+//   * a Gaussian *stack* (every level at the exemplar's size, taps 2^(L-l) apart) instead of a
+//     pyramid, as in the 2-D synthesis of this module: stack upsampling adds h_l * (child bit);
+//   * the S best strips are found with an exact k-d tree (nanoflann) rather than ANN;
+//   * coherence (§4.2) reads "|C[p+d]_y - c_y| = 1" as a toroidal 4-neighbor step of the level's
+//     tap spacing h_l in that exemplar; a filter iteration that would empty a pixel's set is not
+//     applied to that pixel (the paper notes this "happens rarely");
+//   * all neighborhood values are integers (colours are 8-bit, PCA bases 12-bit, distances int32)
+//     so that every backend picks the same candidate (DESIGN.md, the determinism contract);
+//   * 2-D neighborhoods for the first search step are PCA-projected 5x5 neighborhoods (8 dims);
+//     2-D candidate sets are the k-coherence sets of synthesis/exemplar_analysis.
+
+#include "render/image.h"
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+namespace texfab::synthesis {
+
+/// Side of each of the three interleaved 2-D neighborhoods (paper: N = 5).
+inline constexpr int kSolidNeighborhoodSide = 5;
+/// Voxels of a 3-neighborhood: three 5x5 planes through the centre.
+inline constexpr int kSolidCrossVoxels = 61;
+/// Dimensions of a projected 2-D neighborhood (first search step).
+inline constexpr int kSolid2dDims = 8;
+/// Most dimensions of a projected 3-neighborhood (coarse levels; the finest keeps 8).
+inline constexpr int kSolidMaxDims = 12;
+/// Most 3-D candidates per exemplar pixel after the coherence filter.
+inline constexpr int kSolidMaxCandidates = 12;
+
+struct SolidAnalysisOptions {
+  int strips = 65;              ///< S: best crossbar strips taken from each other exemplar; 4..256
+  int kept = 100;               ///< triples kept per pixel by crossbar error; kSolidMaxCandidates..S^2
+  int coherenceIterations = 3;  ///< coherence filter iterations at most (stops at <= 12 per pixel); 0..8
+  int levels = 4;               ///< synthesized levels: the finest and those above it (paper: l_start = L-3); 1..8
+  int candidates2d = 4;         ///< k-coherence 2-D candidates per pixel (coarse levels; finest uses 2); 1..8
+
+  /// Throws texfab::Error naming the field when a value is out of range.
+  void validate() const;
+};
+
+/// Integer PCA projection: q = clamp(round(sum_i basis[d][i] * (x_i - mean_i) / divisor), +-127).
+struct SolidProjection {
+  int inputs = 0;
+  int dims = 0;
+  std::vector<int32_t> mean;    ///< inputs
+  std::vector<int16_t> basis;   ///< dims * inputs, 12-bit fixed point
+  int32_t divisor = 1;
+
+  void project(const int32_t* values, int8_t* out) const;
+};
+
+/// One synthesized level: everything the correction kernel reads.
+struct SolidLevel {
+  int stackLevel = 0;  ///< index into the Gaussian stack (L = finest)
+  int spacing = 1;     ///< h_l = 2^(L - stackLevel): exemplar pixels between neighboring voxels
+  int dims = 0;        ///< dimensions of the projected 3-neighborhoods at this level
+  int k2d = 0;         ///< 2-D candidates used per pixel at this level
+  int k3d = 0;         ///< 3-D candidates used per pixel at this level
+  std::array<std::vector<uint8_t>, 3> colors;        ///< per exemplar: w*h*3, the stack level in 8 bits
+  std::array<std::vector<uint32_t>, 3> candidates2d; ///< per exemplar: w*h*candidates2d packed coords
+  std::array<std::vector<int8_t>, 3> descriptors2d;  ///< per exemplar: w*h*kSolid2dDims
+  /// Per exemplar: w*h*kSolidMaxCandidates triples (x, y, z exemplar coordinates, packed), best
+  /// crossbar error first; the e-th coordinate is the pixel itself. Short sets repeat their first.
+  std::array<std::vector<uint32_t>, 3> triples;
+  std::array<std::vector<int8_t>, 3> descriptors3d;  ///< per exemplar: w*h*kSolidMaxCandidates*dims
+  SolidProjection projection2d;  ///< 25 voxels * 3 channels -> kSolid2dDims
+  SolidProjection projection3d;  ///< 61 voxels * 3 channels -> dims
+};
+
+/// Figures of the precomputation, for reports and tests (never read by synthesis).
+struct SolidAnalysisStats {
+  double meanCandidatesBeforeFilter = 0;  ///< per pixel, finest level (the kept triples)
+  double meanCandidatesAfterFilter = 0;   ///< per pixel, finest level, before truncation to 12
+  double meanBestCrossbarError = 0;       ///< finest level, 8-bit colour units squared
+  double seconds = 0;
+};
+
+struct SolidAnalysis {
+  int width = 0;    ///< all three exemplars share this size
+  int height = 0;
+  bool shared = false;  ///< one image for the three axes: one candidate computation (§6.1)
+  int finestStackLevel = 0;  ///< L
+  std::vector<SolidLevel> levels;  ///< synthesized levels, coarsest (l_start) first
+  SolidAnalysisStats stats;
+  uint64_t key = 0;
+
+  int startStackLevel() const { return finestStackLevel - int(levels.size()) + 1; }
+};
+
+/// The 61 offsets of a 3-neighborhood, in the order of projection inputs: the (x, y) plane row by
+/// row, then the (z, x) plane without its x axis, then the (y, z) plane without its y and z axes.
+const std::array<std::array<int, 3>, kSolidCrossVoxels>& solidCrossOffsets();
+
+/// Throws texfab::Error unless the three exemplars can be analysed together (same size, at least
+/// 8x8, at most 1024x1024). Names the exemplars as given in `names` (x, y, z).
+void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez,
+                            const std::array<std::string, 3>& names = {"x exemplar", "y exemplar", "z exemplar"});
+
+/// The precomputation. Pure: depends only on the pixels and options, never on `threads`.
+/// Passing the same image three times shares the candidate computation.
+SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
+                           int threads = 0);
+
+uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options);
+
+/// Through the on-disk cache `cacheDir/<key>.solid` (see analyzeExemplarCached).
+SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& ez,
+                                 const SolidAnalysisOptions& options, const std::filesystem::path& cacheDir,
+                                 int threads = 0, bool* fromCache = nullptr);
+
+void writeSolidAnalysis(const SolidAnalysis& analysis, const std::filesystem::path& path);
+std::optional<SolidAnalysis> readSolidAnalysis(const std::filesystem::path& path, uint64_t expectedKey);
+
+} // namespace texfab::synthesis

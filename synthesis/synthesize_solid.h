@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Lazy solid texture synthesis: the colour of any voxel of an infinite volume, computing only the
+// dependency chain of the voxels asked for.
+//
+// Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis. EGSR 2008,
+//   §5.1 (sparse multi-resolution synthesis: tiling of the candidate slab, jitter once, upsampling
+//   by coordinate inheritance, 2 correction passes of 8 sub-passes with the two-step search,
+//   colour = mean of the three exemplar colours), §5.2 (masks dilated per pass and level), §6.2
+//   (a cache of coarse levels shared across requests).
+// Notes: ../shared/notes/lefebvre-hdr-notes.md §9; ../shared/notes/wei-levoy-and-jit-notes.md III.
+//
+// Determinism (DESIGN.md): a voxel's triple is a pure function of (analysis, options, position).
+// The mask of §5.2 is computed exactly per sub-pass (a voxel corrected in sub-pass t reads its
+// 61-voxel 3-neighborhood as it was after sub-pass t-1; a voxel not of that sub-pass's class only
+// carries its own value), so every voxel computed for a request has a complete dependency chain,
+// whatever else was requested, in whatever order, split into whatever requests, on however many
+// threads, with or without the cache.
+//
+// Deviations from the paper, on purpose:
+//   * the dependency chain is exact for sub-passes (the paper dilates once per pass, which is
+//     only sufficient without sub-passes): one voxel needs ~10^5 voxels, not 6,778;
+//     dependencyChainSize() reports both;
+//   * the jitter warp is a sum of compactly supported polynomial bumps on two hashed grids (4 and
+//     8 voxels at the start level) instead of ~200 Gaussians in a unit volume: the volume is
+//     infinite, and integer arithmetic keeps backends identical;
+//   * the volume has no size and nothing wraps: only exemplar coordinates wrap.
+
+#include "render/image.h"
+#include "synthesis/solid_analysis.h"
+
+#include <array>
+#include <cstdint>
+#include <list>
+#include <map>
+#include <memory>
+#include <span>
+#include <tuple>
+#include <vector>
+
+namespace texfab::synthesis {
+
+/// A finest-level voxel position. |x|, |y|, |z| <= kMaxSolidPosition.
+struct Voxel {
+  int64_t x = 0, y = 0, z = 0;
+  bool operator==(const Voxel&) const = default;
+};
+inline constexpr int64_t kMaxSolidPosition = int64_t(1) << 30;
+
+/// An axis-aligned box of finest-level voxels.
+struct VoxelBox {
+  int64_t x = 0, y = 0, z = 0;
+  int nx = 0, ny = 0, nz = 0;
+  int64_t count() const { return int64_t(nx) * ny * nz; }
+};
+
+struct SolidSynthesisOptions {
+  uint32_t seed = 1;     ///< the only source of variation
+  /// Strength of the random warp applied once after initialization, in voxels of the start level
+  /// (amplitudes 1.5 and 1 voxel on 4- and 8-voxel grids at 1); 0 = a plain tiling of the slab. [0, 4]
+  float jitter = 1.0f;
+  int passes = 2;        ///< correction passes per level; 0..4
+  /// 2: each pass is 8 sub-passes over the 2x2x2 parity classes (§5.1, the paper's choice);
+  /// 1: each pass corrects every voxel at once (Jacobi), a dependency chain ~25x shorter.
+  int interleave = 2;
+
+  int subpasses() const { return interleave == 2 ? 8 : 1; }
+
+  void validate() const;
+};
+
+/// Exemplar coordinates of one voxel in E_x, E_y, E_z (packed, coord_map.h).
+using Triple = std::array<uint32_t, 3>;
+
+struct SolidLevelStats {
+  int stackLevel = 0;
+  int64_t voxels = 0;        ///< voxels synthesized at this level (the dependency chain)
+  int64_t corrections = 0;   ///< voxel corrections (a voxel is corrected once per pass)
+  double seconds = 0.0;
+};
+
+struct SolidSynthesisResult {
+  std::vector<Triple> triples;           ///< one per requested voxel, in request order
+  std::vector<SolidLevelStats> levels;   ///< coarsest first
+  int64_t voxelsSynthesized() const;     ///< sum over levels
+};
+
+/// Final values of coarse levels, kept across requests in 16^3 bricks, least recently used
+/// evicted beyond `maxBytes`. Owned by the caller; one cache serves one (analysis, options) pair
+/// at a time (it clears itself when they change). Not thread-safe: one request at a time.
+class SolidLevelCache {
+public:
+  explicit SolidLevelCache(size_t maxBytes = size_t(256) << 20) : maxBytes_(maxBytes) {}
+  size_t bytes() const { return bytes_; }
+  size_t maxBytes() const { return maxBytes_; }
+  int64_t hits() const { return hits_; }
+  int64_t misses() const { return misses_; }
+  void clear();
+
+  // Used by the synthesizer.
+  using Key = std::tuple<int, int64_t, int64_t, int64_t>;  // level index, brick x, y, z
+  struct Brick {
+    std::vector<uint32_t> values;  // 16^3 * 3
+  };
+  void bind(uint64_t owner);
+  std::shared_ptr<const Brick> find(const Key& key);
+  void insert(const Key& key, std::shared_ptr<const Brick> brick);
+
+private:
+  size_t maxBytes_;
+  size_t bytes_ = 0;
+  uint64_t owner_ = 0;
+  int64_t hits_ = 0, misses_ = 0;
+  std::list<Key> order_;  // most recent first
+  std::map<Key, std::pair<std::shared_ptr<const Brick>, std::list<Key>::iterator>> bricks_;
+};
+
+/// Triples of the given finest-level voxels (any set: shell, plane, box, scattered; duplicates
+/// allowed). `cache` may be null (nothing kept between requests).
+SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
+                                     const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
+                                     int threads = 0);
+
+/// Triples of every voxel of `box`, x fastest, then y, then z.
+SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& analysis, const VoxelBox& box,
+                                        const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
+                                        int threads = 0);
+
+/// Colour of each triple: the mean of E_x, E_y and E_z at its three coordinates (first three
+/// channels, or grey). `channels` is 3, or 1 when all three exemplars are grey. Values are
+/// appended to `out`, `channels` per triple.
+int solidColorChannels(const Image& ex, const Image& ey, const Image& ez);
+void solidColors(std::span<const Triple> triples, const Image& ex, const Image& ey, const Image& ez,
+                 std::vector<float>& out);
+
+/// The dependency chain of one voxel: voxels synthesized per level (exact, as computed), and the
+/// paper's count (§5.2: the mask dilated by the 3-neighborhood once per pass, not per sub-pass).
+struct DependencyChain {
+  std::vector<int64_t> exactPerLevel;  ///< coarsest first
+  int64_t exact = 0;
+  int64_t perPassDilation = 0;
+};
+DependencyChain dependencyChainSize(const SolidAnalysis& analysis, const SolidSynthesisOptions& options);
+
+} // namespace texfab::synthesis

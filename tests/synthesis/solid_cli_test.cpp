@@ -1,0 +1,150 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End-to-end tests of `texfab solid`, through the real binary: the three modes agree with each
+// other voxel for voxel, and bad input fails with one line, a non-zero exit and no output.
+#include "render/image_io.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <sstream>
+
+namespace texfab {
+namespace {
+
+using test::TempDir;
+namespace fs = std::filesystem;
+
+const std::string kCli = TEXFAB_CLI;
+
+struct Outcome {
+  int status;
+  std::string err;
+};
+
+Outcome texfab(const std::string& args, const TempDir& dir) {
+  const auto errFile = dir / "stderr.txt";
+  const int status = test::run(kCli + " " + args + " >/dev/null 2>" + errFile.string());
+  std::ifstream in(errFile);
+  std::stringstream s;
+  s << in.rdbuf();
+  fs::remove(errFile);
+  return {status, s.str()};
+}
+
+// A 32x32 crop of the bundled marble, written as PNG into `dir`.
+std::string smallExemplar(const TempDir& dir, int side = 32, const std::string& name = "ex.png") {
+  const Image full = readImage(std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/marble.png");
+  Image crop(side, side, full.channels, full.format);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x)
+      for (int c = 0; c < full.channels; ++c) crop.at(x, y, c) = full.at(x + 20, y + 30, c);
+  writeImage(crop, dir / name);
+  return (dir / name).string();
+}
+
+size_t entries(const fs::path& dir) {
+  size_t n = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++n;
+  return n;
+}
+
+TEST(CliSolid, VolumePlaneAndPointsAgree) {
+  TempDir dir;
+  const std::string ex = smallExemplar(dir);
+  const std::string common = ex + " --seed 5 -q --cache-dir " + (dir / "cache").string();
+  ASSERT_EQ(texfab("solid " + common + " --volume 12 -o " + (dir / "vol").string() + " --raw " +
+                       (dir / "vol.raw").string() + " --report " + (dir / "r.json").string(),
+                   dir)
+                .status,
+            0);
+  EXPECT_EQ(entries(dir / "vol"), 12u);
+  EXPECT_EQ(fs::file_size(dir / "vol.raw"), size_t(12 * 12 * 12 * 3));
+  std::ifstream reportFile(dir / "r.json");
+  const auto report = nlohmann::json::parse(reportFile);
+  EXPECT_EQ(report["requested_voxels"], 12 * 12 * 12);
+  EXPECT_GT(report["synthesized_per_requested"].get<double>(), 1.0);
+  EXPECT_FALSE(report["exemplars"]["analysis_cached"].get<bool>());
+
+  // The z = 7 plane as an image equals slice 7 of the volume (and the analysis now is cached).
+  ASSERT_EQ(texfab("solid " + common + " --plane 0,0,7,1,0,0,0,1,0 --size 12x12 -o " + (dir / "p.png").string() +
+                       " --report " + (dir / "r2.json").string(),
+                   dir)
+                .status,
+            0);
+  std::ifstream report2File(dir / "r2.json");
+  EXPECT_TRUE(nlohmann::json::parse(report2File)["exemplars"]["analysis_cached"].get<bool>());
+  const Image plane = readImage(dir / "p.png");
+  const Image slice = readImage(dir / "vol" / "slice_00007.png");
+  EXPECT_EQ(plane.pixels, slice.pixels);
+
+  // Points: voxel (3, 4, 7) of the same slice.
+  {
+    std::ofstream points(dir / "pts.txt");
+    points << "# x y z\n3.5 4.5 7.5\n3,4,7\n";
+  }
+  ASSERT_EQ(texfab("solid " + common + " --points " + (dir / "pts.txt").string() + " -o " + (dir / "c.txt").string(), dir)
+                .status,
+            0);
+  std::ifstream colours(dir / "c.txt");
+  std::string line;
+  std::getline(colours, line);  // header
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_TRUE(std::getline(colours, line));
+    std::istringstream fields(line);
+    double x, y, z, value;
+    fields >> x >> y >> z >> value;
+    EXPECT_NEAR(value, slice.at(3, 4, 0), 1.0 / 255 + 1e-6) << line;
+  }
+
+  // An oblique plane runs too.
+  EXPECT_EQ(texfab("solid " + common + " --plane 0,0,0,0.7,0.2,0.5,-0.3,0.8,0.4 --size 16x10 -o " +
+                       (dir / "o.png").string(),
+                   dir)
+                .status,
+            0);
+  EXPECT_EQ(readImage(dir / "o.png").width, 16);
+}
+
+TEST(CliSolid, BadInputIsOneLineNonZeroAndNoOutput) {
+  TempDir dir;
+  const std::string ex = smallExemplar(dir);
+  const std::string other = smallExemplar(dir, 16, "small.png");
+  const std::string common = " -q --cache-dir " + (dir / "cache").string();
+  {
+    std::ofstream nan(dir / "nan.txt");
+    nan << "1 2 3\n4 nan 6\n";
+  }
+  struct Case {
+    std::string args;
+    std::string expect;  // in the message
+    std::string output;
+  };
+  const std::vector<Case> cases = {
+      {"solid " + ex + " --exemplar-y " + other + " --plane 0,0,0,1,0,0,0,1,0 --size 4x4 -o " + (dir / "a.png").string(),
+       "same size", "a.png"},
+      {"solid " + ex + " --plane 0,0,0,0,0,0,0,1,0 --size 4x4 -o " + (dir / "b.png").string(), "zero", "b.png"},
+      {"solid " + ex + " --plane 0,0,0,1,1,0,2,2,0 --size 4x4 -o " + (dir / "c.png").string(), "parallel", "c.png"},
+      {"solid " + ex + " --plane 0,0,0,1,0,0,0,nan,0 --size 4x4 -o " + (dir / "d.png").string(), "not finite", "d.png"},
+      {"solid " + ex + " --points " + (dir / "nan.txt").string() + " -o " + (dir / "e.txt").string(), "nan.txt:2",
+       "e.txt"},
+      {"solid " + ex + " --volume 60000 -o " + (dir / "f").string(), "memory", "f"},
+      {"solid " + ex + " --volume 8 --plane 0,0,0,1,0,0,0,1,0 -o " + (dir / "g").string(), "exactly one", "g"},
+  };
+  for (const Case& c : cases) {
+    const Outcome o = texfab(c.args + common, dir);
+    EXPECT_EQ(o.status, 2) << c.args << "\n" << o.err;
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+    EXPECT_NE(o.err.find(c.expect), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(dir / c.output)) << c.output;
+  }
+  // Nothing else was left behind (no temporary files).
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_TRUE(e.path().filename() == "ex.png" || e.path().filename() == "small.png" ||
+                e.path().filename() == "nan.txt" || e.path().filename() == "cache")
+        << e.path();
+}
+
+} // namespace
+} // namespace texfab
