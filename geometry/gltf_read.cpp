@@ -193,11 +193,9 @@ std::vector<Eigen::Matrix<float, N, 1>> GltfReader::readFloats(int index, const 
   if (comps < N || csize == 0) throw Error(where + " has the wrong type or component type");
   const size_t element = size_t(comps) * csize;
   std::vector<Eigen::Matrix<float, N, 1>> out(0);
-  if (a.bufferView < 0) {
-    if (a.count > (size_t(1) << 28)) throw Error(where + " has too many elements");
-    out.assign(a.count, Eigen::Matrix<float, N, 1>::Zero());
-    return out;
-  }
+  // An accessor without a buffer view is all zeros (the base of a sparse accessor): never the
+  // geometry of a real model, and an easy way to ask for gigabytes. Refused.
+  if (a.bufferView < 0) throw Error(where + " has no buffer view");
   const auto [data, size] = bufferViewBytes(a.bufferView, where);
   const size_t declaredStride = size_t(model_.bufferViews[size_t(a.bufferView)].byteStride);
   const size_t stride = declaredStride ? declaredStride : element;
@@ -498,8 +496,7 @@ Mesh GltfReader::read() {
 
 // Extensions texfab reads; a file that requires any other is refused.
 bool supportedExtension(const std::string& name) {
-  return name == "KHR_draco_mesh_compression" || name == "KHR_texture_transform" || name == "KHR_mesh_quantization" ||
-         name == "KHR_materials_emissive_strength";
+  return name == "KHR_draco_mesh_compression" || name == "KHR_texture_transform" || name == "KHR_mesh_quantization";
 }
 
 } // namespace

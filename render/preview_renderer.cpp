@@ -50,6 +50,19 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
     geometry::computeSmoothNormals(shape);
     normals_ = std::move(shape.normals);
   }
+  bool normalMapped = false;
+  for (const geometry::Material& m : mesh.materials) normalMapped |= bool(m.normalTexture);
+  if (mesh.hasTangents()) {
+    tangents_ = mesh.tangents;
+  } else if (normalMapped && mesh.hasUvs()) {
+    geometry::Mesh shape;
+    shape.positions = mesh.positions;
+    shape.triangles = mesh.triangles;
+    shape.uvs = mesh.uvs;
+    shape.normals = normals_;
+    geometry::computeTangents(shape);
+    tangents_ = std::move(shape.tangents);
+  }
   std::map<const Image*, MipPyramid> cache;
   auto pyramid = [&](const geometry::Texture& t, bool srgb) -> MipPyramid {
     if (!t || !mesh.hasUvs()) return {};
@@ -163,12 +176,12 @@ Image PreviewRenderer::render(const RenderOptions& o) const {
               roughness *= mr.y();
               metallic *= mr.z();
             }
-            if (!maps.normal.empty() && mesh_.hasTangents()) {
-              const Vector4f tc = w * mesh_.tangents[3 * t] + u * mesh_.tangents[3 * t + 1] + v * mesh_.tangents[3 * t + 2];
+            if (!maps.normal.empty() && !tangents_.empty()) {
+              const Vector4f tc = w * tangents_[3 * t] + u * tangents_[3 * t + 1] + v * tangents_[3 * t + 2];
               Vector3f tangent = tc.head<3>() - n * n.dot(tc.head<3>());
               if (tangent.squaredNorm() > 1e-12f) {
                 tangent.normalize();
-                const Vector3f bitangent = (mesh_.tangents[3 * t].w() < 0 ? -1.0f : 1.0f) * n.cross(tangent);
+                const Vector3f bitangent = (tangents_[3 * t].w() < 0 ? -1.0f : 1.0f) * n.cross(tangent);
                 const Vector4f m = lookup(maps.normal, material.normalTexture);
                 const Vector3f local(material.normalScale * (2 * m.x() - 1), material.normalScale * (2 * m.y() - 1), 2 * m.z() - 1);
                 const Vector3f mapped = local.x() * tangent + local.y() * bitangent + local.z() * n;

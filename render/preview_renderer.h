@@ -53,6 +53,7 @@ private:
   std::vector<MaterialMaps> maps_;
   std::vector<float> uvDensity_; ///< per triangle: sqrt(uv area / world area)
   std::vector<Eigen::Vector3f> normals_; ///< per corner: the mesh's, or crease-angle normals if it has none
+  std::vector<Eigen::Vector4f> tangents_; ///< per corner: the mesh's, or computed when a normal map needs them
 };
 
 } // namespace texfab::render

@@ -30,9 +30,10 @@ const char* kTriangleGltf = R"({"asset":{"version":"2.0"},"meshes":[{"primitives
  "buffers":[{"byteLength":36,"uri":"URI"}]})";
 
 std::string gltfWith(const std::string& uri, int count = 3) {
-  std::string s = kTriangleGltf;
-  s.replace(s.find("COUNT"), 5, std::to_string(count));
-  s.replace(s.find("URI"), 3, uri);
+  const std::string t = kTriangleGltf;
+  const size_t c = t.find("COUNT"), u = t.find("URI");
+  std::string s;
+  s.append(t, 0, c).append(std::to_string(count)).append(t, c + 5, u - c - 5).append(uri).append(t, u + 3);
   return s;
 }
 

@@ -145,6 +145,25 @@ TEST(PreviewRenderer, OpaqueBackgroundAndTurntableViewsDiffer) {
   EXPECT_NE(renderer.render(o).pixels, a.pixels);
 }
 
+TEST(PreviewRenderer, NormalMapsChangeShadingAndFlatMapsDoNot) {
+  // The key light comes from the camera's upper left: a normal map tilting the surface towards
+  // +X (right) darkens the quad, one tilting it left brightens it; a flat map changes nothing.
+  auto render = [](std::shared_ptr<const Image> normalMap) {
+    Mesh quad = texturedQuad(solid(0.7f, 0.7f, 0.7f));
+    quad.materials[0].normalTexture.image = std::move(normalMap);
+    RenderOptions o = frontView(64);
+    o.aoSamples = 0;
+    return statistics(PreviewRenderer(quad).render(o)).mean.x();
+  };
+  const double none = render(nullptr);
+  const double flat = render(solid(0.5f, 0.5f, 1.0f));
+  const double right = render(solid(0.85f, 0.5f, 0.85f));
+  const double left = render(solid(0.15f, 0.5f, 0.85f));
+  EXPECT_NEAR(flat, none, 0.01);
+  EXPECT_LT(right, none - 0.03);
+  EXPECT_GT(left, none + 0.01);
+}
+
 TEST(MipPyramid, LevelsAverageInLinearLight) {
   const MipPyramid p = buildMipPyramid(*checker(8), true);
   ASSERT_EQ(p.levels.size(), 4u);
