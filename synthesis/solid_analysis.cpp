@@ -11,7 +11,6 @@
 #include "synthesis/hash.h"
 
 #include <Eigen/Dense>
-#include <nanoflann.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -27,7 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr uint32_t kSolidMagic = 0x444c5354;  // "TSLD"
-constexpr uint32_t kSolidVersion = 1;         // bump whenever the analysis changes
+constexpr uint32_t kSolidVersion = 2;         // bump whenever the analysis changes
 constexpr int kStripLength = kSolidNeighborhoodSide;
 constexpr int kStripDims = kStripLength * 3;
 constexpr int kRadius = kSolidNeighborhoodSide / 2;
@@ -74,15 +73,6 @@ int32_t stripDistance(const int32_t* a, const int32_t* b) {
   return s;
 }
 
-struct StripCloud {
-  std::vector<float> points;  // n * kStripDims
-  size_t kdtree_get_point_count() const { return points.size() / kStripDims; }
-  float kdtree_get_pt(size_t i, size_t d) const { return points[i * kStripDims + d]; }
-  template <class Box> bool kdtree_get_bbox(Box&) const { return false; }
-};
-using StripTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, StripCloud>, StripCloud,
-                                                      kStripDims, uint32_t>;
-
 struct Strips {
   std::vector<int32_t> rows, cols;  // n * kStripDims each
 };
@@ -105,31 +95,71 @@ struct Triple {  // relative to the exemplar it belongs to: the pixel, then next
   uint32_t q, r;  // pixel indices in the next and previous exemplars
 };
 
+// For each query strip, the s nearest strips among `points` by exact integer squared distance,
+// ties to the smaller index (an exact search, like the paper's ANN with no approximation). Brute
+// force as blocks of a float matrix product: exact, since every term is an integer below 2^24.
+std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const std::vector<int32_t>& points, int n,
+                                    int s, int threads) {
+  using Rows = Eigen::Matrix<float, Eigen::Dynamic, kStripDims, Eigen::RowMajor>;
+  Rows p(n, kStripDims), q(n, kStripDims);
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < kStripDims; ++d) {
+      p(i, d) = float(points[size_t(i) * kStripDims + size_t(d)]);
+      q(i, d) = float(queries[size_t(i) * kStripDims + size_t(d)]);
+    }
+  const Eigen::VectorXf pn = p.rowwise().squaredNorm();
+  std::vector<uint32_t> out(size_t(n) * size_t(s));
+  constexpr int kBlock = 32;
+  parallelFor(0, (n + kBlock - 1) / kBlock, threads, [&](int b0, int b1) {
+    Eigen::MatrixXf dot;
+    std::vector<uint64_t> heap;
+    heap.reserve(size_t(s));
+    for (int b = b0; b < b1; ++b) {
+      const int r0 = b * kBlock, rows = std::min(kBlock, n - r0);
+      dot.noalias() = p * q.middleRows(r0, rows).transpose();  // n x rows: one column per query
+      for (int j = 0; j < rows; ++j) {
+        const float qn = q.row(r0 + j).squaredNorm();
+        const float* column = dot.col(j).data();
+        heap.clear();
+        for (int i = 0; i < n; ++i) {
+          const auto d = uint32_t(qn + pn[i] - 2.0f * column[i]);
+          const uint64_t key = (uint64_t(d) << 32) | uint32_t(i);
+          if (heap.size() < size_t(s)) {
+            heap.push_back(key);
+            std::push_heap(heap.begin(), heap.end());
+          } else if (key < heap.front()) {
+            std::pop_heap(heap.begin(), heap.end());
+            heap.back() = key;
+            std::push_heap(heap.begin(), heap.end());
+          }
+        }
+        std::sort_heap(heap.begin(), heap.end());
+        for (int k = 0; k < s; ++k) out[size_t(r0 + j) * size_t(s) + size_t(k)] = uint32_t(heap[size_t(k)]);
+      }
+    }
+  }, 1);
+  return out;
+}
+
 // §4.1: in every pixel of exemplar `self`, the `kept` triples of least crossbar error built from
 // the S best strips of the next and previous exemplars.
 std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strips& next, const Strips& prev, int n,
                                                  const SolidAnalysisOptions& o, int threads) {
-  StripCloud nextRows, prevCols;
-  nextRows.points.assign(next.rows.begin(), next.rows.end());
-  prevCols.points.assign(prev.cols.begin(), prev.cols.end());
-  StripTree nextTree(kStripDims, nextRows, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  StripTree prevTree(kStripDims, prevCols, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   const size_t s = std::min<size_t>(size_t(o.strips), size_t(n));
+  const std::vector<uint32_t> nearestNext = nearestStrips(self.cols, next.rows, n, int(s), threads);
+  const std::vector<uint32_t> nearestPrev = nearestStrips(self.rows, prev.cols, n, int(s), threads);
   std::vector<std::vector<Triple>> out(static_cast<size_t>(n));
   parallelFor(0, n, threads, [&](int begin, int end) {
-    std::vector<uint32_t> qi(s), ri(s);
-    std::vector<float> qd(s), rd(s);
     std::vector<int32_t> d1(s), d2(s);
-    float query[kStripDims];
     std::vector<Triple> all;
+    all.reserve(s * s);
     for (int p = begin; p < end; ++p) {
       const int32_t* col = &self.cols[size_t(p) * kStripDims];
       const int32_t* row = &self.rows[size_t(p) * kStripDims];
-      for (int i = 0; i < kStripDims; ++i) query[i] = float(col[i]);
-      const size_t nq = nextTree.knnSearch(query, s, qi.data(), qd.data());
-      for (int i = 0; i < kStripDims; ++i) query[i] = float(row[i]);
-      const size_t nr = prevTree.knnSearch(query, s, ri.data(), rd.data());
-      // Exact integer strip distances (the tree's float distances only rank).
+      const uint32_t* qi = &nearestNext[size_t(p) * s];
+      const uint32_t* ri = &nearestPrev[size_t(p) * s];
+      const size_t nq = s, nr = s;
+      // Exact integer strip distances.
       for (size_t i = 0; i < nq; ++i) d1[i] = stripDistance(col, &next.rows[size_t(qi[i]) * kStripDims]);
       for (size_t i = 0; i < nr; ++i) d2[i] = stripDistance(row, &prev.cols[size_t(ri[i]) * kStripDims]);
       // The third crossbar term for all S^2 pairs at once: |a|^2 + |b|^2 - 2 a.b as a small
@@ -141,18 +171,32 @@ std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strip
         for (int i = 0; i < kStripDims; ++i) rb(Eigen::Index(b), i) = float(prev.rows[size_t(ri[b]) * kStripDims + size_t(i)]);
       const Eigen::VectorXf qn = qa.rowwise().squaredNorm(), rn = rb.rowwise().squaredNorm();
       const Eigen::MatrixXf dot = qa * rb.transpose();
-      all.clear();
-      for (size_t a = 0; a < nq; ++a)
-        for (size_t b = 0; b < nr; ++b) {
-          const auto d3 = int32_t(qn(Eigen::Index(a)) + rn(Eigen::Index(b)) - 2.0f * dot(Eigen::Index(a), Eigen::Index(b)));
-          all.push_back({d1[a] + d2[b] + d3, qi[a], ri[b]});
-        }
+      // The `kept` least (CB, q, r) among the S^2 pairs, with a max-heap. d1 and d2 ascend (the
+      // searches return strips nearest first) and CB >= d1 + d2, so a row stops as soon as
+      // d1 + d2 exceeds the worst triple kept: the result is that of the full sort.
       auto less = [](const Triple& x, const Triple& y) {
         return x.cb != y.cb ? x.cb < y.cb : x.q != y.q ? x.q < y.q : x.r < y.r;
       };
-      const size_t keep = std::min(all.size(), size_t(o.kept));
-      std::partial_sort(all.begin(), all.begin() + std::ptrdiff_t(keep), all.end(), less);
-      out[size_t(p)].assign(all.begin(), all.begin() + std::ptrdiff_t(keep));
+      const size_t keep = std::min(nq * nr, size_t(o.kept));
+      all.clear();
+      for (size_t a = 0; a < nq; ++a) {
+        if (all.size() == keep && d1[a] + d2[0] > all.front().cb) break;
+        for (size_t b = 0; b < nr; ++b) {
+          if (all.size() == keep && d1[a] + d2[b] > all.front().cb) break;
+          const auto d3 = int32_t(qn(Eigen::Index(a)) + rn(Eigen::Index(b)) - 2.0f * dot(Eigen::Index(a), Eigen::Index(b)));
+          const Triple t{d1[a] + d2[b] + d3, qi[a], ri[b]};
+          if (all.size() < keep) {
+            all.push_back(t);
+            std::push_heap(all.begin(), all.end(), less);
+          } else if (less(t, all.front())) {
+            std::pop_heap(all.begin(), all.end(), less);
+            all.back() = t;
+            std::push_heap(all.begin(), all.end(), less);
+          }
+        }
+      }
+      std::sort_heap(all.begin(), all.end(), less);
+      out[size_t(p)] = all;
     }
   }, 64);
   return out;
@@ -173,32 +217,40 @@ void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int s
     bool over = false;
     for (const auto& s : sets) over = over || s.size() > size_t(kSolidMaxCandidates);
     if (!over) break;
-    std::vector<std::vector<uint32_t>> qs(static_cast<size_t>(n)), rs(static_cast<size_t>(n));
-    for (int p = 0; p < n; ++p) {
-      for (const Triple& t : sets[size_t(p)]) {
-        qs[size_t(p)].push_back(t.q);
-        rs[size_t(p)].push_back(t.r);
+    // Each pixel's foreign coordinates, sorted, in flat arrays (offsets[p] .. offsets[p+1]).
+    std::vector<size_t> offsets(size_t(n) + 1, 0);
+    for (int p = 0; p < n; ++p) offsets[size_t(p) + 1] = offsets[size_t(p)] + sets[size_t(p)].size();
+    std::vector<uint32_t> qsFlat(offsets.back()), rsFlat(offsets.back());
+    parallelFor(0, n, threads, [&](int begin, int end) {
+      for (int p = begin; p < end; ++p) {
+        size_t i = offsets[size_t(p)];
+        for (const Triple& t : sets[size_t(p)]) {
+          qsFlat[i] = t.q;
+          rsFlat[i++] = t.r;
+        }
+        std::sort(qsFlat.begin() + std::ptrdiff_t(offsets[size_t(p)]), qsFlat.begin() + std::ptrdiff_t(i));
+        std::sort(rsFlat.begin() + std::ptrdiff_t(offsets[size_t(p)]), rsFlat.begin() + std::ptrdiff_t(i));
       }
-      std::sort(qs[size_t(p)].begin(), qs[size_t(p)].end());
-      std::sort(rs[size_t(p)].begin(), rs[size_t(p)].end());
-    }
+    }, 256);
     std::vector<std::vector<Triple>> next(static_cast<size_t>(n));
     parallelFor(0, n, threads, [&](int begin, int end) {
       for (int p = begin; p < end; ++p) {
         const int u = p % w, v = p / w;
         const int neighbors[4] = {v * w + wrap(u + spacing, w), v * w + wrap(u - spacing, w),
                                   wrap(v + spacing, h) * w + u, wrap(v - spacing, h) * w + u};
-        auto found = [&](const std::vector<std::vector<uint32_t>>& lists, uint32_t coord) {
+        auto found = [&](const std::vector<uint32_t>& flat, uint32_t coord) {
           uint32_t steps[4];
           stepsOf(coord, steps);
           for (int nb : neighbors)
             for (uint32_t s : steps)
-              if (std::binary_search(lists[size_t(nb)].begin(), lists[size_t(nb)].end(), s)) return true;
+              if (std::binary_search(flat.begin() + std::ptrdiff_t(offsets[size_t(nb)]),
+                                     flat.begin() + std::ptrdiff_t(offsets[size_t(nb) + 1]), s))
+                return true;
           return false;
         };
         std::vector<Triple>& kept = next[size_t(p)];
         for (const Triple& t : sets[size_t(p)])
-          if (found(qs, t.q) && found(rs, t.r)) kept.push_back(t);
+          if (found(qsFlat, t.q) && found(rsFlat, t.r)) kept.push_back(t);
         if (kept.empty()) kept = sets[size_t(p)];  // never empty a pixel
       }
     }, 256);
@@ -212,14 +264,14 @@ SolidProjection fitProjection(const std::vector<int32_t>& samples, int inputs, i
   SolidProjection p;
   p.inputs = inputs;
   p.dims = dims;
-  Eigen::MatrixXd m(n, inputs);
+  Eigen::MatrixXf m(n, inputs);
   for (int i = 0; i < n; ++i)
-    for (int j = 0; j < inputs; ++j) m(i, j) = samples[size_t(i) * inputs + size_t(j)];
-  const Eigen::RowVectorXd mean = m.colwise().mean();
+    for (int j = 0; j < inputs; ++j) m(i, j) = float(samples[size_t(i) * inputs + size_t(j)]);
+  const Eigen::RowVectorXf mean = m.colwise().mean();
   p.mean.resize(size_t(inputs));
   for (int j = 0; j < inputs; ++j) p.mean[size_t(j)] = int32_t(std::lrint(mean(j)));
-  for (int j = 0; j < inputs; ++j) m.col(j).array() -= double(p.mean[size_t(j)]);
-  const Eigen::MatrixXd covariance = (m.transpose() * m) / double(std::max(1, n - 1));
+  for (int j = 0; j < inputs; ++j) m.col(j).array() -= float(p.mean[size_t(j)]);
+  const Eigen::MatrixXd covariance = (m.transpose() * m).cast<double>() / double(std::max(1, n - 1));
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
   p.basis.assign(size_t(dims) * inputs, 0);
   for (int d = 0; d < dims && d < inputs; ++d) {
@@ -452,7 +504,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
     }
 
     // PCA of 2-D neighborhoods (all pixels of the distinct exemplars) and of 3-neighborhoods
-    // (the two best candidates of every pixel of every exemplar, at most 16384 samples).
+    // (the two best candidates of every pixel of every exemplar, at most 8192 samples).
     std::vector<int32_t> samples;
     for (int e = 0; e < distinct; ++e)
       for (int p = 0; p < n; ++p) {
@@ -462,7 +514,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
     level.projection2d = fitProjection(samples, 75, kSolid2dDims);
     samples.clear();
     const int64_t total = int64_t(n) * 3 * 2;
-    const int64_t stride = std::max<int64_t>(1, total / 16384);
+    const int64_t stride = std::max<int64_t>(1, total / 8192);
     for (int64_t i = 0; i < total; i += stride) {
       const int e = int(i / (int64_t(n) * 2)), p = int((i / 2) % n), k = int(i % 2);
       samples.resize(samples.size() + kSolidCrossVoxels * 3);

@@ -19,7 +19,8 @@
 // Deviations from the paper, on purpose:
 //   * a Gaussian *stack* (every level at the exemplar's size, taps 2^(L-l) apart) instead of a
 //     pyramid, as in the 2-D synthesis of this module: stack upsampling adds h_l * (child bit);
-//   * the S best strips are found with an exact k-d tree (nanoflann) rather than ANN;
+//   * the S best strips are found by an exact brute-force search (blocked matrix products)
+//     rather than ANN; ties go to the smaller pixel index;
 //   * coherence (§4.2) reads "|C[p+d]_y - c_y| = 1" as a toroidal 4-neighbor step of the level's
 //     tap spacing h_l in that exemplar; a filter iteration that would empty a pixel's set is not
 //     applied to that pixel (the paper notes this "happens rarely");
