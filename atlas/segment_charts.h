@@ -15,13 +15,15 @@ namespace texfab::atlas {
 struct SegmentChartsOptions {
   /// A triangle joins a chart only when its normal is within this angle of the chart's mean
   /// normal (degrees, (0, 90]). Smaller: more charts, less stretch, more seams.
-  double maxNormalDeviationDegrees = 44.0;
+  double maxNormalDeviationDegrees = 75.0;
   /// Weight of compactness (distance to the chart seed relative to the chart radius) against
   /// normal deviation when charts compete for triangles (>= 0; 0 = normals only). Round charts
   /// pack better and have shorter seams.
   double compactnessWeight = 0.25;
   /// Lloyd iterations of competitive growth after the greedy seeding (>= 0).
   int lloydIterations = 4;
+  /// Passes of border smoothing (a triangle with two neighbours in another chart moves there) (>= 0).
+  int smoothingPasses = 4;
 
   /// Throws texfab::Error naming the field.
   void validate() const;

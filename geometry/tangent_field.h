@@ -45,7 +45,7 @@ struct TangentField {
   Eigen::Vector3f at(const Mesh& mesh, size_t t, float b1, float b2) const;
 };
 
-/// Solves one sparse Hermitian system (Eigen SimplicialLDLT) over the vertices.
+/// Solves one sparse Hermitian system over the vertices (Eigen conjugate gradients).
 TangentField computeTangentField(const Mesh& mesh, const TangentFieldOptions& options = {});
 
 } // namespace texfab::geometry

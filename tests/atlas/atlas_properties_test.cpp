@@ -138,6 +138,7 @@ TEST(AtlasOnCgalMeshes, IndirectionWalksAreContinuousAcrossSeams) {
   ASSERT_FALSE(starts.empty());
   std::mt19937 rng(7);
   size_t steps = 0, crossings = 0, bad = 0;
+  std::vector<double> ratios, seamRatios;
   double worst = 0;
   for (int walk = 0; walk < 300; ++walk) {
     auto [x, y] = starts[rng() % starts.size()];
@@ -161,7 +162,17 @@ TEST(AtlasOnCgalMeshes, IndirectionWalksAreContinuousAcrossSeams) {
       // One step of `len` texels covers len / texelsPerUnit of surface, up to the stretch.
       const double ratio = (to - from).norm() * r.atlas.texelsPerUnit / len;
       worst = std::max(worst, ratio);
-      if (!t.hitBoundary && (ratio < 0.25 || ratio > 3.0)) ++bad;
+      // The chord is shorter than the step where the path folds over a sharp edge, so single
+      // steps are only bounded loosely (no stall, no jump); the medians below must be ≈ 1. A wrong
+      // seam jump lands many texels away.
+      const double lower = 0.05;
+      if (!t.hitBoundary) (t.crossedSeam ? seamRatios : ratios).push_back(ratio);
+      if (!t.hitBoundary && (ratio < lower || ratio > 3.0)) {
+        ++bad;
+        ADD_FAILURE() << "step from texel " << x << "," << y << " dir " << k << " ratio " << ratio << " seam "
+                      << int(t.crossedSeam) << " to " << t.x << "," << t.y << " chart " << here.chart << "->" << t.chart
+                      << " entry " << e;
+      }
       ++steps;
       crossings += t.crossedSeam;
       const int nx = int(std::floor(t.x)), ny = int(std::floor(t.y));
@@ -170,6 +181,13 @@ TEST(AtlasOnCgalMeshes, IndirectionWalksAreContinuousAcrossSeams) {
     }
   }
   EXPECT_EQ(bad, 0u) << "worst ratio " << worst;
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  ASSERT_FALSE(seamRatios.empty());
+  EXPECT_NEAR(median(ratios), 1.0, 0.15);
+  EXPECT_NEAR(median(seamRatios), 1.0, 0.25);
   EXPECT_GT(steps, 1000u);
   EXPECT_GT(crossings, 20u);
 }
