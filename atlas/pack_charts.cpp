@@ -201,8 +201,10 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
   });
   std::vector<size_t> order(charts.size());
   std::iota(order.begin(), order.end(), size_t(0));
+  // Largest shorter side first (measured on CGAL meshes: 1-4 % better fill than by area, by
+  // longer side, or by perimeter).
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return size_t(masks[a].w) * size_t(masks[a].h) > size_t(masks[b].w) * size_t(masks[b].h);
+    return std::min(masks[a].w, masks[a].h) > std::min(masks[b].w, masks[b].h);
   });
   std::vector<int> horizon(size_t(W), 0);
   int used = 0;
@@ -334,6 +336,8 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   atlas.texelsPerUnit = bestDensity;
   report.texelsPerUnit = bestDensity;
   report.usedHeight = bestUsed;
+  for (const Mask& m : bestMasks)
+    for (uint8_t b : m.bits) report.maskTexels += b;
   atlas.texelUvs.assign(3 * mesh.triangleCount(), Eigen::Vector2f(0.5f, 0.5f));
   for (size_t c = 0; c < atlas.charts.size(); ++c) {
     Chart& chart = atlas.charts[c];

@@ -29,6 +29,7 @@ struct PackChartsReport {
   double texelsPerUnit = 0;
   int passes = 0;
   int usedHeight = 0;          ///< rows used by the packed charts (<= height)
+  size_t maskTexels = 0;        ///< texels of the packed masks (charts + half gutters): the packer's fill
   size_t chartsBelowOneTexel = 0; ///< charts whose extent is under one texel at the chosen density
 };
 
