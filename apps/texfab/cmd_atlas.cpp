@@ -201,6 +201,8 @@ void runAtlas(const AtlasArgs& args) {
                        {"texels_per_unit", r.texelsPerUnit},
                        {"chart_texels", result.fields.chartTexels},
                        {"packing_passes", r.pack.passes},
+                       {"packed_mask_fill", double(r.pack.maskTexels) / (double(width) * height)},
+                       {"used_height", r.pack.usedHeight},
                        {"splits", {{"disks", r.segment.splitsForDisks},
                                    {"flips", r.parameterize.splitsForFlips},
                                    {"overlaps", r.parameterize.splitsForOverlaps},
