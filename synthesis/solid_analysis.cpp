@@ -335,6 +335,21 @@ bool samePixels(const Image& a, const Image& b) {
   return a.width == b.width && a.height == b.height && a.channels == b.channels && a.pixels == b.pixels;
 }
 
+// Fills the derived tables of a level (see SolidLevel::candidateDescriptors2d).
+void deriveTables(SolidLevel& level, int w) {
+  for (int e = 0; e < 3; ++e) {
+    const auto& cands = level.candidates2d[size_t(e)];
+    const auto& desc = level.descriptors2d[size_t(e)];
+    auto& out = level.candidateDescriptors2d[size_t(e)];
+    out.resize(cands.size() * kSolid2dDims);
+    for (size_t i = 0; i < cands.size(); ++i) {
+      const size_t p = size_t(coordV(cands[i])) * size_t(w) + coordU(cands[i]);
+      std::copy_n(desc.begin() + std::ptrdiff_t(p * kSolid2dDims), kSolid2dDims,
+                  out.begin() + std::ptrdiff_t(i * kSolid2dDims));
+    }
+  }
+}
+
 } // namespace
 
 void SolidProjection::project(const int32_t* values, int8_t* out) const {
@@ -540,6 +555,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
           }
         }
     }, 64);
+    deriveTables(level, w);
   }
   a.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return a;
@@ -693,6 +709,7 @@ std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t ex
     }
     readProjection(r, l.projection2d, 75, kSolid2dDims);
     readProjection(r, l.projection3d, kSolidCrossVoxels * 3, l.dims);
+    if (r.ok) deriveTables(l, a.width);
   }
   if (!r.ok || in.peek() != std::char_traits<char>::eof()) return std::nullopt;
   return a;

@@ -82,6 +82,9 @@ struct SolidLevel {
   std::array<std::vector<uint8_t>, 3> colors;        ///< per exemplar: w*h*3, the stack level in 8 bits
   std::array<std::vector<uint32_t>, 3> candidates2d; ///< per exemplar: w*h*candidates2d packed coords
   std::array<std::vector<int8_t>, 3> descriptors2d;  ///< per exemplar: w*h*kSolid2dDims
+  /// Derived (not cached): per exemplar, w*h*(2-D candidates)*kSolid2dDims, the descriptor of each
+  /// 2-D candidate of a pixel, side by side, so the search reads one cache line per pixel.
+  std::array<std::vector<int8_t>, 3> candidateDescriptors2d;
   /// Per exemplar: w*h*kSolidMaxCandidates triples (x, y, z exemplar coordinates, packed), best
   /// crossbar error first; the e-th coordinate is the pixel itself. Short sets repeat their first.
   std::array<std::vector<uint32_t>, 3> triples;

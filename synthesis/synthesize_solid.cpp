@@ -25,7 +25,7 @@ using cpu::VolumeGrid;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kTileShift = 7;   // requests are cut into 128^3 finest-level tiles
-constexpr int kBrickShift = 4;  // the cache holds 16^3 bricks
+constexpr int kBrickShift = 3;  // the cache holds 8^3 bricks
 constexpr int kBrickSide = 1 << kBrickShift;
 constexpr int kRowGrain = 4;
 
@@ -45,6 +45,7 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li) {
     t.colors[e] = l.colors[s].data();
     t.candidates2d[e] = l.candidates2d[s].data();
     t.descriptors2d[e] = l.descriptors2d[s].data();
+    t.candidateDescriptors2d[e] = l.candidateDescriptors2d[s].data();
     t.triples[e] = l.triples[size_t(e)].data();
     t.descriptors3d[e] = l.descriptors3d[size_t(e)].data();
   }

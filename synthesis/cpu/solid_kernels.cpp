@@ -243,11 +243,12 @@ void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, c
             for (int k = 0; k < seenCount && !visited; ++k) visited = seen[k] == base;
             if (visited) continue;
             seen[seenCount++] = base;
-            const uint32_t* cand = t.candidates2d[e] + (size_t(coordV(base)) * size_t(w) + coordU(base)) * size_t(t.k2dStride);
+            const size_t slot = (size_t(coordV(base)) * size_t(w) + coordU(base)) * size_t(t.k2dStride);
+            const uint32_t* cand = t.candidates2d[e] + slot;
+            const int8_t* candDescriptors = t.candidateDescriptors2d[e] + slot * kSolid2dDims;
             for (int k = 0; k < t.k2d; ++k) {
               const uint32_t p = cand[k];
-              const int32_t d =
-                  ssdN<kSolid2dDims>(target2d, t.descriptors2d[e] + (size_t(coordV(p)) * size_t(w) + coordU(p)) * kSolid2dDims);
+              const int32_t d = ssdN<kSolid2dDims>(target2d, candDescriptors + size_t(k) * kSolid2dDims);
               if (d < best || (d == best && p < bestC)) {  // order-independent minimum of (d, p)
                 best = d;
                 bestC = p;

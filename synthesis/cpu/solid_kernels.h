@@ -36,6 +36,7 @@ struct SolidTables {
   const uint8_t* colors[3] = {};         ///< per exemplar: w*h*3 8-bit colours of this level
   const uint32_t* candidates2d[3] = {};  ///< per exemplar: w*h*k2dStride packed coordinates
   const int8_t* descriptors2d[3] = {};   ///< per exemplar: w*h*8
+  const int8_t* candidateDescriptors2d[3] = {};  ///< per exemplar: w*h*k2dStride*8, each candidate's descriptor
   const uint32_t* triples[3] = {};       ///< per exemplar: w*h*12*3 packed coordinates
   const int8_t* descriptors3d[3] = {};   ///< per exemplar: w*h*12*dims
   const int32_t* mean2d = nullptr;       ///< 75
