@@ -219,6 +219,21 @@ void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, c
           for (int ch = 0; ch < 3; ++ch) values[i * 3 + ch] += 2 * c[ch];
         }
       }
+      // The 2-D candidate pixels of the 3x3 plane neighbors (C(S[v + P d] - d), §5.1): found
+      // first, so that their table lines are fetched while the projections run (a CPU-only hint).
+      uint32_t bases[3][9];
+      for (int e = 0; e < 3; ++e)
+        for (int j = -1; j <= 1; ++j)
+          for (int i = -1; i <= 1; ++i) {
+            const uint32_t s = in[(int64_t(v) + l.linear[l.plane[e][(j + 2) * 5 + (i + 2)]]) * 3 + e];
+            const uint32_t base = wrapCoord(int64_t(coordU(s)) - i * t.spacing, int64_t(coordV(s)) - j * t.spacing, w, h);
+            bases[e][(j + 1) * 3 + (i + 1)] = base;
+#if defined(__GNUC__)
+            const size_t slot = (size_t(coordV(base)) * size_t(w) + coordU(base)) * size_t(t.k2dStride);
+            __builtin_prefetch(t.candidateDescriptors2d[e] + slot * kSolid2dDims);
+            __builtin_prefetch(t.candidates2d[e] + slot);
+#endif
+          }
       int8_t target3d[kSolidMaxDims];
       project(values, kSolidCrossVoxels * 3, t.mean3d, t.basis3d, t.dims, t.divisor3d, target3d);
 
@@ -234,11 +249,8 @@ void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, c
         uint32_t bestC = 0;
         uint32_t seen[9];  // coherent neighbors often point at the same pixel: visit it once
         int seenCount = 0;
-        for (int j = -1; j <= 1; ++j)
-          for (int i = -1; i <= 1; ++i) {
-            const int c = l.plane[e][(j + 2) * 5 + (i + 2)];
-            const uint32_t s = in[(int64_t(v) + l.linear[c]) * 3 + e];
-            const uint32_t base = wrapCoord(int64_t(coordU(s)) - i * t.spacing, int64_t(coordV(s)) - j * t.spacing, w, h);
+        for (int n = 0; n < 9; ++n) {
+            const uint32_t base = bases[e][n];
             bool visited = false;
             for (int k = 0; k < seenCount && !visited; ++k) visited = seen[k] == base;
             if (visited) continue;
@@ -256,6 +268,11 @@ void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, c
             }
           }
         bestPixel[e] = bestC;
+#if defined(__GNUC__)
+        const size_t first = (size_t(coordV(bestC)) * size_t(w) + coordU(bestC)) * kSolidMaxCandidates;
+        for (int k = 0; k < t.k3d * t.dims; k += 64) __builtin_prefetch(t.descriptors3d[e] + first * size_t(t.dims) + size_t(k));
+        __builtin_prefetch(t.triples[e] + first * 3);
+#endif
       }
 
       // Step 2: the best 3-D candidate of those three pixels.

@@ -343,6 +343,30 @@ TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
   }
 }
 
+TEST(SolidSynthesis, NonSquareNonPowerOfTwoExemplars) {
+  Image e(40, 24, 3);
+  const Image crop = marble(40, 10, 60);
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 40; ++x)
+      for (int c = 0; c < 3; ++c) e.at(x, y, c) = crop.at(x, y, crop.channels >= 3 ? c : 0);
+  SolidAnalysisOptions ao;
+  ao.strips = 24;
+  const SolidAnalysis a = analyzeSolid(e, e, e, ao, 2);
+  EXPECT_EQ(a.levels.back().stackLevel, 6);  // ceil(log2(40))
+  const VoxelBox box{-5, 3, 11, 12, 9, 7};
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, {}, nullptr, 2);
+  for (const Triple& t : whole.triples) {
+    EXPECT_LT(coordU(t[0]), 40u);
+    EXPECT_LT(coordV(t[0]), 24u);
+    EXPECT_LT(coordU(t[2]), 40u);
+    EXPECT_LT(coordV(t[2]), 24u);
+  }
+  const std::vector<Voxel> all = boxVoxels(box);
+  std::vector<Voxel> some(all.begin() + 100, all.begin() + 160);
+  const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, 1);
+  for (size_t i = 0; i < some.size(); ++i) EXPECT_EQ(r.triples[i], fromBox(whole, box, some[i]));
+}
+
 TEST(SolidSynthesis, RejectsBadParameters) {
   const SolidAnalysis& a = analysis32();
   SolidSynthesisOptions o;
