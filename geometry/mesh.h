@@ -12,6 +12,7 @@
 #include "render/image.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <array>
 #include <cstdint>

@@ -87,3 +87,13 @@ std::vector<uint8_t> encodeDraco(const VertexArrays& vertices, const MeshWriteOp
 VertexArrays decodeDraco(const uint8_t* data, size_t size, const DracoAttributeIds& ids, const std::string& name);
 
 } // namespace texfab::geometry::detail
+
+namespace texfab::geometry::detail {
+
+/// Triangulates one polygon given by vertex positions, returning corner triples (indices into
+/// `corners`). Ear clipping in the polygon's best-fit plane (Newell normal), so concave faces
+/// come out right; polygons of more than 64 corners, and those ear clipping cannot finish
+/// (self-intersecting), fall back to a fan.
+std::vector<std::array<uint32_t, 3>> triangulatePolygon(const std::vector<Eigen::Vector3f>& corners);
+
+} // namespace texfab::geometry::detail

@@ -136,6 +136,7 @@ Mesh readObj(const fs::path& path) {
   uint32_t currentMaterial = 0;
   bool anyMaterialUsed = false;
   std::vector<CornerRef> polygon;
+  std::vector<Eigen::Vector3f> polygonPositions;
   while (!cursor.atEnd()) {
     const std::string_view line = cursor.nextLine();
     const auto words = splitWords(line);
@@ -183,12 +184,16 @@ Mesh readObj(const fs::path& path) {
         polygon.push_back(ref);
       }
       if (polygon.size() < 3) throw Error(lineError(path, cursor.lineNumber(), "face with fewer than 3 corners"));
-      // Fan triangulation (faces of OBJ files are convex in practice).
-      for (size_t k = 1; k + 1 < polygon.size(); ++k) {
-        corners.push_back(polygon[0]);
-        corners.push_back(polygon[k]);
-        corners.push_back(polygon[k + 1]);
+      if (polygon.size() == 3) {
+        corners.insert(corners.end(), polygon.begin(), polygon.end());
         mesh.faceMaterials.push_back(currentMaterial);
+      } else {
+        polygonPositions.clear();
+        for (const CornerRef& r : polygon) polygonPositions.push_back(mesh.positions[size_t(r.v - 1)]);
+        for (const auto& tri : triangulatePolygon(polygonPositions)) {
+          for (uint32_t k : tri) corners.push_back(polygon[k]);
+          mesh.faceMaterials.push_back(currentMaterial);
+        }
       }
     } else if (key == "mtllib") {
       // A name may contain spaces; several libraries may be listed, but that is rare: try the whole

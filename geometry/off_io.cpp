@@ -67,19 +67,22 @@ Mesh readOff(const fs::path& path) {
     }
     if (texcoords) number(), number();
   }
+  std::vector<uint32_t> face;
+  std::vector<Eigen::Vector3f> facePositions;
   for (long long f = 0; f < nf; ++f) {
     const long long n = integer("a face size");
     if (n < 3 || n > 1000000) throw Error(path.string() + ": OFF face " + std::to_string(f) + " has " + std::to_string(n) + " vertices");
-    long long first = 0, previous = 0;
+    face.clear();
     for (long long k = 0; k < n; ++k) {
       const long long v = integer("a vertex index");
       if (v < 0 || v >= nv)
         throw Error(path.string() + ": OFF face " + std::to_string(f) + " uses vertex " + std::to_string(v) +
                     " but there are " + std::to_string(nv) + " vertices");
-      if (k == 0) first = v;
-      else if (k >= 2) mesh.triangles.push_back({uint32_t(first), uint32_t(previous), uint32_t(v)});
-      previous = v;
+      face.push_back(uint32_t(v));
     }
+    facePositions.clear();
+    for (uint32_t v : face) facePositions.push_back(mesh.positions[v]);
+    for (const auto& tri : triangulatePolygon(facePositions)) mesh.triangles.push_back({face[tri[0]], face[tri[1]], face[tri[2]]});
     // Optional face colour: rest of the line.
     next = words.size();
   }

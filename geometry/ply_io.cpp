@@ -158,6 +158,8 @@ Mesh readPly(const fs::path& path) {
   std::vector<Eigen::Vector2f> cornerUvs;
   bool haveCornerUvs = true;
   std::vector<double> values;
+  std::vector<Eigen::Vector3f> facePositions;
+  std::vector<std::array<uint32_t, 3>> faceCorners;
   for (const Element& element : elements) {
     // Every item takes at least one byte (binary) or two (ASCII: digit and separator): a count
     // larger than the data left is a corrupt header, refused before any allocation.
@@ -183,6 +185,8 @@ Mesh readPly(const fs::path& path) {
     }
     for (uint64_t item = 0; item < element.count; ++item) {
       values.assign(element.properties.size(), 0.0);
+      facePositions.clear();
+      faceCorners.clear();
       for (size_t pi = 0; pi < element.properties.size(); ++pi) {
         const Property& prop = element.properties[pi];
         if (!prop.list) {
@@ -199,30 +203,25 @@ Mesh readPly(const fs::path& path) {
         for (double& v : list) v = body.read(prop.type);
         if (isFace && (prop.name == "vertex_indices" || prop.name == "vertex_index")) {
           if (count < 3) throw Error(path.string() + ": PLY face " + std::to_string(item) + " has fewer than 3 vertices");
-          const size_t firstTri = mesh.triangles.size();
-          for (size_t k = 1; k + 1 < count; ++k) {
-            std::array<uint32_t, 3> tri{};
-            const double idx[3] = {list[0], list[k], list[k + 1]};
-            for (int c = 0; c < 3; ++c) {
-              if (!(idx[c] >= 0) || idx[c] >= double(mesh.positions.size()))
-                throw Error(path.string() + ": PLY face " + std::to_string(item) + " uses vertex " +
-                            std::to_string((long long)idx[c]) + " but there are " + std::to_string(mesh.positions.size()) +
-                            " vertices");
-              tri[size_t(c)] = uint32_t(idx[c]);
-            }
-            mesh.triangles.push_back(tri);
+          facePositions.clear();
+          for (double idx : list) {
+            if (!(idx >= 0) || idx >= double(mesh.positions.size()))
+              throw Error(path.string() + ": PLY face " + std::to_string(item) + " uses vertex " +
+                          std::to_string((long long)idx) + " but there are " + std::to_string(mesh.positions.size()) +
+                          " vertices");
+            facePositions.push_back(mesh.positions[size_t(idx)]);
           }
-          (void)firstTri;
+          faceCorners = triangulatePolygon(facePositions);
+          for (const auto& tri : faceCorners)
+            mesh.triangles.push_back({uint32_t(list[tri[0]]), uint32_t(list[tri[1]]), uint32_t(list[tri[2]])});
           values[pi] = double(count);
         } else if (isFace && prop.name == "texcoord") {
           values[pi] = double(count);
-          cornerUvs.resize(cornerUvs.size()); // filled after the item: needs the polygon size
           if (count % 2 != 0) throw Error(path.string() + ": PLY face texcoord list has an odd length");
-          // Fan-triangulate the same way as the vertex indices.
-          const size_t n = count / 2;
-          if (n >= 3)
-            for (size_t k = 1; k + 1 < n; ++k)
-              for (size_t c : {size_t(0), k, k + 1}) cornerUvs.emplace_back(float(list[2 * c]), float(list[2 * c + 1]));
+          // Triangulated the same way as the vertex indices (which PLY lists first).
+          if (count / 2 == facePositions.size())
+            for (const auto& tri : faceCorners)
+              for (uint32_t c : tri) cornerUvs.emplace_back(float(list[2 * c]), float(list[2 * c + 1]));
         }
       }
       if (isVertex) {

@@ -111,6 +111,29 @@ TEST(MeshIo, ObjReadsPolygonsNegativeIndicesAndMissingParts) {
   EXPECT_EQ(m.uvs[8], Eigen::Vector2f(0, 0));  // the face without vt gets (0, 0)
 }
 
+TEST(MeshIo, ConcavePolygonsAreTriangulatedInside) {
+  // A concave pentagon whose fan from the first corner would flip a triangle. Same face in OBJ,
+  // OFF and PLY: all triangles face +Z and their areas sum to the polygon's (2.5).
+  TempDir dir("texfab-concave");
+  const std::string v = "0 0 0\n2 0 0\n2 2 0\n1 0.5 0\n0 2 0\n";
+  std::ofstream(dir / "p.obj") << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 1 0.5 0\nv 0 2 0\nf 1 2 3 4 5\n";
+  std::ofstream(dir / "p.off") << "OFF\n5 1 0\n" << v << "5 0 1 2 3 4\n";
+  std::ofstream(dir / "p.ply") << "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+                                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                               << v << "5 0 1 2 3 4\n";
+  for (const char* name : {"p.obj", "p.off", "p.ply"}) {
+    const Mesh m = readMesh(dir / name);
+    ASSERT_EQ(m.triangleCount(), 3u) << name;
+    float area = 0;
+    for (size_t t = 0; t < 3; ++t) {
+      const Eigen::Vector3f n = (m.corner(t, 1) - m.corner(t, 0)).cross(m.corner(t, 2) - m.corner(t, 0));
+      EXPECT_GT(n.z(), 0) << name << " triangle " << t << " is flipped";
+      area += 0.5f * n.norm();
+    }
+    EXPECT_NEAR(area, 2.5f, 1e-5f) << name;
+  }
+}
+
 TEST(MeshIo, PlyRoundTripBinaryAndAscii) {
   TempDir dir("texfab-ply");
   const Mesh cube = texturedCube();
