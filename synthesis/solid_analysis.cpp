@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,7 +27,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr uint32_t kSolidMagic = 0x444c5354;  // "TSLD"
-constexpr uint32_t kSolidVersion = 2;         // bump whenever the analysis changes
+constexpr uint32_t kSolidVersion = 3;         // bump whenever the analysis changes
 constexpr int kStripLength = kSolidNeighborhoodSide;
 constexpr int kStripDims = kStripLength * 3;
 constexpr int kRadius = kSolidNeighborhoodSide / 2;
@@ -291,7 +292,8 @@ SolidProjection fitProjection(const std::vector<int32_t>& samples, int inputs, i
         acc += int64_t(p.basis[size_t(d) * inputs + size_t(j)]) * (samples[size_t(i) * inputs + size_t(j)] - p.mean[size_t(j)]);
       maxAbs = std::max(maxAbs, acc < 0 ? -acc : acc);
     }
-  p.divisor = int32_t(std::max<int64_t>(1, (maxAbs + 126) / 127));
+  // A power of two (a shift at run time), the smallest that maps the largest value into int8.
+  p.divisor = int32_t(std::bit_ceil(uint64_t(std::max<int64_t>(1, (maxAbs + 126) / 127))));
   return p;
 }
 
@@ -360,8 +362,7 @@ void SolidProjection::project(const int32_t* values, int8_t* out) const {
     const int16_t* b = basis.data() + size_t(d) * inputs;
     int32_t acc = 0;
     for (int j = 0; j < inputs; ++j) acc += int32_t(b[j]) * int32_t(centred[j]);
-    const int32_t half = divisor / 2;
-    const int32_t q = acc >= 0 ? (acc + half) / divisor : -((-acc + half) / divisor);
+    const int32_t q = (acc + (divisor >> 1)) >> std::countr_zero(uint32_t(divisor));  // round half up
     out[d] = int8_t(std::clamp(q, -127, 127));
   }
 }
@@ -604,7 +605,7 @@ void readProjection(Reader& r, SolidProjection& p, int inputs, int dims) {
   r.value(p.inputs);
   r.value(p.dims);
   r.value(p.divisor);
-  if (p.inputs != inputs || p.dims != dims || p.divisor < 1) r.ok = false;
+  if (p.inputs != inputs || p.dims != dims || p.divisor < 1 || !std::has_single_bit(uint32_t(p.divisor))) r.ok = false;
   r.vec(p.mean, size_t(inputs));
   r.vec(p.basis, size_t(inputs) * size_t(dims));
 }

@@ -61,7 +61,8 @@ struct SolidAnalysisOptions {
   void validate() const;
 };
 
-/// Integer PCA projection: q = clamp(round(sum_i basis[d][i] * (x_i - mean_i) / divisor), +-127).
+/// Integer PCA projection: q = clamp(floor((sum_i basis[d][i] * (x_i - mean_i) + divisor/2) / divisor), +-127),
+/// divisor a power of two (a shift).
 struct SolidProjection {
   int inputs = 0;
   int dims = 0;

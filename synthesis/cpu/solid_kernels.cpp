@@ -10,6 +10,7 @@
 #include "synthesis/solid_analysis.h"
 
 #include <atomic>
+#include <bit>
 #include <climits>
 
 namespace texfab::synthesis::cpu {
@@ -55,12 +56,13 @@ inline void project(const int32_t* values, int inputs, const int32_t* mean, cons
                     int32_t divisor, int8_t* out) {
   int16_t centred[kSolidCrossVoxels * 3];
   for (int j = 0; j < inputs; ++j) centred[j] = int16_t(values[j] - mean[j]);
+  const int shift = std::countr_zero(uint32_t(divisor));
+  const int32_t half = divisor >> 1;
   for (int d = 0; d < dims; ++d) {
     const int16_t* b = basis + size_t(d) * size_t(inputs);
     int32_t acc = 0;
     for (int j = 0; j < inputs; ++j) acc += int32_t(b[j]) * int32_t(centred[j]);
-    const int32_t half = divisor / 2;
-    const int32_t q = acc >= 0 ? (acc + half) / divisor : -((-acc + half) / divisor);
+    const int32_t q = (acc + half) >> shift;  // divisor = 2^shift: round half up
     out[d] = int8_t(q < -127 ? -127 : q > 127 ? 127 : q);
   }
 }
