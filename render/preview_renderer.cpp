@@ -10,6 +10,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <numeric>
 
 namespace texfab::render {
 
@@ -113,6 +114,10 @@ Image PreviewRenderer::render(const RenderOptions& o) const {
   const float pixelSpread = 2.0f * tanHalf / float(o.height);  // radians per pixel at the centre
   const float lodBias = -0.5f * std::log2(float(spp));           // each sample covers 1/spp of the pixel
   const float eps = 1e-4f * radius;
+  // A stride coprime with the number of AO rays per pixel, to decorrelate the two AO strata.
+  const uint32_t aoCount = uint32_t(std::max(1, spp * std::max(o.aoSamples, 0)));
+  uint32_t aoStride = uint32_t(std::max(1.0, std::round(0.618 * aoCount)));
+  while (std::gcd(aoStride, aoCount) != 1) ++aoStride;
   const Vector3f bg(srgbToLinear(o.background.x()), srgbToLinear(o.background.y()), srgbToLinear(o.background.z()));
 
   Image out(o.width, o.height, o.transparentBackground ? 4 : 3, PixelFormat::UInt8);
@@ -214,8 +219,14 @@ Image PreviewRenderer::render(const RenderOptions& o) const {
             Vector3f ta, tb;
             basis(n, ta, tb);
             for (int a = 0; a < o.aoSamples; ++a) {
-              const float r1 = hashUnit(uint32_t(px), uint32_t(py), uint32_t(s * 16 + a), 2);
-              const float r2 = hashUnit(uint32_t(px), uint32_t(py), uint32_t(s * 16 + a), 3);
+              // Stratified over the pixel's AO rays: two shuffled 1-D strata (a rotation and a
+              // coprime stride are permutations), jittered within the stratum.
+              const uint32_t index = uint32_t(s * o.aoSamples + a), count = uint32_t(spp * o.aoSamples);
+              const uint32_t shift1 = uint32_t(hashUnit(uint32_t(px), uint32_t(py), 0, 4) * float(count));
+              const uint32_t shift2 = uint32_t(hashUnit(uint32_t(px), uint32_t(py), 0, 5) * float(count));
+              const float r1 = (float((index + shift1) % count) + hashUnit(uint32_t(px), uint32_t(py), index, 2)) / float(count);
+              const float r2 =
+                  (float((index * aoStride + shift2) % count) + hashUnit(uint32_t(px), uint32_t(py), index, 3)) / float(count);
               const float rr = std::sqrt(r1), phi = 2 * kPi * r2;
               Vector3f d = rr * std::cos(phi) * ta + rr * std::sin(phi) * tb + std::sqrt(std::max(0.0f, 1 - r1)) * n;
               if (d.dot(ng) <= 0) d -= 2 * d.dot(ng) * ng;
