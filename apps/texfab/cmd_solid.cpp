@@ -128,8 +128,10 @@ void runSolid(const SolidArgs& args) {
     if (args.volume < 1 || args.volume > kMaxImageSide)
       throw Error("--volume: size must be in [1, " + std::to_string(kMaxImageSide) + "], got " + std::to_string(args.volume));
     const double n = args.volume;
-    // Working set: one 128-voxel slab of triples and colours, plus synthesis of one 128^3 tile.
-    const double need = n * n * std::min(n, 128.0) * (12 + 12) + 512.0 * (1 << 20);
+    // Working set: one 128-slice slab of triples and colours (voxels are `scale` slices wide),
+    // plus the synthesis of one 128^3 tile.
+    const double side = std::ceil(n / args.scale) + 1, slab = std::ceil(std::min(n, 128.0) / args.scale) + 1;
+    const double need = side * side * slab * 12 + n * n * std::min(n, 128.0) * 12 + 512.0 * (1 << 20);
     if (need > 0.8 * physicalMemoryBytes())
       throw Error("--volume " + std::to_string(args.volume) + ": needs about " + gib(need) + " of memory, more than " +
                   "this machine can give (" + gib(physicalMemoryBytes()) + ")");
