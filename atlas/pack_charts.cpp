@@ -6,6 +6,10 @@
 //  - H. Freeman, R. Shapira, "Determining the minimum-area encasing rectangle for an arbitrary
 //    closed curve", CACM 1975 (rotating calipers: charts are first turned to their minimal-area
 //    bounding rectangle).
+//  - Hole filling as in bottom-left-fill raster packers (xatlas's brute-force placement, and
+//    E. Hopper, B. Turton, "An empirical investigation of meta-heuristic and heuristic algorithms
+//    for a 2D packing problem", EJOR 2001): before dropping a chart on the horizon, look for the
+//    lowest free spot in the space left under earlier charts (row run-lengths, bounded effort).
 //  - Conservative rasterization by the separating axis theorem (triangle vs texel square).
 #include "atlas/pack_charts.h"
 
@@ -102,6 +106,8 @@ struct Mask {
   // Profiles per quarter turn: top[x] first occupied row, bottom[x] last occupied row + 1.
   std::array<std::vector<int>, 4> top, bottom;
   std::array<int, 4> width{}, maxBottom{};
+  /// Occupied spans [a, b) of each row, per quarter turn (for hole filling).
+  std::array<std::vector<std::vector<std::pair<int, int>>>, 4> spans;
 };
 
 /// Whether the triangle (a, b, c) (any orientation) intersects the square [x, x+1]×[y, y+1].
@@ -182,6 +188,33 @@ Mask rasterizeMask(const PreparedChart& chart, double density, int pad) {
     int mb = 0;
     for (int& b : m.bottom[size_t(q)]) mb = std::max(mb, b);
     m.maxBottom[size_t(q)] = mb;
+    // Rotated grid, then its row spans.
+    const int rw = (q % 2) ? m.h : m.w, rh = (q % 2) ? m.w : m.h;
+    std::vector<uint8_t> rot(size_t(rw) * size_t(rh), 0);
+    for (int y = 0; y < m.h; ++y)
+      for (int x = 0; x < m.w; ++x) {
+        if (!m.bits[size_t(y) * size_t(m.w) + size_t(x)]) continue;
+        int px = x, py = y, ph = m.h, pw = m.w;
+        for (int k = 0; k < q; ++k) {
+          const int nx = ph - 1 - py, ny = px;
+          px = nx, py = ny;
+          std::swap(pw, ph);
+        }
+        rot[size_t(py) * size_t(rw) + size_t(px)] = 1;
+      }
+    auto& rows = m.spans[size_t(q)];
+    rows.assign(size_t(rh), {});
+    for (int y = 0; y < rh; ++y)
+      for (int x = 0; x < rw;) {
+        if (!rot[size_t(y) * size_t(rw) + size_t(x)]) {
+          ++x;
+          continue;
+        }
+        int e = x;
+        while (e < rw && rot[size_t(y) * size_t(rw) + size_t(e)]) ++e;
+        rows[size_t(y)].push_back({x, e});
+        x = e;
+      }
   }
   return m;
 }
@@ -193,7 +226,7 @@ struct Placement {
 /// Packs every chart at `density` into width W (height unbounded). Returns the used height and the
 /// placements, or -1 when a chart is wider than the atlas in every orientation.
 int packAt(const std::vector<PreparedChart>& charts, double density, int W, int pad, int threads,
-           double heightWeight,
+           double heightWeight, long long holeBudget,
            std::vector<Placement>& placements, std::vector<Mask>& masks) {
   masks.assign(charts.size(), Mask{});
   parallelFor(0, int(charts.size()), threads, [&](int b, int e) {
@@ -208,6 +241,31 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
   });
   std::vector<int> horizon(size_t(W), 0);
   int used = 0;
+  // Occupancy as run lengths per row: run[x] > 0 free texels from x on, < 0 occupied ones.
+  std::vector<std::vector<uint8_t>> occupied;
+  std::vector<std::vector<int32_t>> run;
+  std::vector<int32_t> rowMaxRun; // longest free run of each row
+  auto ensureRows = [&](int rows) {
+    while (int(occupied.size()) < rows) {
+      rowMaxRun.push_back(W);
+      occupied.emplace_back(size_t(W), 0);
+      std::vector<int32_t> r(static_cast<size_t>(W));
+      for (int x = 0; x < W; ++x) r[size_t(x)] = W - x;
+      run.push_back(std::move(r));
+    }
+  };
+  long long work = 0; // hole-search effort for the current chart (bounded: deterministic, not timed)
+  auto fits = [&](const std::vector<std::vector<std::pair<int, int>>>& rows, int X, int Y, int& skip) {
+    for (size_t j = 0; j < rows.size(); ++j)
+      for (const auto& [a, b] : rows[j]) {
+        ++work;
+        const int32_t v = run[size_t(Y) + j][size_t(X + a)];
+        if (v >= b - a) continue;
+        skip = v <= 0 ? -v : v + 1;
+        return false;
+      }
+    return true;
+  };
   placements.assign(charts.size(), Placement{});
   std::vector<double> prefix(size_t(W) + 1, 0.0); // prefix sums of the horizon
   for (size_t idx : order) {
@@ -248,10 +306,66 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
       }
     }
     if (bestQ < 0) return -1;
+    // Hole filling: the lowest-row position below the horizon placement where the chart fits in
+    // the free space left under earlier charts without growing the used height.
+    {
+      int holeY = -1, holeX = 0, holeQ = 0;
+      work = 0;
+      const long long budget = holeBudget * W;
+      for (int q = 0; q < (holeBudget > 0 ? 4 : 0); ++q) {
+        const int rw = m.width[size_t(q)], rh = (q % 2) ? m.w : m.h;
+        if (rw > W) continue;
+        const int yLimit = std::min(bestY - 1, used - rh);
+        const auto& rows = m.spans[size_t(q)];
+        std::vector<int> need(rows.size(), 0); // longest span per mask row
+        for (size_t j = 0; j < rows.size(); ++j)
+          for (const auto& [a, b] : rows[j]) need[j] = std::max(need[j], b - a);
+        const int widest = int(std::max_element(need.begin(), need.end()) - need.begin());
+        for (int Y = 0; Y <= yLimit && (holeY < 0 || Y < holeY) && work < budget; ++Y) {
+          // Rows too full for the chart's span there rule Y out at once (widest mask row first).
+          if (rowMaxRun[size_t(Y + widest)] < need[size_t(widest)]) continue;
+          bool blocked = false;
+          for (size_t j = 0; j < rows.size() && !blocked; ++j) blocked = rowMaxRun[size_t(Y) + j] < need[j];
+          work += long(rows.size()) / 8 + 1;
+          if (blocked) continue;
+          bool found = false;
+          for (int X = 0; X + rw <= W && work < budget;) {
+            int skip = 1;
+            if (fits(m.spans[size_t(q)], X, Y, skip)) {
+              found = true;
+              if (holeY < 0 || Y < holeY || (Y == holeY && X < holeX)) holeY = Y, holeX = X, holeQ = q;
+              break;
+            }
+            X += std::max(1, skip);
+          }
+          if (found) break;
+        }
+      }
+      if (holeY >= 0) bestY = holeY, bestX = holeX, bestQ = holeQ;
+    }
     const int Y = bestY;
     const auto& bottom = m.bottom[size_t(bestQ)];
     for (int x = 0; x < m.width[size_t(bestQ)]; ++x)
-      if (bottom[size_t(x)] > 0) horizon[size_t(bestX + x)] = Y + bottom[size_t(x)];
+      if (bottom[size_t(x)] > 0) horizon[size_t(bestX + x)] = std::max(horizon[size_t(bestX + x)], Y + bottom[size_t(x)]);
+    {
+      const auto& rows = m.spans[size_t(bestQ)];
+      ensureRows(Y + int(rows.size()));
+      for (size_t j = 0; j < rows.size(); ++j) {
+        std::vector<uint8_t>& occ = occupied[size_t(Y) + j];
+        for (const auto& [a, b] : rows[j])
+          for (int x = a; x < b; ++x) occ[size_t(bestX + x)] = 1;
+        std::vector<int32_t>& r = run[size_t(Y) + j];
+        for (int x = W - 1; x >= 0; --x) {
+          const bool o = occ[size_t(x)];
+          const int32_t next = x + 1 < W ? r[size_t(x + 1)] : 0;
+          if (o) r[size_t(x)] = next < 0 ? next - 1 : -1;
+          else r[size_t(x)] = next > 0 ? next + 1 : 1;
+        }
+        int32_t longest = 0;
+        for (int32_t v : r) longest = std::max(longest, v);
+        rowMaxRun[size_t(Y) + j] = longest;
+      }
+    }
     used = std::max(used, Y + m.maxBottom[size_t(bestQ)]);
     for (int x = 0; x < W; ++x) prefix[size_t(x + 1)] = prefix[size_t(x)] + horizon[size_t(x)];
     placements[idx] = {bestX, Y, bestQ};
@@ -281,11 +395,12 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   // Weight of growing the used height against area wasted under the chart (measured on CGAL
   // meshes: 0.3 packs best; 0 fills one column first, 1 wastes more under overhangs).
   const double hw = 0.3;
+  const long long holeBudget = options.holeFilling ? 256 : 0; // span tests per atlas column per chart
   // Density search: secant steps on the used height, then bisection once bracketed.
   auto search = [&](int w, int h, int p, double density, int passes, bool keep) {
     double lo = 0, hi = std::numeric_limits<double>::infinity(), found = 0;
     for (int pass = 0; pass < passes || (found == 0 && pass < passes + 24); ++pass) {
-      const int used = packAt(prepared, density, w, p, threads, hw, placements, masks);
+      const int used = packAt(prepared, density, w, p, threads, hw, holeBudget, placements, masks);
       ++report.passes;
       if (used >= 0 && used <= h) {
         lo = density;
@@ -309,7 +424,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
     return found;
   };
   if (options.texelsPerUnit > 0) {
-    const int used = packAt(prepared, options.texelsPerUnit, W, pad, threads, hw, placements, masks);
+    const int used = packAt(prepared, options.texelsPerUnit, W, pad, threads, hw, holeBudget, placements, masks);
     report.passes = 1;
     if (used < 0 || used > H)
       throw Error("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
@@ -325,7 +440,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
       const double coarse = search(W / k, H / k, (pad + k - 1) / k, start / k, options.maxPasses + 2, false);
       if (coarse > 0) start = coarse * k;
     }
-    search(W, H, pad, start, k > 1 ? std::max(2, options.maxPasses / 2) : options.maxPasses, true);
+    search(W, H, pad, start, k > 1 ? 3 : options.maxPasses, true);
     if (bestDensity == 0)
       throw Error("the " + std::to_string(atlas.charts.size()) + " charts cannot fit a " + std::to_string(W) + "x" +
                   std::to_string(H) + " atlas (each needs at least " + std::to_string(2 * pad + 3) +

@@ -21,6 +21,9 @@ struct PackChartsOptions {
   bool powerOfTwo = true;    ///< require power-of-two width and height
   double texelsPerUnit = 0;  ///< fixed density; 0 = the largest that fits
   int maxPasses = 8;         ///< packing passes of the density search (>= 1)
+  /// Fill holes left under earlier charts (bounded search per chart; deterministic). ~+8 %
+  /// utilization on CGAL meshes for ~2× the packing time.
+  bool holeFilling = true;
 
   void validate() const;
 };
