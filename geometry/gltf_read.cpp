@@ -304,6 +304,7 @@ Material GltfReader::material(size_t index) {
   out.roughnessFactor = float(pbr.roughnessFactor);
   out.normalScale = float(m.normalTexture.scale);
   out.doubleSided = m.doubleSided;
+  out.blend = m.alphaMode == "BLEND";
   if (!out.baseColorFactor.allFinite() || !std::isfinite(out.metallicFactor) || !std::isfinite(out.roughnessFactor) ||
       !std::isfinite(out.normalScale))
     throw Error(name_ + ": material " + std::to_string(index) + " has a non-finite factor");

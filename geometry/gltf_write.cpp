@@ -169,7 +169,7 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
       if (m.normalScale != 1.0f) material["normalTexture"]["scale"] = m.normalScale;
     }
     if (m.doubleSided) material["doubleSided"] = true;
-    if (m.baseColorFactor.w() < 1.0f) material["alphaMode"] = "BLEND";
+    if (m.blend) material["alphaMode"] = "BLEND";
     materials.push_back(material);
   }
 

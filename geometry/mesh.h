@@ -47,6 +47,9 @@ struct Material {
   float roughnessFactor = 1.0f;
   float normalScale = 1.0f;
   bool doubleSided = false;
+  /// Alpha blending (glTF alphaMode BLEND; OBJ d < 1). When false the material is opaque and the
+  /// alpha of the factor and texture is ignored, as glTF's default OPAQUE mode says.
+  bool blend = false;
   Texture baseColorTexture;
   Texture metallicRoughnessTexture; ///< G = roughness, B = metallic (glTF)
   Texture normalTexture;            ///< tangent-space normal map (+Y up, OpenGL convention)

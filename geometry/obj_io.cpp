@@ -112,6 +112,7 @@ void readMtl(const fs::path& obj, const std::string& reference, std::vector<Mate
   }
   for (Material& m : materials) {
     m.baseColorFactor = m.baseColorFactor.cwiseMax(0.0f).cwiseMin(1.0f);
+    m.blend = m.baseColorFactor.w() < 1.0f;
     m.metallicFactor = std::clamp(m.metallicFactor, 0.0f, 1.0f);
     m.roughnessFactor = std::clamp(m.roughnessFactor, 0.0f, 1.0f);
   }

@@ -244,7 +244,7 @@ Image PreviewRenderer::render(const RenderOptions& o) const {
           // Soft highlight roll-off (Reinhard-style), on the shaded surface only.
           color = color.cwiseQuotient(Vector3f::Ones() + 0.15f * color);
           // Blend partially transparent materials with the background.
-          const float opacity = std::clamp(base.w(), 0.0f, 1.0f);
+          const float opacity = material.blend ? std::clamp(base.w(), 0.0f, 1.0f) : 1.0f;
           if (opacity < 1 && !o.transparentBackground) color = opacity * color + (1 - opacity) * bg;
           else if (opacity < 1) coverage -= 1 - opacity, color *= opacity;
           sum += color;

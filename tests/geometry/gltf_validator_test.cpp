@@ -37,6 +37,7 @@ Mesh normalMappedMesh() {
   m.materials[0].metallicRoughnessTexture.image = texfab::testing::gradientImage(4, 4);
   m.materials[0].baseColorTexture.rotation = 0.5f;
   m.materials[1].baseColorFactor.w() = 0.5f;
+  m.materials[1].blend = true;
   m.materials[1].doubleSided = true;
   return m;
 }

@@ -167,6 +167,8 @@ TEST(MeshIo, OffAndStlRoundTripKeepGeometry) {
 TEST(MeshIo, GltfAndGlbRoundTripKeepEverything) {
   TempDir dir("texfab-gltf");
   Mesh cube = texturedCube();
+  cube.materials[1].blend = true;
+  cube.materials[1].baseColorFactor.w() = 0.5f;
   cube.materials[0].baseColorTexture.offset = {0.25f, 0.5f};
   cube.materials[0].baseColorTexture.scale = {2.0f, 2.0f};
   for (const char* name : {"cube.glb", "cube.gltf"}) {
@@ -178,6 +180,8 @@ TEST(MeshIo, GltfAndGlbRoundTripKeepEverything) {
     EXPECT_EQ(back.materials[1].name, "plain");
     EXPECT_LT((back.materials[1].baseColorFactor - cube.materials[1].baseColorFactor).norm(), 1e-6f);
     EXPECT_NEAR(back.materials[1].roughnessFactor, 0.75f, 1e-6f);
+    EXPECT_TRUE(back.materials[1].blend);
+    EXPECT_FALSE(back.materials[0].blend);
     ASSERT_TRUE(back.materials[0].baseColorTexture);
     EXPECT_EQ(back.materials[0].baseColorTexture.image->width, 16);
     EXPECT_EQ(back.materials[0].baseColorTexture.offset, Eigen::Vector2f(0.25f, 0.5f));
