@@ -16,8 +16,10 @@ struct Command {
 
 Command addSynthCommand(CLI::App& root);
 Command addStatsCommand(CLI::App& root);
+Command addSolidCommand(CLI::App& root);
 Command addInfoCommand(CLI::App& root);
 Command addConvertCommand(CLI::App& root);
 Command addRenderCommand(CLI::App& root);
+Command addAtlasCommand(CLI::App& root);
 
 } // namespace texfab::cli

@@ -19,9 +19,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "texfab " TEXFAB_VERSION);
 
-  std::vector<cli::Command> commands{cli::addSynthCommand(app), cli::addStatsCommand(app),
+  std::vector<cli::Command> commands{cli::addSynthCommand(app), cli::addStatsCommand(app), cli::addSolidCommand(app),
                                      cli::addInfoCommand(app), cli::addConvertCommand(app),
-                                     cli::addRenderCommand(app)};
+                                     cli::addRenderCommand(app), cli::addAtlasCommand(app)};
 
   try {
     app.parse(argc, argv);
