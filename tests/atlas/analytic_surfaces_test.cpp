@@ -153,3 +153,21 @@ TEST(AnalyticSurfaces, SphereNeedsSeveralChartsAndKeepsStretchLow) {
 
 } // namespace
 } // namespace texfab::atlas
+
+namespace texfab::atlas {
+namespace {
+
+TEST(AnalyticSurfaces, ArapParameterizerGivesAValidAtlasToo) {
+  const geometry::Mesh sphere = test::makeSphere(24, 12);
+  GenerateAtlasOptions o;
+  o.pack.width = o.pack.height = 256;
+  o.parameterize.parameterizer = Parameterizer::Arap;
+  const GenerateAtlasResult r = generateAtlas(sphere, o);
+  EXPECT_EQ(r.report.flippedTriangles, 0u);
+  EXPECT_EQ(r.report.overlappingTexels, 0u);
+  EXPECT_EQ(r.report.nonDiskCharts, 0u);
+  EXPECT_LT(r.report.l2Stretch, 1.05);
+}
+
+} // namespace
+} // namespace texfab::atlas
