@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <bit>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -115,23 +116,30 @@ std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const s
     Eigen::MatrixXf dot;
     std::vector<uint64_t> heap;
     heap.reserve(size_t(s));
+    std::vector<int32_t> dist(static_cast<size_t>(n));
     for (int b = b0; b < b1; ++b) {
       const int r0 = b * kBlock, rows = std::min(kBlock, n - r0);
       dot.noalias() = p * q.middleRows(r0, rows).transpose();  // n x rows: one column per query
       for (int j = 0; j < rows; ++j) {
         const float qn = q.row(r0 + j).squaredNorm();
         const float* column = dot.col(j).data();
+        const float* norms = pn.data();
+        int32_t* d = dist.data();
+        for (int i = 0; i < n; ++i) d[i] = int32_t(qn + norms[i] - 2.0f * column[i]);  // < 2^24: exact
         heap.clear();
+        int32_t threshold = INT32_MAX;  // the worst distance kept, once the heap is full
         for (int i = 0; i < n; ++i) {
-          const auto d = uint32_t(qn + pn[i] - 2.0f * column[i]);
-          const uint64_t key = (uint64_t(d) << 32) | uint32_t(i);
+          if (dist[size_t(i)] > threshold) continue;
+          const uint64_t key = (uint64_t(uint32_t(dist[size_t(i)])) << 32) | uint32_t(i);
           if (heap.size() < size_t(s)) {
             heap.push_back(key);
             std::push_heap(heap.begin(), heap.end());
+            if (heap.size() == size_t(s)) threshold = int32_t(heap.front() >> 32);
           } else if (key < heap.front()) {
             std::pop_heap(heap.begin(), heap.end());
             heap.back() = key;
             std::push_heap(heap.begin(), heap.end());
+            threshold = int32_t(heap.front() >> 32);
           }
         }
         std::sort_heap(heap.begin(), heap.end());
