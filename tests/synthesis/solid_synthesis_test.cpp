@@ -367,6 +367,29 @@ TEST(SolidSynthesis, NonSquareNonPowerOfTwoExemplars) {
   for (size_t i = 0; i < some.size(); ++i) EXPECT_EQ(r.triples[i], fromBox(whole, box, some[i]));
 }
 
+TEST(SolidSynthesis, ThreeDifferentExemplars) {
+  const Image ex = marble(16, 0, 0), ey = marble(16, 50, 20), ez = marble(16, 90, 100);
+  SolidAnalysisOptions ao;
+  ao.strips = 16;
+  const SolidAnalysis a = analyzeSolid(ex, ey, ez, ao, 2);
+  EXPECT_FALSE(a.shared);
+  const SolidLevel& f = a.levels.back();
+  EXPECT_NE(f.colors[0], f.colors[1]);
+  // Each exemplar's candidates have their own pixel as their own coordinate.
+  for (int e = 0; e < 3; ++e)
+    for (int p = 0; p < 16 * 16; ++p)
+      ASSERT_EQ(f.triples[size_t(e)][size_t(p) * kSolidMaxCandidates * 3 + size_t(e)], packCoord(uint32_t(p % 16), uint32_t(p / 16)));
+  const VoxelBox box{3, -4, 2, 9, 8, 7};
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, {}, nullptr, 2);
+  const std::vector<Voxel> all = boxVoxels(box);
+  std::vector<Voxel> some(all.begin() + 200, all.begin() + 260);
+  const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, 1);
+  for (size_t i = 0; i < some.size(); ++i) EXPECT_EQ(r.triples[i], fromBox(whole, box, some[i]));
+  std::vector<float> colours;
+  solidColors(whole.triples, ex, ey, ez, colours);
+  EXPECT_EQ(colours.size(), whole.triples.size() * size_t(solidColorChannels(ex, ey, ez)));
+}
+
 TEST(SolidSynthesis, RejectsBadParameters) {
   const SolidAnalysis& a = analysis32();
   SolidSynthesisOptions o;
