@@ -6,7 +6,9 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <cstring>
 #include <map>
+#include <unordered_map>
 #include <tuple>
 
 namespace texfab::geometry {
@@ -154,13 +156,24 @@ void computeTangents(Mesh& mesh) {
 }
 
 void weldPositions(Mesh& mesh) {
-  std::map<std::tuple<float, float, float>, uint32_t> index;
+  struct KeyHash {
+    size_t operator()(const std::array<uint32_t, 3>& k) const {
+      return (size_t(k[0]) * 73856093u) ^ (size_t(k[1]) * 19349663u) ^ (size_t(k[2]) * 83492791u);
+    }
+  };
+  std::unordered_map<std::array<uint32_t, 3>, uint32_t, KeyHash> index;
+  index.reserve(mesh.positions.size());
   std::vector<uint32_t> remap(mesh.positions.size());
   std::vector<Eigen::Vector3f> kept;
   for (size_t i = 0; i < mesh.positions.size(); ++i) {
     const Eigen::Vector3f& p = mesh.positions[i];
-    // +0.0f folds -0 into 0 so that both weld.
-    const auto [it, inserted] = index.emplace(std::make_tuple(p.x() + 0.0f, p.y() + 0.0f, p.z() + 0.0f), uint32_t(kept.size()));
+    // Bit patterns as the key; +0.0f folds -0 into 0 so that both weld.
+    std::array<uint32_t, 3> key;
+    for (int k = 0; k < 3; ++k) {
+      const float c = p[k] + 0.0f;
+      std::memcpy(&key[size_t(k)], &c, 4);
+    }
+    const auto [it, inserted] = index.emplace(key, uint32_t(kept.size()));
     if (inserted) kept.push_back(p);
     remap[i] = it->second;
   }
