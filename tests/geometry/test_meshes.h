@@ -4,6 +4,7 @@
 
 #include "geometry/mesh.h"
 #include "render/error.h"
+#include "tests/test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -15,24 +16,7 @@
 
 namespace texfab::testing {
 
-/// A fresh empty folder under the system temp dir, removed at destruction.
-class TempDir {
-public:
-  explicit TempDir(const std::string& name) {
-    path_ = std::filesystem::temp_directory_path() /
-            (name + "-" + std::to_string(::getpid()) + "-" + std::to_string(std::random_device{}()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
-private:
-  std::filesystem::path path_;
-};
+using TempDir = test::TempDir;
 
 /// A w x h RGB(A) image whose pixels follow a simple formula (so texture round trips can compare).
 inline std::shared_ptr<const Image> gradientImage(int w, int h, int channels = 3) {

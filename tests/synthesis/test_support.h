@@ -1,40 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// Small helpers shared by the synthesis tests.
+// Small helpers shared by the synthesis tests (plus tests/test_support.h).
 
 #include "render/image.h"
 #include "synthesis/hash.h"
+#include "tests/test_support.h"
 
-#include <cstdlib>
 #include <filesystem>
-#include <string>
-#include <unistd.h>
 
 namespace texfab::test {
-
-/// A fresh, empty folder for one test, removed by the destructor.
-class TempDir {
-public:
-  TempDir() {
-    path_ = std::filesystem::temp_directory_path() /
-            ("texfab-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter()++));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
-private:
-  static int& counter() {
-    static int c = 0;
-    return c;
-  }
-  std::filesystem::path path_;
-};
 
 /// A w x h RGB image of hashed noise: every pixel different, no structure.
 inline Image noiseImage(int w, int h, uint32_t seed = 7) {
@@ -48,11 +22,5 @@ inline Image noiseImage(int w, int h, uint32_t seed = 7) {
 
 /// GIMP's pattern folder (Debian gimp-data).
 inline std::filesystem::path gimpPatterns() { return "/usr/share/gimp/2.0/patterns"; }
-
-/// Runs a shell command; returns its exit status.
-inline int run(const std::string& command) {
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-}
 
 } // namespace texfab::test
