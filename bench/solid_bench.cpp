@@ -9,13 +9,13 @@
 //   build/bench/solid_bench --benchmark_counters_tabular=true
 // Each synthesis benchmark runs with the paper's 8 sub-passes per pass (interleave 2) and with
 // Jacobi passes (interleave 1, a far shorter dependency chain).
+#include "bench/bench_support.h"
 #include "render/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 
 #include <cmath>
 
@@ -24,27 +24,15 @@ namespace {
 using namespace texfab;
 using namespace texfab::synthesis;
 
-Image exemplar(int side) {
-  static const Image marble = readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png");
-  Image out(side, side, marble.channels, marble.format);
-  for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x)
-      for (int c = 0; c < marble.channels; ++c) out.at(x, y, c) = marble.at(x, y, c);
-  return out;
-}
-
-double peakMemoryMiB() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_maxrss) / 1024.0;
-}
+using bench::marbleExemplar;
+using bench::peakMemoryMiB;
 
 // The analysis synthesis benchmarks use, through the on-disk cache (computed once).
 const SolidAnalysis& analysis(int side) {
   static std::map<int, SolidAnalysis> analyses;
   auto it = analyses.find(side);
   if (it == analyses.end()) {
-    const Image e = exemplar(side);
+    const Image e = marbleExemplar(side);
     it = analyses.emplace(side, analyzeSolidCached(e, e, e, {}, defaultCacheDir())).first;
   }
   return it->second;
@@ -57,7 +45,7 @@ SolidSynthesisOptions optionsFor(int64_t interleave) {
 }
 
 void BM_SolidPrecomputation(benchmark::State& state) {
-  const Image image = exemplar(int(state.range(0)));
+  const Image image = marbleExemplar(int(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(analyzeSolid(image, image, image, {}));
   state.counters["peak_MiB"] = peakMemoryMiB();
 }

@@ -141,6 +141,32 @@ void commitFile(const fs::path& tmp, const fs::path& path) {
   }
 }
 
+void writeFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+  const fs::path tmp = temporaryPathFor(path);
+  auto discard = [&] {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+  };
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error(path.string() + ": cannot create file");
+    try {
+      write(out);
+    } catch (...) {
+      out.close();
+      discard();
+      throw;
+    }
+    out.flush();
+    if (!out) {
+      out.close();
+      discard();
+      throw Error(path.string() + ": cannot write file (disk full?)");
+    }
+  }
+  commitFile(tmp, path);
+}
+
 void checkImageWritable(const fs::path& path) {
   const std::string name = path.string();
   if (path.filename().empty() || path.extension().empty())

@@ -8,6 +8,8 @@
 #include "render/image.h"
 
 #include <filesystem>
+#include <functional>
+#include <ostream>
 #include <span>
 #include <cstdint>
 #include <string>
@@ -35,6 +37,11 @@ void writeImage(const Image& image, const std::filesystem::path& path);
 /// Throws texfab::Error unless an image can be written to `path`: a known image extension and an
 /// existing folder. Commands call it before long work so a bad output path fails at once.
 void checkImageWritable(const std::filesystem::path& path);
+
+/// Writes a file through `write(stream)` with the same discipline as writeImage: to a temporary
+/// name in the same folder, then renamed onto `path`. On any failure the temporary file is
+/// removed and texfab::Error names `path`.
+void writeFileAtomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
 
 /// Renames `tmp` onto `path`, removing `tmp` and throwing texfab::Error on failure. For writers
 /// that produce files other than images with the same write-then-rename discipline.

@@ -395,10 +395,7 @@ fs::path defaultCacheDir() {
 }
 
 void writeAnalysis(const ExemplarAnalysis& a, const fs::path& path) {
-  const fs::path tmp = temporaryPathFor(path);
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw Error(path.string() + ": cannot create analysis cache file");
+  writeFileAtomically(path, [&](std::ostream& out) {
     auto put = [&](const void* data, size_t size) { out.write(static_cast<const char*>(data), std::streamsize(size)); };
     const int32_t header[5] = {a.width, a.height, int32_t(a.levels.size()), a.k, kAppearanceDims};
     put(&kCacheMagic, 4);
@@ -410,15 +407,7 @@ void writeAnalysis(const ExemplarAnalysis& a, const fs::path& path) {
       put(level.appearance.data(), level.appearance.size());
       put(level.candidates.data(), level.candidates.size() * sizeof(uint32_t));
     }
-    out.flush();
-    if (!out) {
-      out.close();
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw Error(path.string() + ": cannot write analysis cache file");
-    }
-  }
-  commitFile(tmp, path);
+  });
 }
 
 std::optional<ExemplarAnalysis> readAnalysis(const fs::path& path, uint64_t expectedKey) {

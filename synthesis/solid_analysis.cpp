@@ -575,7 +575,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
 namespace {
 
 struct Writer {
-  std::ofstream& out;
+  std::ostream& out;
   void raw(const void* d, size_t n) { out.write(static_cast<const char*>(d), std::streamsize(n)); }
   template <class T> void value(const T& v) { raw(&v, sizeof v); }
   template <class T> void vec(const std::vector<T>& v) {
@@ -621,10 +621,7 @@ void readProjection(Reader& r, SolidProjection& p, int inputs, int dims) {
 } // namespace
 
 void writeSolidAnalysis(const SolidAnalysis& a, const fs::path& path) {
-  const fs::path tmp = temporaryPathFor(path);
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw Error(path.string() + ": cannot create solid analysis cache file");
+  writeFileAtomically(path, [&](std::ostream& out) {
     Writer w{out};
     w.value(kSolidMagic);
     w.value(kSolidVersion);
@@ -651,15 +648,7 @@ void writeSolidAnalysis(const SolidAnalysis& a, const fs::path& path) {
       writeProjection(w, l.projection2d);
       writeProjection(w, l.projection3d);
     }
-    out.flush();
-    if (!out) {
-      out.close();
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw Error(path.string() + ": cannot write solid analysis cache file");
-    }
-  }
-  commitFile(tmp, path);
+  });
 }
 
 std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t expectedKey) {

@@ -8,7 +8,6 @@
 
 #include <charconv>
 #include <cstdio>
-#include <fstream>
 
 namespace texfab::cli {
 
@@ -72,14 +71,7 @@ double peakMemoryMiB() {
 }
 
 void writeReport(const nlohmann::json& report, const std::filesystem::path& path) {
-  const std::filesystem::path tmp = temporaryPathFor(path);
-  {
-    std::ofstream out(tmp);
-    if (!out) throw Error(path.string() + ": cannot create report file");
-    out << report.dump(2) << '\n';
-    if (!out.flush()) throw Error(path.string() + ": cannot write report file");
-  }
-  commitFile(tmp, path);
+  writeFileAtomically(path, [&](std::ostream& out) { out << report.dump(2) << '\n'; });
 }
 
 } // namespace texfab::cli
