@@ -8,6 +8,7 @@
 #include "render/error.h"
 #include "render/image_io.h"
 #include "render/parallel.h"
+#include "synthesis/analysis_cache.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/hash.h"
 
@@ -446,24 +447,9 @@ std::optional<ExemplarAnalysis> readAnalysis(const fs::path& path, uint64_t expe
 ExemplarAnalysis analyzeExemplarCached(const Image& exemplar, const AnalysisOptions& options,
                                        const fs::path& cacheDir, int threads, bool* fromCache) {
   options.validate();
-  const uint64_t key = analysisKey(exemplar, options);
-  char name[40];
-  std::snprintf(name, sizeof name, "%016llx.analysis", static_cast<unsigned long long>(key));
-  const fs::path path = cacheDir / name;
-  if (auto cached = readAnalysis(path, key)) {
-    if (fromCache) *fromCache = true;
-    return std::move(*cached);
-  }
-  ExemplarAnalysis analysis = analyzeExemplar(exemplar, options, threads);
-  if (fromCache) *fromCache = false;
-  try {
-    std::error_code ec;
-    fs::create_directories(cacheDir, ec);
-    writeAnalysis(analysis, path);
-  } catch (const Error&) {
-    // A read-only or full cache folder costs time on the next run, not correctness.
-  }
-  return analysis;
+  return loadOrCompute(
+      cacheDir, analysisKey(exemplar, options), ".analysis", readAnalysis,
+      [&] { return analyzeExemplar(exemplar, options, threads); }, writeAnalysis, fromCache);
 }
 
 } // namespace texfab::synthesis

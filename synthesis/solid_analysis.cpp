@@ -6,6 +6,7 @@
 #include "render/error.h"
 #include "render/image_io.h"
 #include "render/parallel.h"
+#include "synthesis/analysis_cache.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/hash.h"
@@ -17,7 +18,6 @@
 #include <chrono>
 #include <cstdint>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <numeric>
@@ -717,24 +717,9 @@ SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& 
                                  const fs::path& cacheDir, int threads, bool* fromCache) {
   options.validate();
   validateSolidExemplars(ex, ey, ez);
-  const uint64_t key = solidAnalysisKey(ex, ey, ez, options);
-  char name[40];
-  std::snprintf(name, sizeof name, "%016llx.solid", static_cast<unsigned long long>(key));
-  const fs::path path = cacheDir / name;
-  if (auto cached = readSolidAnalysis(path, key)) {
-    if (fromCache) *fromCache = true;
-    return std::move(*cached);
-  }
-  SolidAnalysis analysis = analyzeSolid(ex, ey, ez, options, threads);
-  if (fromCache) *fromCache = false;
-  try {
-    std::error_code ec;
-    fs::create_directories(cacheDir, ec);
-    writeSolidAnalysis(analysis, path);
-  } catch (const Error&) {
-    // A read-only or full cache folder costs time on the next run, not correctness.
-  }
-  return analysis;
+  return loadOrCompute(
+      cacheDir, solidAnalysisKey(ex, ey, ez, options), ".solid", readSolidAnalysis,
+      [&] { return analyzeSolid(ex, ey, ez, options, threads); }, writeSolidAnalysis, fromCache);
 }
 
 } // namespace texfab::synthesis
