@@ -332,15 +332,6 @@ void exemplarNeighborhood2d(const Exemplar8& e, int u, int v, int spacing, int32
     }
 }
 
-Image firstChannels(const Image& image) {
-  const int c = image.channels >= 3 ? 3 : 1;
-  Image out(image.width, image.height, c, PixelFormat::Float);
-  for (int y = 0; y < image.height; ++y)
-    for (int x = 0; x < image.width; ++x)
-      for (int i = 0; i < c; ++i) out.at(x, y, i) = image.at(x, y, i);
-  return out;
-}
-
 bool samePixels(const Image& a, const Image& b) {
   return a.width == b.width && a.height == b.height && a.channels == b.channels && a.pixels == b.pixels;
 }
@@ -462,7 +453,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   options2d.k = options.candidates2d;
   options2d.searchNeighbors = std::max(options2d.searchNeighbors, options.candidates2d);
   for (int e = 0; e < distinct; ++e) {
-    stacks[size_t(e)] = gaussianStack(firstChannels(*inputs[e]));
+    stacks[size_t(e)] = gaussianStack(*inputs[e]);
     analyses2d[size_t(e)] = analyzeExemplar(*inputs[e], options2d, threads);
   }
   auto src = [&](int e) { return shared ? 0 : e; };
