@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,15 +46,13 @@ double pearson(const std::vector<float>& lum, int w, int h, int dx, int dy) {
 
 } // namespace
 
-double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, int threads) {
-  const int r = options.radius, side = 2 * r + 1;
+double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, int threads) {
+  const int r = radius, side = 2 * r + 1;
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
-  if (image.width < side || image.height < side)
-    throw Error("image is smaller than the " + std::to_string(side) + "x" + std::to_string(side) + " fidelity neighborhood");
-  if (colourChannelCount(image) != colourChannelCount(exemplar))
-    throw Error("image and exemplar differ in colour channels (grey versus RGB)");
-  const int c = colourChannelCount(image);
+  const int c = colourChannelCount(exemplar);
   const int dims = side * side * c;
+  if (patches.empty() || patches.size() % size_t(dims) != 0)
+    throw Error("fidelity: patches must hold a whole number of " + std::to_string(dims) + "-value neighborhoods");
 
   // All exemplar neighborhoods (toroidal), 8-bit, one contiguous vector each.
   const int ew = exemplar.width, eh = exemplar.height;
@@ -68,29 +67,12 @@ double neighborhoodFidelity(const Image& image, const Image& exemplar, const Fid
         }
     }
 
-  // Output neighborhoods on a regular grid of interior texels.
-  const int iw = image.width - 2 * r, ih = image.height - 2 * r;
-  int stepX = 1, stepY = 1;
-  if (options.samples > 0 && int64_t(iw) * ih > options.samples) {
-    const double step = std::sqrt(double(iw) * ih / options.samples);
-    stepX = std::max(1, int(std::lround(step)));
-    stepY = stepX;
-  }
-  std::vector<std::pair<int, int>> centres;
-  for (int y = r; y < image.height - r; y += stepY)
-    for (int x = r; x < image.width - r; x += stepX) centres.emplace_back(x, y);
-
-  std::vector<double> nearest(centres.size());
-  parallelFor(0, int(centres.size()), threads, [&](int begin, int end) {
+  const size_t count = patches.size() / size_t(dims);
+  std::vector<double> nearest(count);
+  parallelFor(0, int(count), threads, [&](int begin, int end) {
     std::vector<uint8_t> q(size_t(dims), 0);
     for (int s = begin; s < end; ++s) {
-      const auto [cx, cy] = centres[size_t(s)];
-      uint8_t* v = q.data();
-      for (int j = -r; j <= r; ++j)
-        for (int i = -r; i <= r; ++i) {
-          const float* p = image.pixel(cx + i, cy + j);
-          for (int ch = 0; ch < c; ++ch) *v++ = quantize(p[ch]);
-        }
+      for (int d = 0; d < dims; ++d) q[size_t(d)] = quantize(patches[size_t(s) * size_t(dims) + size_t(d)]);
       // Exact search with partial-distance elimination, one neighborhood row at a time.
       const int rowDims = side * c;
       int64_t best = std::numeric_limits<int64_t>::max();
@@ -111,6 +93,31 @@ double neighborhoodFidelity(const Image& image, const Image& exemplar, const Fid
     }
   }, 16);
   return std::accumulate(nearest.begin(), nearest.end(), 0.0) / double(nearest.size());
+}
+
+double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, int threads) {
+  const int r = options.radius, side = 2 * r + 1;
+  if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
+  if (image.width < side || image.height < side)
+    throw Error("image is smaller than the " + std::to_string(side) + "x" + std::to_string(side) + " fidelity neighborhood");
+  if (colourChannelCount(image) != colourChannelCount(exemplar))
+    throw Error("image and exemplar differ in colour channels (grey versus RGB)");
+  const int c = colourChannelCount(image);
+
+  // Output neighborhoods on a regular grid of interior texels.
+  const int iw = image.width - 2 * r, ih = image.height - 2 * r;
+  int step = 1;
+  if (options.samples > 0 && int64_t(iw) * ih > options.samples)
+    step = std::max(1, int(std::lround(std::sqrt(double(iw) * ih / options.samples))));
+  std::vector<float> patches;
+  for (int y = r; y < image.height - r; y += step)
+    for (int x = r; x < image.width - r; x += step)
+      for (int j = -r; j <= r; ++j)
+        for (int i = -r; i <= r; ++i) {
+          const float* p = image.pixel(x + i, y + j);
+          patches.insert(patches.end(), p, p + c);
+        }
+  return patchFidelity(patches, exemplar, r, threads);
 }
 
 double histogramDistance(const Image& image, const Image& exemplar) {

@@ -9,6 +9,7 @@
 #include "synthesis/coord_map.h"
 
 #include <optional>
+#include <span>
 
 namespace texfab::synthesis {
 
@@ -22,6 +23,11 @@ struct FidelityOptions {
 /// Output neighborhoods must lie inside the image; the image needs 2*radius+1 texels per side.
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options = {},
                             int threads = 0);
+
+/// Fidelity of neighborhoods gathered elsewhere (e.g. resampled from a surface texture in
+/// exemplar space): `patches` holds (2*radius+1)^2 neighborhoods of the exemplar's colour channels
+/// (3, or 1 for grey), row-major, channels interleaved, values in [0,1]. Same measure as above.
+double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, int threads = 0);
 
 /// Histogram distance: the largest per-channel earth mover's distance between the value
 /// histograms (256 bins over [0,1]) of the image and the exemplar, in value units. 0 = identical.

@@ -53,11 +53,15 @@ void Progress::start(std::string stage) {
 
 double Progress::finish(const std::string& detail) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-  timings_[stage_] = seconds;
-  if (!quiet_)
-    std::fprintf(stderr, "%s: %-10s %7.3f s%s%s\n", command_.c_str(), stage_.c_str(), seconds,
-                 detail.empty() ? "" : "  ", detail.c_str());
+  record(stage_, seconds, detail);
   return seconds;
+}
+
+void Progress::record(const std::string& stage, double seconds, const std::string& detail) {
+  timings_[stage] = seconds;
+  if (!quiet_)
+    std::fprintf(stderr, "%s: %-10s %7.3f s%s%s\n", command_.c_str(), stage.c_str(), seconds,
+                 detail.empty() ? "" : "  ", detail.c_str());
 }
 
 void Progress::note(const std::string& message) const {

@@ -24,6 +24,8 @@ public:
   void start(std::string stage);
   /// Ends the current stage; `detail` is appended to its line.
   double finish(const std::string& detail = {});
+  /// A stage timed elsewhere (e.g. reported by a library callback).
+  void record(const std::string& stage, double seconds, const std::string& detail = {});
   void note(const std::string& message) const;
   const nlohmann::json& timings() const { return timings_; }
 

@@ -21,5 +21,6 @@ Command addInfoCommand(CLI::App& root);
 Command addConvertCommand(CLI::App& root);
 Command addRenderCommand(CLI::App& root);
 Command addAtlasCommand(CLI::App& root);
+Command addTextureCommand(CLI::App& root);
 
 } // namespace texfab::cli

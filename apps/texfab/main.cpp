@@ -21,7 +21,8 @@ int main(int argc, char** argv) {
 
   std::vector<cli::Command> commands{cli::addSynthCommand(app), cli::addStatsCommand(app), cli::addSolidCommand(app),
                                      cli::addInfoCommand(app), cli::addConvertCommand(app),
-                                     cli::addRenderCommand(app), cli::addAtlasCommand(app)};
+                                     cli::addRenderCommand(app), cli::addAtlasCommand(app),
+                                     cli::addTextureCommand(app)};
 
   try {
     app.parse(argc, argv);

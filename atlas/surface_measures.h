@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Quality measures of a texture synthesized over a surface (DESIGN.md, "Quality measures"; issue
+// 6): continuity across chart seams, uniformity of the texture's scale on the surface, and
+// neighborhood fidelity measured in exemplar space. All take the finest level of the surface
+// domain (atlas/surface_domain.h) and are deterministic.
+
+#include "atlas/rasterize_atlas.h"
+#include "render/image.h"
+#include "synthesis/synthesize_surface.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace texfab::atlas {
+
+/// Mean colour difference (mean absolute over the colour channels) between surface-adjacent
+/// texels (the 4 axis steps of the domain's neighbor table) across chart seams, divided by the
+/// same within charts. Near 1: the seams do not show.
+struct SeamMeasure {
+  double ratio = 0;
+  double seamDifference = 0;
+  double interiorDifference = 0;
+  size_t seamPairs = 0;
+  size_t interiorPairs = 0;
+};
+SeamMeasure measureSeams(const synthesis::SurfaceLevel& finest, const Image& atlasImage);
+
+/// The texture's scale on the surface, from the (subpixel) coordinate map: at each chart texel,
+/// exemplar pixels per model unit, the median of |Δc| / |ΔP| over the coherent adjacent pairs of
+/// its 5x5 window (the median ignores the small slips where two patches meet). A pair is coherent when its coordinate step is at most 2·requested + 1.5
+/// pixels (not a jump between patches); a texel with fewer than 8 coherent pairs counts as not
+/// measured, and so as not within the tolerance.
+struct ScaleMeasure {
+  double medianPixelsPerUnit = 0;
+  double fractionWithin = 0;   ///< of chart texels (equal area at the atlas's uniform density)
+  double fractionMeasured = 0;
+  double tolerance = 0.15;
+};
+ScaleMeasure measureScale(const synthesis::SurfaceLevel& finest, const std::vector<uint32_t>& coords,
+                          const AtlasFields& fields, int exemplarWidth, int exemplarHeight,
+                          double requestedPixelsPerUnit, double tolerance = 0.15);
+
+/// Neighborhood fidelity in exemplar space (synthesis/quality_measures.h): at up to `samples`
+/// chart texels spread over the atlas, the 7x7 exemplar-space neighborhood is resampled from the
+/// atlas image (bilinear, at p + J⁻¹(i, j)); neighborhoods that leave their chart are skipped.
+struct SurfaceFidelity {
+  double fidelity = 0;
+  size_t samples = 0;
+};
+SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& atlasImage,
+                                       const Image& exemplar, const AtlasFields& fields, int samples = 1024,
+                                       int threads = 0);
+
+} // namespace texfab::atlas

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The main job of texfab (`texfab texture`): synthesize a texture over a mesh and return the mesh
+// with an atlas and a PBR material carrying the synthesized maps (DESIGN.md, "Data flow").
+//
+//   surface mode: atlas -> tangent field -> Jacobians J = (t b)⁺ J_f -> surface domain (sites,
+//     neighbors across seams) -> anisometric synthesis in the atlas (Lefebvre & Hoppe 2006 §5–6)
+//     -> exemplar coordinates per texel -> colours and companion maps (same coordinates).
+//   solid mode: atlas -> each texel's 3D position times the scale is a voxel of lazy solid
+//     synthesis (Dong et al. 2008) -> colours. Seamless by construction: a cut shows the same.
+// Gutters are filled by dilating the charts' colours, so bilinear lookups and mip maps never read
+// unsynthesized texels.
+
+#include "atlas/generate_atlas.h"
+#include "atlas/surface_measures.h"
+#include "geometry/mesh.h"
+#include "geometry/tangent_field.h"
+#include "render/image.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/synthesize_solid.h"
+#include "synthesis/synthesize_surface.h"
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace texfab::atlas {
+
+enum class TextureMode { Surface, Solid };
+
+struct TextureMeshOptions {
+  TextureMode mode = TextureMode::Surface;
+  /// Exemplar pixels per model unit (solid mode: voxels per model unit); 0 = the atlas density,
+  /// one exemplar pixel per texel.
+  double textureScale = 0;
+  GenerateAtlasOptions atlas;
+  geometry::TangentFieldOptions field;        ///< orientation of the texture (surface mode)
+  synthesis::SurfaceSynthesisOptions surface;
+  synthesis::SolidSynthesisOptions solid;
+  bool measure = true;  ///< compute TextureMeasures (seams always; scale and fidelity in surface mode)
+  int threads = 0;      ///< 0 = all cores; the result does not depend on it
+};
+
+/// The exemplar and what synthesis knows about it. Companion maps must have the exemplar's size.
+struct TextureExemplar {
+  const Image* color = nullptr;
+  const synthesis::ExemplarAnalysis* analysis = nullptr;   ///< needed in surface mode
+  const synthesis::SolidAnalysis* solidAnalysis = nullptr; ///< needed in solid mode
+  const Image* normal = nullptr;    ///< tangent-space normal map, OpenGL convention (+Y up); surface mode
+  const Image* roughness = nullptr; ///< first channel
+  const Image* height = nullptr;    ///< first channel
+};
+
+struct TextureMeasures {
+  SeamMeasure seams;
+  std::optional<ScaleMeasure> scale;         ///< surface mode
+  std::optional<SurfaceFidelity> fidelity;   ///< surface mode
+};
+
+struct TextureMeshResult {
+  geometry::Mesh mesh;                      ///< the input with atlas UVs and one material with the maps
+  std::shared_ptr<const Image> baseColor;   ///< atlas-sized maps (also referenced by mesh.materials[0])
+  std::shared_ptr<const Image> normal, metallicRoughness, height; ///< null unless requested
+  GenerateAtlasResult atlas;
+  synthesis::SurfaceLevel sites;            ///< the finest level of the surface domain (one site per chart texel)
+  std::vector<uint32_t> coords;             ///< surface mode: exemplar coordinate per site
+  std::vector<synthesis::Triple> triples;   ///< solid mode: exemplar triple per site
+  double textureScale = 0;                  ///< exemplar pixels per model unit used
+  double exemplarPixelsPerTexel = 0;
+  int64_t voxelsRequested = 0, voxelsSynthesized = 0; ///< solid mode
+  TextureMeasures measures;
+  std::vector<std::string> warnings;        ///< e.g. a scale at which features are smaller than a texel
+};
+
+/// Called as each stage ends: its name, seconds, and a one-line detail.
+using StageCallback = std::function<void(const std::string& stage, double seconds, const std::string& detail)>;
+
+/// Throws texfab::Error on bad input (no triangles, a missing analysis, maps of the wrong size, a
+/// scale that puts a whole exemplar inside one texel).
+TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& exemplar,
+                              const TextureMeshOptions& options, const StageCallback& onStage = {});
+
+/// Fills the texels of `image` where `filled` is 0 from their filled neighbors, `rounds` rings
+/// deep (each ring the mean of the filled 8-neighbors), then the rest with the mean colour.
+void fillGutters(Image& image, std::vector<uint8_t> filled, int rounds, int threads = 0);
+
+} // namespace texfab::atlas

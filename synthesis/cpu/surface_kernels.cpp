@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §5–6;
+//           notes/lefebvre-hdr-notes.md §8 and errata 3–4.
+#include "synthesis/cpu/surface_kernels.h"
+
+#include "synthesis/coord_map.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/hash.h"
+
+#include <cmath>
+#include <cstdlib>
+
+namespace texfab::synthesis::cpu {
+
+namespace {
+
+// Must match exemplar_analysis.cpp and synthesis_kernels.cpp.
+constexpr int kDiagonalX[kNeighborhoodSamples] = {-1, 1, -1, 1};
+constexpr int kDiagonalY[kNeighborhoodSamples] = {-1, -1, 1, 1};
+
+// Neighbor index of step (dx, dy), indexed [dy + 1][dx + 1]; -1 for (0, 0).
+constexpr int kStepIndex[3][3] = {{5, 6, 7}, {4, -1, 0}, {3, 2, 1}};
+
+inline int roundToInt(float v) { return int(std::floor(v + 0.5f)); }
+
+constexpr int kOne = 1 << kSubpixelBits;  // one exemplar pixel in subpixel units
+
+struct Offset {
+  int x, y;
+};
+
+// round(J * (vx, vy)) in subpixel units; products and sums kept separate so that no compiler
+// fuses them into a multiply-add.
+inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
+  const float ax = j[0] * vx, bx = j[1] * vy;
+  const float ay = j[2] * vx, by = j[3] * vy;
+  return {roundToInt((ax + bx) * float(kOne)), roundToInt((ay + by) * float(kOne))};
+}
+
+// c + (dx, dy) subpixels, wrapped to the exemplar (sizes in subpixels).
+inline uint32_t shifted(uint32_t c, int dx, int dy, int64_t w, int64_t h) {
+  return packCoord(uint32_t(floorMod(int64_t(coordU(c)) + dx, w)), uint32_t(floorMod(int64_t(coordV(c)) + dy, h)));
+}
+
+inline int32_t squaredDistance(const int8_t* a, const int8_t* b) {
+  int32_t sum = 0;
+  for (int i = 0; i < kNeighborhoodDims; ++i) {
+    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
+    sum += d * d;
+  }
+  return sum;
+}
+
+// The unit step (one of 8) closest in direction to (fx, fy): the rounding of errata 3 done on the
+// circle (sectors of 45° around each step).
+inline int stepToward(float fx, float fy) {
+  constexpr float kTan22_5 = 0.41421356f;
+  const float ax = std::fabs(fx), ay = std::fabs(fy);
+  const int dx = ax > kTan22_5 * ay ? (fx > 0 ? 1 : -1) : 0;
+  const int dy = ay > kTan22_5 * ax ? (fy > 0 ? 1 : -1) : 0;
+  return kStepIndex[dy + 1][dx + 1];
+}
+
+} // namespace
+
+void initSurfaceKernel(const SurfaceLevel& level, uint32_t* out, int ew, int eh, size_t begin, size_t end) {
+  for (size_t s = begin; s < end; ++s) {
+    const Offset o = applyJ(level.jacobian[s], float(level.x[s]) + 0.5f, float(level.y[s]) + 0.5f);
+    out[s] = shifted(0, o.x, o.y, int64_t(ew) * kOne, int64_t(eh) * kOne);
+  }
+}
+
+void upsampleSurfaceKernel(const SurfaceLevel& level, const uint32_t* parent, uint32_t* out, int ew, int eh,
+                           size_t begin, size_t end) {
+  for (size_t s = begin; s < end; ++s) {
+    const Offset o = applyJ(level.jacobian[s], float(level.x[s] & 1) - 0.5f, float(level.y[s] & 1) - 0.5f);
+    out[s] = shifted(parent[level.parent[s]], o.x, o.y, int64_t(ew) * kOne, int64_t(eh) * kOne);
+  }
+}
+
+void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t seed, int atlasLevel,
+                         int64_t amplitude256, int ew, int eh, size_t begin, size_t end) {
+  if (amplitude256 == 0) return;
+  for (size_t s = begin; s < end; ++s) {
+    const uint32_t chartSeed = seed ^ pcgHash(uint32_t(level.chart[s]) + 0x9e3779b9u);
+    const int64_t hx = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 0) >> 16) - 32768;
+    const int64_t hy = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 1) >> 16) - 32768;
+    const int64_t jx = (amplitude256 * kOne * hx + (int64_t(1) << 22)) >> 23;  // subpixels
+    const int64_t jy = (amplitude256 * kOne * hy + (int64_t(1) << 22)) >> 23;
+    coords[s] = shifted(coords[s], int(jx), int(jy), int64_t(ew) * kOne, int64_t(eh) * kOne);
+  }
+}
+
+void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_t* out, const LevelTables& t,
+                          int cls, size_t begin, size_t end) {
+  const int ew = t.exemplarWidth, eh = t.exemplarHeight;
+  const int64_t sw = int64_t(ew) * kOne, sh = int64_t(eh) * kOne;
+  const auto pixelIndex = [&](uint32_t c) {  // the exemplar pixel nearest subpixel coordinate c
+    const size_t u = size_t(floorMod((int64_t(coordU(c)) + kOne / 2) >> kSubpixelBits, ew));
+    const size_t v = size_t(floorMod((int64_t(coordV(c)) + kOne / 2) >> kSubpixelBits, eh));
+    return v * size_t(ew) + u;
+  };
+  for (size_t s = begin; s < end; ++s) {
+    out[s] = in[s];
+    if (((level.x[s] & 1) | ((level.y[s] & 1) << 1)) != cls) continue;
+    const std::array<float, 4>& j = level.jacobian[s];
+    const std::array<int32_t, 8>& nb = level.neighbors[s];
+    const uint32_t current = in[s];
+
+    // -J(p)δ for the 8 unit steps, rounded once.
+    Offset back[8];
+    for (int d = 0; d < 8; ++d) {
+      const Offset o = applyJ(j, float(kSurfaceStepX[d]), float(kSurfaceStepY[d]));
+      back[d] = {-o.x, -o.y};
+    }
+
+    // The synthesized neighborhood, predicted from immediate neighbors (LH06 §5).
+    const float det = j[0] * j[3] - j[1] * j[2];
+    const float sgn = det < 0 ? -1.0f : 1.0f;
+    alignas(32) int8_t target[kNeighborhoodDims];
+    for (int i = 0; i < kNeighborhoodSamples; ++i) {
+      const int dx = t.spacing * kDiagonalX[i], dy = t.spacing * kDiagonalY[i];
+      // φ = J⁻¹Δ up to the positive factor 1/|det|: only its direction matters.
+      const float fx = sgn * (j[3] * float(dx) - j[1] * float(dy)), fy = sgn * (j[0] * float(dy) - j[2] * float(dx));
+      const int d = det != 0.0f ? stepToward(fx, fy) : stepToward(float(dx), float(dy));
+      const int32_t n = nb[size_t(d)];
+      const uint32_t predicted = n >= 0 ? shifted(in[n], back[d].x + dx * kOne, back[d].y + dy * kOne, sw, sh)
+                                        : shifted(current, dx * kOne, dy * kOne, sw, sh);
+      const int8_t* a = t.appearance + pixelIndex(predicted) * kAppearanceDims;
+      for (int c = 0; c < kAppearanceDims; ++c) target[i * kAppearanceDims + c] = a[c];
+    }
+
+    uint32_t best = current;
+    int32_t bestDistance = squaredDistance(target, t.neighborhood + pixelIndex(current) * kNeighborhoodDims);
+    for (int d = 0; d <= 8; ++d) {
+      const int32_t n = d < 8 ? nb[size_t(d)] : int32_t(s);
+      if (n < 0) continue;
+      const uint32_t base = in[n];
+      const size_t basePixel = pixelIndex(base);
+      // C_i(S[n]) - J(p)δ, keeping S[n]'s subpixel offset from its nearest pixel.
+      const int fracX = int(floorMod(int64_t(coordU(base)) + kOne / 2, kOne)) - kOne / 2;
+      const int fracY = int(floorMod(int64_t(coordV(base)) + kOne / 2, kOne)) - kOne / 2;
+      const Offset o = d < 8 ? back[d] : Offset{0, 0};
+      const uint32_t* cand = t.candidates + basePixel * size_t(t.k);
+      for (int i = 0; i < t.k; ++i) {
+        const uint32_t pixel = packCoord(coordU(cand[i]) * kOne, coordV(cand[i]) * kOne);
+        const uint32_t c = shifted(pixel, o.x + fracX, o.y + fracY, sw, sh);
+        if (c == best) continue;
+        const int32_t dist = squaredDistance(target, t.neighborhood + pixelIndex(c) * kNeighborhoodDims);
+        if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {
+          bestDistance = dist;
+          best = c;
+        }
+      }
+    }
+    out[s] = best;
+  }
+}
+
+} // namespace texfab::synthesis::cpu

@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The per-site kernels of synthesis in an atlas (Lefebvre & Hoppe 2006 §5–6), on the plain arrays
+// of a SurfaceLevel. Like synthesis_kernels.h: each kernel reads its input buffer and writes its
+// output buffer for the sites [begin, end) it is given, so sites can be split across threads (or
+// GPU invocations) freely. Coordinates are subpixel (kSubpixelBits); appearance, neighborhoods and
+// candidates are looked up at the nearest exemplar pixel. Jacobians are floats; each product J·v
+// is rounded to subpixels by floor(x + 1/2) in single precision, without fused multiply-add.
+
+#include "synthesis/cpu/synthesis_kernels.h"
+#include "synthesis/synthesize_surface.h"
+
+#include <cstdint>
+
+namespace texfab::synthesis::cpu {
+
+/// Top level: S[s] = J(s) * (texel centre) mod exemplar size, a tiling that follows each chart's
+/// Jacobian (jitter then randomizes it).
+void initSurfaceKernel(const SurfaceLevel& level, uint32_t* out, int exemplarWidth, int exemplarHeight,
+                       size_t begin, size_t end);
+
+/// Upsampling: S[s] = S_parent[parent(s)] + J(s) * ((x mod 2, y mod 2) - 1/2): the child's offset
+/// from its parent's centre, in this level's texels, mapped to the exemplar.
+void upsampleSurfaceKernel(const SurfaceLevel& level, const uint32_t* parent, uint32_t* out, int exemplarWidth,
+                           int exemplarHeight, size_t begin, size_t end);
+
+/// Jitter in place, as jitterKernel, hashed on (seed, chart, level, x, y).
+void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t seed, int atlasLevel,
+                         int64_t amplitude256, int exemplarWidth, int exemplarHeight, size_t begin, size_t end);
+
+/// One correction sub-pass over the sites of class `cls` = (x mod 2) + 2 (y mod 2); other sites
+/// are copied. The neighborhood of site s: for each diagonal Δ = h(±1, ±1), δ = the unit step
+/// closest in direction to J⁻¹Δ, and the sample E[S[n] − round(Jδ) + Δ] with n the neighbor of s
+/// in direction δ (S[s] + Δ when s has none). Candidates: C_i(S[n]) − round(Jδ) over the 8
+/// neighbors and C_i(S[s]); ties as in correctKernel.
+void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_t* out, const LevelTables& tables,
+                          int cls, size_t begin, size_t end);
+
+} // namespace texfab::synthesis::cpu
