@@ -4,7 +4,8 @@
 // least `gutter` empty texels between any two charts; quarter-turn rotations allowed after each
 // chart is turned to its minimal-area bounding rectangle. Packing places conservative raster
 // masks of the charts (every texel a chart touches, dilated by half the gutter), so charts cannot
-// overlap by construction; the density is the largest found to fit (a few packing passes).
+// overlap by construction; the density is the largest found to fit (a few packing passes, two at
+// a time on two cores; the result does not depend on the thread count).
 // Re-runnable: call again with other options without redoing charts or parameterizations.
 
 #include "atlas/atlas.h"
@@ -20,7 +21,7 @@ struct PackChartsOptions {
   int gutter = 4;            ///< minimum empty texels between two charts (0 .. 64)
   bool powerOfTwo = true;    ///< require power-of-two width and height
   double texelsPerUnit = 0;  ///< fixed density; 0 = the largest that fits
-  int maxPasses = 8;         ///< packing passes of the density search (>= 1)
+  int maxPasses = 8;         ///< packing passes of the density search (>= 1; run in pairs)
   /// Fill holes left under earlier charts (bounded search per chart; deterministic). ~+8 %
   /// utilization on CGAL meshes for ~2× the packing time.
   bool holeFilling = true;

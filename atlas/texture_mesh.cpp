@@ -265,9 +265,16 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
 
   // Resolve: colours and companion maps through the same coordinates.
   const int colourChannels = synthesis::solidColorChannels(exemplar, exemplar, exemplar);  // 3, or 1 for grey
+  // Colours at the nearest exemplar pixel keep the exemplar's sharpness; bilinear filtering only
+  // where the exemplar is magnified (a texel finer than its pixels), where nearest looks blocky.
+  const bool magnified = r.exemplarPixelsPerTexel < 0.75;
   auto lookup = [&](const Image& map, size_t site, int channel) -> float {
     channel = std::min(channel, map.channels - 1);
-    if (surface) return bilinearToroidal(map, synthesis::surfaceU(r.coords[site]), synthesis::surfaceV(r.coords[site]), channel);
+    if (surface) {
+      const float u = synthesis::surfaceU(r.coords[site]), v = synthesis::surfaceV(r.coords[site]);
+      if (magnified) return bilinearToroidal(map, u, v, channel);
+      return map.at(int(std::floor(u + 0.5f)) % map.width, int(std::floor(v + 0.5f)) % map.height, channel);
+    }
     float sum = 0;
     for (uint32_t c : r.triples[site]) sum += map.at(int(synthesis::coordU(c)), int(synthesis::coordV(c)), channel);
     return sum / 3.0f;

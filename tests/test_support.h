@@ -5,9 +5,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace texfab::test {
@@ -39,6 +42,33 @@ private:
 inline int run(const std::string& command) {
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+/// The Khronos glTF validator (npm gltf-validator) installed by scripts/install-deps.sh into
+/// .tools/, or the node_modules folder named by $TEXFAB_GLTF_VALIDATOR.
+inline std::filesystem::path gltfValidatorModules() {
+  if (const char* env = std::getenv("TEXFAB_GLTF_VALIDATOR"); env && *env) return env;
+  return std::filesystem::path(TEXFAB_SOURCE_DIR) / ".tools" / "node_modules";
+}
+
+/// Why the validator cannot run here (for GTEST_SKIP), or empty when it can.
+inline std::string gltfValidatorMissing() {
+  if (std::system("command -v node >/dev/null 2>&1") != 0) return "node not installed";
+  if (!std::filesystem::exists(gltfValidatorModules() / "gltf-validator"))
+    return "gltf-validator not installed (run scripts/install-deps.sh)";
+  return {};
+}
+
+/// Runs the validator on a .glb/.gltf; returns its output, whose first line reads
+/// "errors=N warnings=N ...".
+inline std::string validateGltf(const std::filesystem::path& file) {
+  const std::string command = "node '" + std::string(TEXFAB_SOURCE_DIR) + "/tests/geometry/validate_gltf.js' '" +
+                              gltfValidatorModules().string() + "' '" + file.string() + "' 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), &pclose);
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (pipe && fgets(buffer.data(), int(buffer.size()), pipe.get())) out += buffer.data();
+  return out;
 }
 
 } // namespace texfab::test

@@ -123,6 +123,12 @@ void runTexture(const TextureArgs& args) {
   const Image exemplar = readImage(args.exemplar);
   synthesis::validateExemplarSize(exemplar);
   const CompanionMaps maps = readCompanionMaps(args.maps);
+  if (maps.normal && options.mode == atlas::TextureMode::Solid)
+    throw Error("--maps: a normal map needs surface mode (a solid texture has no tangent frame)");
+  for (const std::optional<Image>* map : {&maps.normal, &maps.roughness, &maps.height})
+    if (*map && ((*map)->width != exemplar.width || (*map)->height != exemplar.height))
+      throw Error("--maps: companion maps must have the exemplar's size (" + std::to_string(exemplar.width) + "x" +
+                  std::to_string(exemplar.height) + ")");
   const geometry::Mesh mesh = geometry::readMesh(args.model);
   if (mesh.triangleCount() == 0) throw Error(args.model + ": the model has no triangles");
   progress.finish(args.model + ": " + std::to_string(mesh.triangleCount()) + " triangles; " + args.exemplar + " " +

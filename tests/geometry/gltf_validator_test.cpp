@@ -5,31 +5,11 @@
 #include "geometry/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
 
-#include <array>
-#include <cstdio>
-#include <memory>
-
 using namespace texfab;
 using namespace texfab::geometry;
 using texfab::testing::TempDir;
 
 namespace {
-
-std::filesystem::path validatorModules() {
-  if (const char* env = std::getenv("TEXFAB_GLTF_VALIDATOR"); env && *env) return env;
-  return std::filesystem::path(TEXFAB_SOURCE_DIR) / ".tools" / "node_modules";
-}
-
-// Runs the validator; returns its first output line ("errors=0 warnings=0 ...") and the rest.
-std::string validate(const std::filesystem::path& file) {
-  const std::string command = "node '" + std::string(TEXFAB_SOURCE_DIR) + "/tests/geometry/validate_gltf.js' '" +
-                              validatorModules().string() + "' '" + file.string() + "' 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), &pclose);
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (pipe && fgets(buffer.data(), int(buffer.size()), pipe.get())) out += buffer.data();
-  return out;
-}
 
 Mesh normalMappedMesh() {
   Mesh m = texfab::testing::texturedCube();
@@ -47,9 +27,7 @@ Mesh normalMappedMesh() {
 class GltfValidator : public ::testing::TestWithParam<std::string> {
 protected:
   void SetUp() override {
-    if (std::system("command -v node >/dev/null 2>&1") != 0) GTEST_SKIP() << "node not installed";
-    if (!std::filesystem::exists(validatorModules() / "gltf-validator"))
-      GTEST_SKIP() << "gltf-validator not installed (run scripts/install-deps.sh)";
+    if (const std::string missing = texfab::test::gltfValidatorMissing(); !missing.empty()) GTEST_SKIP() << missing;
   }
 };
 
@@ -70,7 +48,7 @@ TEST_P(GltfValidator, OutputHasNoErrorsOrWarnings) {
   for (const auto& [label, mesh] : meshes) {
     const std::filesystem::path file = dir / (label + name.substr(name.find('.')));
     writeMesh(mesh, file, options);
-    const std::string report = validate(file);
+    const std::string report = texfab::test::validateGltf(file);
     EXPECT_EQ(report.rfind("errors=0 warnings=0 ", 0), 0u) << label << " " << name << ":\n" << report;
   }
 }

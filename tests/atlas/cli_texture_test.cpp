@@ -1,0 +1,139 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// texfab texture end to end on the bundled model: both modes, companion maps, files a real glTF
+// validator accepts, the report's measures; bad input fails with one line and leaves no output.
+#include "geometry/mesh_io.h"
+#include "render/image_io.h"
+#include "tests/test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+namespace {
+namespace fs = std::filesystem;
+using texfab::test::TempDir;
+
+const fs::path kSource(TEXFAB_SOURCE_DIR);
+const fs::path kModel = kSource / "models" / "meshes" / "elephant.off";
+const fs::path kExemplar = kSource / "models" / "exemplars" / "brick.png";
+
+int texture(const std::string& args, const fs::path& stderrFile = "/dev/null") {
+  return texfab::test::run(std::string(TEXFAB_CLI) + " texture " + args + " 2>'" + stderrFile.string() + "'");
+}
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+nlohmann::json readJson(const fs::path& p) { return nlohmann::json::parse(readText(p)); }
+
+void expectValidGltf(const fs::path& file) {
+  if (const std::string missing = texfab::test::gltfValidatorMissing(); !missing.empty()) {
+    std::cout << "glTF validator skipped: " << missing << "\n";
+    return;
+  }
+  const std::string report = texfab::test::validateGltf(file);
+  EXPECT_EQ(report.rfind("errors=0 warnings=0 ", 0), 0u) << file << ":\n" << report;
+}
+
+} // namespace
+
+TEST(CliTexture, SurfaceModeOnTheBundledModel) {
+  TempDir d("texfab-texture-cli");
+  const std::string common = "'" + kModel.string() + "' -e '" + kExemplar.string() + "' --resolution 512 --cache-dir '" +
+                             (d / "cache").string() + "'";
+  ASSERT_EQ(0, texture(common + " -o '" + (d / "out.glb").string() + "' --preview '" + (d / "view.png").string() +
+                       "' --preview-size 200 --report '" + (d / "r.json").string() + "' -q"));
+  const texfab::geometry::Mesh out = texfab::geometry::readMesh(d / "out.glb");
+  ASSERT_TRUE(out.hasUvs());
+  ASSERT_EQ(out.materials.size(), 1u);
+  ASSERT_TRUE(out.materials[0].baseColorTexture);
+  EXPECT_EQ(out.materials[0].baseColorTexture.image->width, 512);
+  EXPECT_EQ(texfab::readImage(d / "view.png").width, 200);
+  expectValidGltf(d / "out.glb");
+
+  const nlohmann::json r = readJson(d / "r.json");
+  EXPECT_LE(r["measures"]["seams"]["ratio"].get<double>(), 1.3);
+  EXPECT_GE(r["measures"]["scale"]["fraction_within_tolerance"].get<double>(), 0.9);
+  EXPECT_GT(r["measures"]["fidelity"]["exemplar_space"].get<double>(), 0.0);
+  for (const char* stage : {"load", "analysis", "atlas", "fields", "synthesis", "resolve", "write", "preview"})
+    EXPECT_TRUE(r["timings"].contains(stage)) << stage;
+
+  // Same seed, same file: the whole job is deterministic (also on one thread).
+  ASSERT_EQ(0, texture(common + " -o '" + (d / "again.glb").string() + "' --threads 1 -q"));
+  EXPECT_EQ(readText(d / "out.glb"), readText(d / "again.glb"));
+}
+
+TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
+  TempDir d("texfab-texture-cli");
+  // Solid mode, a small exemplar (the solid precomputation grows with its size).
+  texfab::Image small = texfab::readImage(kExemplar);
+  texfab::Image crop(32, 32, small.channels);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x)
+      for (int c = 0; c < small.channels; ++c) crop.at(x, y, c) = small.at(x, y, c);
+  texfab::writeImage(crop, d / "small.png");
+  ASSERT_EQ(0, texture("'" + kModel.string() + "' -e '" + (d / "small.png").string() +
+                       "' --mode solid --resolution 256 --cache-dir '" + (d / "cache").string() + "' -o '" +
+                       (d / "solid.glb").string() + "' --report '" + (d / "solid.json").string() + "' -q"));
+  expectValidGltf(d / "solid.glb");
+  const nlohmann::json r = readJson(d / "solid.json");
+  EXPECT_LE(r["measures"]["seams"]["ratio"].get<double>(), 1.1);
+  EXPECT_GT(r["solid"]["voxels_requested"].get<int64_t>(), 1000);
+
+  // Surface mode with normal, roughness and height maps, written as OBJ and as Draco GLB.
+  texfab::Image normal(crop.width, crop.height, 3), rough(crop.width, crop.height, 1);
+  for (int y = 0; y < crop.height; ++y)
+    for (int x = 0; x < crop.width; ++x) {
+      normal.at(x, y, 0) = 0.5f + 0.3f * float(x % 4) / 4.0f;
+      normal.at(x, y, 1) = 0.5f;
+      normal.at(x, y, 2) = 0.9f;
+      rough.at(x, y, 0) = crop.at(x, y, 0);
+    }
+  texfab::writeImage(normal, d / "n.png");
+  texfab::writeImage(rough, d / "r.png");
+  const std::string maps = " --maps 'normal=" + (d / "n.png").string() + ",roughness=" + (d / "r.png").string() +
+                           ",height=" + (d / "r.png").string() + "'";
+  ASSERT_EQ(0, texture("'" + kModel.string() + "' -e '" + (d / "small.png").string() + "' --resolution 256 -q" +
+                       maps + " --draco -o '" + (d / "maps.glb").string() + "'"));
+  expectValidGltf(d / "maps.glb");
+  EXPECT_TRUE(fs::exists(d / "maps_height.png"));
+  const texfab::geometry::Mesh withMaps = texfab::geometry::readMesh(d / "maps.glb");
+  EXPECT_TRUE(withMaps.materials.at(0).normalTexture);
+  EXPECT_TRUE(withMaps.materials.at(0).metallicRoughnessTexture);
+  ASSERT_EQ(0, texture("'" + kModel.string() + "' -e '" + (d / "small.png").string() + "' --resolution 256 -q" +
+                       maps + " -o '" + (d / "maps.obj").string() + "'"));
+  EXPECT_TRUE(fs::exists(d / "maps.mtl"));
+}
+
+TEST(CliTexture, BadInputFailsWithOneLineAndNoOutput) {
+  TempDir d("texfab-texture-cli");
+  std::ofstream(d / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  std::ofstream(d / "notimage.png") << "not an image";
+  const std::string model = "'" + kModel.string() + "'", ex = " -e '" + kExemplar.string() + "'";
+  const std::string out = " -o '" + (d / "out.glb").string() + "' --resolution 256 -q";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"no triangles", "'" + (d / "points.obj").string() + "'" + ex + out},
+      {"missing model", "'" + (d / "missing.obj").string() + "'" + ex + out},
+      {"missing exemplar", model + " -e '" + (d / "missing.png").string() + "'" + out},
+      {"corrupt exemplar", model + " -e '" + (d / "notimage.png").string() + "'" + out},
+      {"unknown mode", model + ex + out + " --mode cloud"},
+      {"scale and feature size", model + ex + out + " --scale 10 --feature-size 1"},
+      {"scale too large", model + ex + out + " --scale 1e9"},
+      {"normal map in solid mode", model + ex + out + " --mode solid --maps normal='" + kExemplar.string() + "'"},
+      {"bad output format", model + ex + " -o '" + (d / "out.xyz").string() + "'"},
+      {"unknown flag", model + ex + out + " --frobnicate"},
+      {"bad direction", model + ex + out + " --direction 0,0,0"},
+  };
+  for (const auto& [name, args] : cases) {
+    const fs::path err = d / "stderr.txt";
+    EXPECT_NE(0, texture(args + " --cache-dir '" + (d / "cache").string() + "'", err)) << name;
+    const std::string text = readText(err);
+    EXPECT_FALSE(text.empty()) << name;
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << name << ": " << text;
+    EXPECT_FALSE(fs::exists(d / "out.glb")) << name;
+  }
+}
