@@ -9,7 +9,8 @@
 //  - Hole filling as in bottom-left-fill raster packers (xatlas's brute-force placement, and
 //    E. Hopper, B. Turton, "An empirical investigation of meta-heuristic and heuristic algorithms
 //    for a 2D packing problem", EJOR 2001): before dropping a chart on the horizon, look for the
-//    lowest free spot in the space left under earlier charts (row run-lengths, bounded effort).
+//    lowest free spot in the space left under earlier charts (a one-bit-per-texel occupancy
+//    grid tested a span at a time, widest spans first; bounded effort).
 //  - Conservative rasterization by the separating axis theorem (triangle vs texel square).
 #include "atlas/pack_charts.h"
 
@@ -17,6 +18,8 @@
 #include "render/parallel.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -241,29 +244,64 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
   });
   std::vector<int> horizon(size_t(W), 0);
   int used = 0;
-  // Occupancy as run lengths per row: run[x] > 0 free texels from x on, < 0 occupied ones.
-  std::vector<std::vector<uint8_t>> occupied;
-  std::vector<std::vector<int32_t>> run;
-  std::vector<int32_t> rowMaxRun; // longest free run of each row
+  // Occupancy as one bit per texel, 64 texels a word (a 2048² atlas takes 512 KiB: the hole
+  // search stays in cache), and the longest free run of each row.
+  const size_t words = size_t(W + 63) / 64;
+  std::vector<uint64_t> occ;
+  std::vector<int32_t> rowMaxRun;
   auto ensureRows = [&](int rows) {
-    while (int(occupied.size()) < rows) {
-      rowMaxRun.push_back(W);
-      occupied.emplace_back(size_t(W), 0);
-      std::vector<int32_t> r(static_cast<size_t>(W));
-      for (int x = 0; x < W; ++x) r[size_t(x)] = W - x;
-      run.push_back(std::move(r));
+    if (int(rowMaxRun.size()) < rows) {
+      rowMaxRun.resize(size_t(rows), W);
+      occ.resize(size_t(rows) * words, 0);
     }
   };
-  long long work = 0; // hole-search effort for the current chart (bounded: deterministic, not timed)
-  auto fits = [&](const std::vector<std::vector<std::pair<int, int>>>& rows, int X, int Y, int& skip) {
-    for (size_t j = 0; j < rows.size(); ++j)
-      for (const auto& [a, b] : rows[j]) {
-        ++work;
-        const int32_t v = run[size_t(Y) + j][size_t(X + a)];
-        if (v >= b - a) continue;
-        skip = v <= 0 ? -v : v + 1;
-        return false;
+  // Last occupied texel of row y in [x0, x1), or -1 when all are free.
+  auto lastOccupied = [&](int y, int x0, int x1) {
+    const uint64_t* row = occ.data() + size_t(y) * words;
+    const int w0 = x0 >> 6, w1 = (x1 - 1) >> 6;
+    for (int w = w1; w >= w0; --w) {
+      uint64_t v = row[w];
+      if (w == w1 && ((x1 & 63) != 0)) v &= (uint64_t(1) << (x1 & 63)) - 1;
+      if (w == w0) v &= ~uint64_t(0) << (x0 & 63);
+      if (v) return w * 64 + 63 - std::countl_zero(v);
+    }
+    return -1;
+  };
+  auto longestFreeRun = [&](int y) {
+    const uint64_t* row = occ.data() + size_t(y) * words;
+    int32_t longest = 0, start = 0;
+    int x = 0;
+    while (x < W) {
+      const uint64_t v = row[size_t(x) >> 6] >> (x & 63);
+      const int left = std::min(64 - (x & 63), W - x);
+      const int zeros = std::min(v ? std::countr_zero(v) : 64, left);
+      if (zeros < left) { // an occupied texel at x + zeros
+        x += zeros;
+        longest = std::max(longest, x - start);
+        const int ones = std::min(std::countr_one(v >> zeros), left - zeros);
+        x += ones;
+        start = x;
+      } else {
+        x += left;
       }
+    }
+    return std::max(longest, W - start);
+  };
+  long long work = 0; // hole-search effort for the current chart (bounded: deterministic, not timed)
+  // A span (a, b) of mask row j; hole tests try the widest spans first, so a position that does
+  // not fit is usually rejected by the first test, with the longest skip.
+  struct Span {
+    int j, a, b;
+  };
+  std::vector<Span> spanOrder;
+  auto fits = [&](int X, int Y, int& skip) {
+    for (const Span& s : spanOrder) {
+      ++work;
+      const int last = lastOccupied(Y + s.j, X + s.a, X + s.b);
+      if (last < 0) continue;
+      skip = last + 1 - (X + s.a);
+      return false;
+    }
     return true;
   };
   placements.assign(charts.size(), Placement{});
@@ -321,6 +359,11 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
         for (size_t j = 0; j < rows.size(); ++j)
           for (const auto& [a, b] : rows[j]) need[j] = std::max(need[j], b - a);
         const int widest = int(std::max_element(need.begin(), need.end()) - need.begin());
+        spanOrder.clear();
+        for (size_t j = 0; j < rows.size(); ++j)
+          for (const auto& [a, b] : rows[j]) spanOrder.push_back({int(j), a, b});
+        std::stable_sort(spanOrder.begin(), spanOrder.end(),
+                         [](const Span& u, const Span& v) { return u.b - u.a > v.b - v.a; });
         for (int Y = 0; Y <= yLimit && (holeY < 0 || Y < holeY) && work < budget; ++Y) {
           // Rows too full for the chart's span there rule Y out at once (widest mask row first).
           if (rowMaxRun[size_t(Y + widest)] < need[size_t(widest)]) continue;
@@ -331,7 +374,7 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
           bool found = false;
           for (int X = 0; X + rw <= W && work < budget;) {
             int skip = 1;
-            if (fits(m.spans[size_t(q)], X, Y, skip)) {
+            if (fits(X, Y, skip)) {
               found = true;
               if (holeY < 0 || Y < holeY || (Y == holeY && X < holeX)) holeY = Y, holeX = X, holeQ = q;
               break;
@@ -351,19 +394,10 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
       const auto& rows = m.spans[size_t(bestQ)];
       ensureRows(Y + int(rows.size()));
       for (size_t j = 0; j < rows.size(); ++j) {
-        std::vector<uint8_t>& occ = occupied[size_t(Y) + j];
+        uint64_t* row = occ.data() + (size_t(Y) + j) * words;
         for (const auto& [a, b] : rows[j])
-          for (int x = a; x < b; ++x) occ[size_t(bestX + x)] = 1;
-        std::vector<int32_t>& r = run[size_t(Y) + j];
-        for (int x = W - 1; x >= 0; --x) {
-          const bool o = occ[size_t(x)];
-          const int32_t next = x + 1 < W ? r[size_t(x + 1)] : 0;
-          if (o) r[size_t(x)] = next < 0 ? next - 1 : -1;
-          else r[size_t(x)] = next > 0 ? next + 1 : 1;
-        }
-        int32_t longest = 0;
-        for (int32_t v : r) longest = std::max(longest, v);
-        rowMaxRun[size_t(Y) + j] = longest;
+          for (int x = bestX + a; x < bestX + b; ++x) row[size_t(x) >> 6] |= uint64_t(1) << (x & 63);
+        rowMaxRun[size_t(Y) + j] = longestFreeRun(Y + int(j));
       }
     }
     used = std::max(used, Y + m.maxBottom[size_t(bestQ)]);
@@ -388,59 +422,95 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   if (atlas.charts.empty() || !(totalArea > 0)) throw Error("the mesh has no triangle with a non-zero area to map");
 
   PackChartsReport report;
-  std::vector<Placement> placements, bestPlacements;
-  std::vector<Mask> masks, bestMasks;
+  std::vector<Placement> bestPlacements;
+  std::vector<Mask> bestMasks;
   double bestDensity = 0;
   int bestUsed = 0;
   // Weight of growing the used height against area wasted under the chart (measured on CGAL
   // meshes: 0.3 packs best; 0 fills one column first, 1 wastes more under overhangs).
   const double hw = 0.3;
   const long long holeBudget = options.holeFilling ? 256 : 0; // span tests per atlas column per chart
-  // Density search: secant steps on the used height, then bisection once bracketed.
-  auto search = [&](int w, int h, int p, double density, int passes, bool keep) {
-    double lo = 0, hi = std::numeric_limits<double>::infinity(), found = 0;
-    for (int pass = 0; pass < passes || (found == 0 && pass < passes + 24); ++pass) {
-      const int used = packAt(prepared, density, w, p, threads, hw, holeBudget, placements, masks);
-      ++report.passes;
-      if (used >= 0 && used <= h) {
-        lo = density;
-        if (density > found) {
-          found = density;
-          if (keep) bestDensity = density, bestUsed = used, bestPlacements = placements, bestMasks = std::move(masks);
+  // Density search. The used height grows about like the square of the density (the width is
+  // fixed), so each round predicts the density that fills the height from the packed pass nearest
+  // to it (a secant step on sqrt(used)), and packs a pair of candidates around the prediction at
+  // once (one per core). Which candidates are packed depends only on earlier results, never on
+  // the thread count, so the atlas does not either.
+  struct Pass {
+    double density = 0;
+    int used = -1;
+    std::vector<Placement> placements;
+    std::vector<Mask> masks;
+  };
+  auto packPair = [&](int w, int p, double d0, double d1, std::array<Pass, 2>& out) {
+    out[0].density = d0, out[1].density = d1;
+    parallelFor(0, 2, threads, [&](int b, int e) {
+      for (int i = b; i < e; ++i) {
+        Pass& r = out[size_t(i)];
+        r.used = packAt(prepared, r.density, w, p, threads, hw, holeBudget, r.placements, r.masks);
+      }
+    });
+    report.passes += 2;
+  };
+  // Returns the best fitting density found (0 if none); keeps its pass when `keep`. The first
+  // round packs start·first[0..1]; later rounds pack the prediction ·0.99 and ·0.997 (just under
+  // it: the used height is not quite monotonic in the density).
+  auto search = [&](int w, int h, int p, double start, int rounds, std::array<double, 2> first, bool keep) {
+    double lo = 0, hi = std::numeric_limits<double>::infinity();
+    std::array<Pass, 2> pair;
+    std::array<double, 2> factors = first;
+    double density = start;
+    for (int round = 0; round < rounds || (lo == 0 && round < rounds + 16); ++round) {
+      packPair(w, p, density * factors[0], density * factors[1], pair);
+      factors = {0.99, 0.997};
+      // Prediction from the pass nearest to the target height.
+      double estimate = 0, nearest = std::numeric_limits<double>::infinity();
+      for (Pass& r : pair) {
+        if (r.used >= 0 && r.used <= h) {
+          if (r.density > lo) {
+            lo = r.density;
+            if (keep)
+              bestDensity = r.density, bestUsed = r.used, bestPlacements = std::move(r.placements),
+              bestMasks = std::move(r.masks);
+          }
+        } else {
+          hi = std::min(hi, r.density);
         }
-      } else {
-        hi = density;
+        if (r.used > 0 && std::abs(std::log(double(r.used) / h)) < nearest) {
+          nearest = std::abs(std::log(double(r.used) / h));
+          estimate = r.density * std::clamp(std::sqrt(double(h) / double(r.used)), 0.5, 1.6);
+        }
       }
-      if (std::isfinite(hi) && lo > 0) {
-        if (hi / lo < 1.004) break;
-        density = 0.5 * (lo + hi);
-      } else if (used > 0) {
-        density *= std::clamp(std::sqrt(double(h) / double(used)), 0.5, 1.6) * (used > h ? 0.995 : 1.0);
-      } else {
-        density *= 0.5;
-      }
+      if (estimate == 0) estimate = density * 0.5; // nothing packed: charts wider than the atlas
+      if (std::isfinite(hi)) estimate = std::min(estimate, hi);
+      if (lo > 0 && estimate * factors[1] <= lo * 1.001) break; // no candidate above the best left
+      density = estimate;
       if (density * std::sqrt(totalArea) < 1e-6) break;
     }
-    return found;
+    return lo;
   };
   if (options.texelsPerUnit > 0) {
+    std::vector<Placement> placements;
+    std::vector<Mask> masks;
     const int used = packAt(prepared, options.texelsPerUnit, W, pad, threads, hw, holeBudget, placements, masks);
     report.passes = 1;
     if (used < 0 || used > H)
       throw Error("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
                   std::to_string(options.texelsPerUnit) + " texels per unit");
     bestDensity = options.texelsPerUnit, bestUsed = used;
-    bestPlacements = placements, bestMasks = std::move(masks);
+    bestPlacements = std::move(placements), bestMasks = std::move(masks);
   } else {
     double start = std::sqrt(0.72 * double(W) * double(H) / totalArea);
     // A coarse search on a 4× smaller grid (16× cheaper) finds the density to within a few
-    // percent; a few full-resolution passes finish it.
+    // percent (its masks are fatter: the fine density is 0-10 % higher); two rounds of
+    // full-resolution pairs finish it.
     const int k = (W >= 512 && H >= 512) ? 4 : 1;
+    const int rounds = std::max(1, options.maxPasses / 2);
     if (k > 1) {
-      const double coarse = search(W / k, H / k, (pad + k - 1) / k, start / k, options.maxPasses + 2, false);
+      const double coarse = search(W / k, H / k, (pad + k - 1) / k, start / k, std::min(rounds, 3), {0.97, 1.03}, false);
       if (coarse > 0) start = coarse * k;
     }
-    search(W, H, pad, start, k > 1 ? 3 : options.maxPasses, true);
+    if (k > 1) search(W, H, pad, start, 2, {1.0, 1.08}, true);
+    else search(W, H, pad, start, rounds, {0.97, 1.03}, true);
     if (bestDensity == 0)
       throw Error("the " + std::to_string(atlas.charts.size()) + " charts cannot fit a " + std::to_string(W) + "x" +
                   std::to_string(H) + " atlas (each needs at least " + std::to_string(2 * pad + 3) +

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Atlas benchmarks: CGAL's bunny00 (75K triangles), armadillo (52K) and a ~1.2M-triangle mesh
+// Atlas benchmarks: CGAL's bunny00 (75K triangles), armadillo (52K), camel (20K), eight, elephant and a ~1.2M-triangle mesh
 // (bunny00 with each triangle split in 16), at 2048² with a 4-texel gutter. Counters: seconds per
 // stage, charts, utilization, stretch. Run:
 //   build-atlas/bench/atlas_bench --benchmark_counters_tabular=true
@@ -81,6 +81,9 @@ void runAtlas(benchmark::State& state, const char* name, int subdivisions) {
 
 BENCHMARK_CAPTURE(runAtlas, bunny00, "bunny00.off", 0)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(runAtlas, armadillo, "armadillo.off", 0)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(runAtlas, camel, "camel.off", 0)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(runAtlas, eight, "eight.off", 0)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(runAtlas, elephant, "elephant.off", 0)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(runAtlas, bunny00_x16, "bunny00.off", 2)->Unit(benchmark::kSecond)->Iterations(1);
 
 } // namespace
