@@ -112,6 +112,7 @@ void runTexture(const TextureArgs& args) {
   options.solid.seed = args.seed;
   options.threads = args.threads;
   options.atlas.threads = args.threads;
+  options.measure = !args.report.empty();  // the measures (seconds on a 2048² atlas) go to the report
   render::RenderOptions previewOptions;
   if (!args.preview.empty()) {
     checkImageWritable(args.preview);
@@ -252,7 +253,9 @@ Command addTextureCommand(CLI::App& root) {
   app->add_flag("--draco", args->draco, "Compress the geometry with Draco (.glb/.gltf)");
   app->add_option("--preview", args->preview, "Also render the textured model to this PNG");
   app->add_option("--preview-size", args->previewSize, "Preview size N or WxH")->capture_default_str();
-  app->add_option("--report", args->report, "Write timings, atlas figures and quality measures as JSON");
+  app->add_option("--report", args->report,
+                  "Write timings, atlas figures and quality measures (seams, scale, fidelity; measured only "
+                  "when a report is asked for) as JSON");
   app->add_option("--threads", args->threads, "Worker threads (0 = all cores); the result does not depend on it")
       ->capture_default_str();
   app->add_option("--cache-dir", args->cacheDir, "Exemplar analysis cache folder (default: ~/.cache/texfab)");
