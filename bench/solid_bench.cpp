@@ -79,23 +79,30 @@ std::vector<Voxel> zPlane(int side, int64_t z) {
 // The interactive-cutting case (§6.4): a 256^2 axis-aligned cut with the coarse levels already in
 // the cache, 128^2 exemplar (256^3 equivalent volume).
 void BM_SolidCut256Cached(benchmark::State& state) {
-  const SolidAnalysis& a = analysis(128);
+  const SolidAnalysis& a = analysis(state.range(1) ? int(state.range(1)) : 128);
   const SolidSynthesisOptions o = optionsFor(state.range(0));
   SolidLevelCache cache(size_t(1) << 30);
   // Warm the coarse levels of the 8 cuts z = 36..43 (as the paper's precomputed coarse volume),
   // then time the cuts themselves: only their finest level is synthesized.
   for (int64_t z = 36; z < 44; ++z) synthesizeSolid(a, zPlane(256, z), o, &cache);
-  int64_t z = 0, finest = 0;
+  int64_t z = 0, finest = 0, all = 0, corrections = 0;
+  double seconds = 0;
   for (auto _ : state) {
     const SolidSynthesisResult r = synthesizeSolid(a, zPlane(256, z++ % 8 + 36), o, &cache);
     finest = r.levels.back().voxels;
+    corrections = r.levels.back().corrections;
+    seconds = r.levels.back().seconds;
+    all = r.voxelsSynthesized();
     benchmark::DoNotOptimize(r.triples.data());
   }
   state.counters["finest_voxels_per_pixel"] = double(finest) / (256.0 * 256.0);
+  state.counters["coarse_voxels"] = double(all - finest);
+  state.counters["finest_corrections"] = double(corrections);
+  state.counters["finest_ms"] = seconds * 1e3;
   state.counters["cache_MiB"] = double(cache.bytes()) / double(1 << 20);
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
-BENCHMARK(BM_SolidCut256Cached)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_SolidCut256Cached)->Args({2, 128})->Args({1, 128})->Args({1, 64})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Cost of laziness: voxels synthesized (all levels) per requested voxel, cold cache.
 void BM_SolidPlaneCold(benchmark::State& state) {
@@ -111,30 +118,35 @@ void BM_SolidPlaneCold(benchmark::State& state) {
 }
 BENCHMARK(BM_SolidPlaneCold)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
-// A thin shell: the voxels at distance [r - 0.5, r + 0.5) from a centre, r = 48 (~29,000 voxels),
-// through a coarse cache shared by its tiles (one request).
+// A thin shell: the voxels at distance [r - 0.5, r + 0.5) from a centre, one voxel thick; r = 48
+// (~29,000 voxels) and r = 200 (~503,000 voxels, the case of `texfab texture --mode solid`: a
+// surface's voxels in one request). Cold: a fresh coarse cache per run, shared by the request's
+// tiles.
 void BM_SolidShell(benchmark::State& state) {
   const SolidAnalysis& a = analysis(128);
   const SolidSynthesisOptions o = optionsFor(state.range(0));
+  const int r = int(state.range(1));
   std::vector<Voxel> shell;
-  const double r = 48;
-  for (int z = -50; z <= 50; ++z)
-    for (int y = -50; y <= 50; ++y)
-      for (int x = -50; x <= 50; ++x) {
-        const double d = std::sqrt(double(x * x + y * y + z * z));
-        if (d >= r - 0.5 && d < r + 0.5) shell.push_back({x + 300, y + 300, z + 300});
+  for (int z = -r - 1; z <= r + 1; ++z)
+    for (int y = -r - 1; y <= r + 1; ++y)
+      for (int x = -r - 1; x <= r + 1; ++x) {
+        const double d2 = double(x) * x + double(y) * y + double(z) * z;
+        if (d2 >= (r - 0.5) * (r - 0.5) && d2 < (r + 0.5) * (r + 0.5)) shell.push_back({x + 300, y + 300, z + 300});
       }
-  int64_t synthesized = 0;
+  int64_t synthesized = 0, corrections = 0;
   for (auto _ : state) {
     SolidLevelCache cache(size_t(1) << 30);
     const SolidSynthesisResult res = synthesizeSolid(a, shell, o, &cache);
     synthesized = res.voxelsSynthesized();
+    corrections = 0;
+    for (const auto& l : res.levels) corrections += l.corrections;
   }
   state.counters["voxels"] = double(shell.size());
   state.counters["synth_per_requested"] = double(synthesized) / double(shell.size());
+  state.counters["corrections_per_requested"] = double(corrections) / double(shell.size());
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
-BENCHMARK(BM_SolidShell)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_SolidShell)->Args({2, 48})->Args({1, 48})->Args({1, 200})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 } // namespace
 

@@ -11,6 +11,8 @@
 #include "synthesis/hash.h"
 
 #include <algorithm>
+#include <climits>
+#include <cstdint>
 #include <chrono>
 #include <cmath>
 #include <set>
@@ -29,7 +31,19 @@ constexpr int kBrickShift = 3;  // the cache holds 8^3 bricks
 constexpr int kBrickSide = 1 << kBrickShift;
 constexpr int kRowGrain = 4;
 
-cpu::SolidTables tablesOf(const SolidAnalysis& a, int li) {
+// The projections of a level laid out for the correction kernel.
+struct Prepared {
+  cpu::SolidPairProjection pairs2d, pairs3d;
+};
+
+Prepared prepare(const SolidLevel& l) {
+  return {cpu::prepareSolidProjection(l.projection2d.mean.data(), l.projection2d.basis.data(), l.projection2d.inputs,
+                                      l.projection2d.dims, l.projection2d.divisor),
+          cpu::prepareSolidProjection(l.projection3d.mean.data(), l.projection3d.basis.data(), l.projection3d.inputs,
+                                      l.projection3d.dims, l.projection3d.divisor)};
+}
+
+cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared) {
   const SolidLevel& l = a.levels[size_t(li)];
   cpu::SolidTables t;
   t.exemplarWidth = a.width;
@@ -55,6 +69,8 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li) {
   t.mean3d = l.projection3d.mean.data();
   t.basis3d = l.projection3d.basis.data();
   t.divisor3d = l.projection3d.divisor;
+  t.pairs2d = &prepared.pairs2d;
+  t.pairs3d = &prepared.pairs3d;
   return t;
 }
 
@@ -74,106 +90,160 @@ uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   return h.h;
 }
 
+// A grow-only scratch array, not initialized: every kernel writes a voxel before it reads it, and
+// reusing the memory across tiles spares the page faults of fresh allocations.
+template <class T> struct Buffer {
+  std::unique_ptr<T[]> data;
+  size_t capacity = 0;
+  T* get(size_t size) {
+    if (size > capacity) {
+      data.reset(new T[size]);
+      capacity = size;
+    }
+    return data.get();
+  }
+};
+
+// Scratch memory of one level (compute and final of a level run nested inside those of the level
+// below it, never inside their own).
+struct Workspace {
+  Buffer<int8_t> lastE, last;
+  Buffer<uint32_t> cur, next, parent, values;
+  Buffer<int16_t> curC, nextC;
+  Buffer<uint8_t> pneed, touched, mneed;
+};
+
 struct Engine {
   const SolidAnalysis& a;
   const SolidSynthesisOptions& o;
   SolidLevelCache* cache;
   int threads;
-  int steps;
   std::vector<SolidLevelStats>& stats;
+  std::vector<std::unique_ptr<Prepared>> preparedLevels = std::vector<std::unique_ptr<Prepared>>(a.levels.size());
+  std::vector<Workspace> ws = std::vector<Workspace>(a.levels.size());
 
   int top() const { return int(a.levels.size()) - 1; }
+  int stepsAt(int) const { return o.passes * o.subpasses(); }
 
-  // Values (3 words per voxel of `box`) after the last sub-pass of level li, valid where `need`.
-  std::vector<uint32_t> final(int li, const VolumeGrid& box, const std::vector<uint8_t>& need) {
-    if (!cache || li == top()) return compute(li, box, need);
-    std::vector<SolidLevelCache::Key> keys;
+  const Prepared& prepared(int li) {
+    auto& p = preparedLevels[size_t(li)];
+    if (!p) p = std::make_unique<Prepared>(prepare(a.levels[size_t(li)]));
+    return *p;
+  }
+
+  // Writes into `out` (3 words per voxel of `box`) the values after the last sub-pass of level li
+  // where `need`; leaves the other voxels unspecified.
+  void final(int li, const VolumeGrid& box, const uint8_t* need, uint32_t* out) {
+    if (!cache || li == top()) return compute(li, box, need, out);
+    Workspace& w = ws[size_t(li)];
+    // The bricks `box` touches where needed, as a dense grid of brick slots (no per-voxel lookup).
+    const int64_t bx0 = cpu::floorShift(box.x0, kBrickShift), by0 = cpu::floorShift(box.y0, kBrickShift),
+                  bz0 = cpu::floorShift(box.z0, kBrickShift);
+    const VolumeGrid bg{bx0, by0, bz0, int(cpu::floorShift(box.x0 + box.nx - 1, kBrickShift) - bx0 + 1),
+                        int(cpu::floorShift(box.y0 + box.ny - 1, kBrickShift) - by0 + 1),
+                        int(cpu::floorShift(box.z0 + box.nz - 1, kBrickShift) - bz0 + 1)};
+    auto slotOf = [&](int x, int y, int z) {  // buffer voxel of `box` -> brick slot of `bg`
+      return indexIn(bg, cpu::floorShift(box.x0 + x, kBrickShift), cpu::floorShift(box.y0 + y, kBrickShift),
+                     cpu::floorShift(box.z0 + z, kBrickShift));
+    };
+    uint8_t* touched = w.touched.get(bg.size());
+    std::fill_n(touched, bg.size(), uint8_t(0));
     for (int z = 0; z < box.nz; ++z)
-      for (int y = 0; y < box.ny; ++y)
+      for (int y = 0; y < box.ny; ++y) {
+        const uint8_t* row = need + (size_t(z) * box.ny + size_t(y)) * box.nx;
         for (int x = 0; x < box.nx; ++x)
-          if (need[(size_t(z) * box.ny + size_t(y)) * box.nx + size_t(x)])
-            keys.emplace_back(li, cpu::floorShift(box.x0 + x, kBrickShift), cpu::floorShift(box.y0 + y, kBrickShift),
-                              cpu::floorShift(box.z0 + z, kBrickShift));
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    std::map<SolidLevelCache::Key, std::shared_ptr<const SolidLevelCache::Brick>> bricks;
-    std::vector<SolidLevelCache::Key> missing;
-    for (const auto& k : keys) {
-      auto b = cache->find(k);
-      if (b) bricks[k] = std::move(b);
-      else missing.push_back(k);
+          if (row[x]) touched[slotOf(x, y, z)] = 1;
+      }
+    std::vector<std::shared_ptr<const SolidLevelCache::Brick>> bricks(bg.size());
+    std::vector<size_t> missing;
+    auto brickOrigin = [&](size_t i, int64_t b[3]) {
+      b[0] = (bg.x0 + int64_t(i % size_t(bg.nx))) * kBrickSide;
+      b[1] = (bg.y0 + int64_t(i / size_t(bg.nx) % size_t(bg.ny))) * kBrickSide;
+      b[2] = (bg.z0 + int64_t(i / (size_t(bg.nx) * size_t(bg.ny)))) * kBrickSide;
+    };
+    for (size_t i = 0; i < bg.size(); ++i) {
+      if (!touched[i]) continue;
+      int64_t b[3];
+      brickOrigin(i, b);
+      bricks[i] = cache->find({li, b[0] / kBrickSide, b[1] / kBrickSide, b[2] / kBrickSide});
+      if (!bricks[i]) missing.push_back(i);
     }
     if (!missing.empty()) {
       int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
-      for (const auto& [l, bx, by, bz] : missing) {
-        const int64_t b[3] = {bx, by, bz};
-        for (int i = 0; i < 3; ++i) {
-          lo[i] = std::min(lo[i], b[i] * kBrickSide);
-          hi[i] = std::max(hi[i], b[i] * kBrickSide + kBrickSide);
+      for (size_t i : missing) {
+        int64_t b[3];
+        brickOrigin(i, b);
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], b[k]);
+          hi[k] = std::max(hi[k], b[k] + kBrickSide);
         }
       }
       const VolumeGrid mbox{lo[0], lo[1], lo[2], int(hi[0] - lo[0]), int(hi[1] - lo[1]), int(hi[2] - lo[2])};
-      std::vector<uint8_t> mneed(mbox.size(), 0);
-      for (const auto& [l, bx, by, bz] : missing)
+      uint8_t* mneed = w.mneed.get(mbox.size());
+      std::fill_n(mneed, mbox.size(), uint8_t(0));
+      for (size_t i : missing) {
+        int64_t b[3];
+        brickOrigin(i, b);
         for (int z = 0; z < kBrickSide; ++z)
           for (int y = 0; y < kBrickSide; ++y)
-            for (int x = 0; x < kBrickSide; ++x)
-              mneed[indexIn(mbox, bx * kBrickSide + x, by * kBrickSide + y, bz * kBrickSide + z)] = 1;
-      const std::vector<uint32_t> values = compute(li, mbox, mneed);
-      for (const auto& k : missing) {
-        const auto& [l, bx, by, bz] = k;
+            std::fill_n(mneed + indexIn(mbox, b[0], b[1] + y, b[2] + z), kBrickSide, uint8_t(1));
+      }
+      uint32_t* values = w.values.get(mbox.size() * 3);
+      compute(li, mbox, mneed, values);
+      for (size_t i : missing) {
+        int64_t b[3];
+        brickOrigin(i, b);
         auto brick = std::make_shared<SolidLevelCache::Brick>();
         brick->values.resize(size_t(kBrickSide) * kBrickSide * kBrickSide * 3);
         for (int z = 0; z < kBrickSide; ++z)
           for (int y = 0; y < kBrickSide; ++y)
-            for (int x = 0; x < kBrickSide; ++x) {
-              const size_t from = indexIn(mbox, bx * kBrickSide + x, by * kBrickSide + y, bz * kBrickSide + z) * 3;
-              const size_t to = ((size_t(z) * kBrickSide + size_t(y)) * kBrickSide + size_t(x)) * 3;
-              std::copy_n(values.begin() + std::ptrdiff_t(from), 3, brick->values.begin() + std::ptrdiff_t(to));
-            }
-        cache->insert(k, brick);
-        bricks[k] = std::move(brick);
+            std::copy_n(values + indexIn(mbox, b[0], b[1] + y, b[2] + z) * 3, kBrickSide * 3,
+                        brick->values.begin() + std::ptrdiff_t((size_t(z) * kBrickSide + size_t(y)) * kBrickSide * 3));
+        cache->insert({li, b[0] / kBrickSide, b[1] / kBrickSide, b[2] / kBrickSide}, brick);
+        bricks[i] = std::move(brick);
       }
     }
-    std::vector<uint32_t> out(box.size() * 3, 0);
     for (int z = 0; z < box.nz; ++z)
       for (int y = 0; y < box.ny; ++y)
         for (int x = 0; x < box.nx; ++x) {
           const size_t v = (size_t(z) * box.ny + size_t(y)) * box.nx + size_t(x);
           if (!need[v]) continue;
           const int64_t q[3] = {box.x0 + x, box.y0 + y, box.z0 + z};
-          const auto& brick = bricks.at({li, cpu::floorShift(q[0], kBrickShift), cpu::floorShift(q[1], kBrickShift),
-                                         cpu::floorShift(q[2], kBrickShift)});
+          const SolidLevelCache::Brick& brick = *bricks[slotOf(x, y, z)];
           const size_t from = ((size_t(cpu::floorMod(q[2], kBrickSide)) * kBrickSide + size_t(cpu::floorMod(q[1], kBrickSide))) *
                                    kBrickSide +
                                size_t(cpu::floorMod(q[0], kBrickSide))) *
                               3;
-          std::copy_n(brick->values.begin() + std::ptrdiff_t(from), 3, out.begin() + std::ptrdiff_t(v * 3));
+          std::copy_n(brick.values.data() + from, 3, out + v * 3);
         }
-    return out;
   }
 
-  std::vector<uint32_t> compute(int li, const VolumeGrid& box, const std::vector<uint8_t>& need) {
+  void compute(int li, const VolumeGrid& box, const uint8_t* need, uint32_t* out) {
     auto started = Clock::now();
+    Workspace& w = ws[size_t(li)];
+    const int steps = stepsAt(li);
     // §5.2, exact per sub-pass: last[v] = the last step after which v's value is needed.
     const int margin = 2 * steps;
     const VolumeGrid e{box.x0 - margin, box.y0 - margin, box.z0 - margin, box.nx + 2 * margin, box.ny + 2 * margin,
                        box.nz + 2 * margin};
-    std::vector<int8_t> lastE(e.size(), -1);
+    int8_t* lastE = w.lastE.get(e.size());
+    std::fill_n(lastE, e.size(), int8_t(-1));
     for (int z = 0; z < box.nz; ++z)
-      for (int y = 0; y < box.ny; ++y)
+      for (int y = 0; y < box.ny; ++y) {
+        const uint8_t* row = need + (size_t(z) * box.ny + size_t(y)) * box.nx;
+        int8_t* to = lastE + indexIn(e, box.x0, box.y0 + y, box.z0 + z);
         for (int x = 0; x < box.nx; ++x)
-          if (need[(size_t(z) * box.ny + size_t(y)) * box.nx + size_t(x)])
-            lastE[indexIn(e, box.x0 + x, box.y0 + y, box.z0 + z)] = int8_t(steps);
+          if (row[x]) to[x] = int8_t(steps);
+      }
     for (int t = steps; t >= 1; --t)
-      parallelFor(0, e.rows(), threads, [&](int r0, int r1) { cpu::solidDilateKernel(lastE.data(), e, o.interleave, t, r0, r1); },
+      parallelFor(0, e.rows(), threads, [&](int r0, int r1) { cpu::solidDilateKernel(lastE, e, o.interleave, t, r0, r1); },
                   kRowGrain);
 
     // The level's working box: the bounding box of the chain.
     int lo[3] = {e.nx, e.ny, e.nz}, hi[3] = {-1, -1, -1};
     for (int z = 0; z < e.nz; ++z)
       for (int y = 0; y < e.ny; ++y) {
-        const int8_t* row = &lastE[(size_t(z) * e.ny + size_t(y)) * e.nx];
+        const int8_t* row = lastE + (size_t(z) * e.ny + size_t(y)) * e.nx;
         for (int x = 0; x < e.nx; ++x)
           if (row[x] >= 0) {
             lo[0] = std::min(lo[0], x), hi[0] = std::max(hi[0], x);
@@ -181,75 +251,84 @@ struct Engine {
             lo[2] = std::min(lo[2], z), hi[2] = std::max(hi[2], z);
           }
       }
-    std::vector<uint32_t> out(box.size() * 3, 0);
-    if (hi[0] < 0) return out;  // nothing needed
+    if (hi[0] < 0) return;  // nothing needed
     const VolumeGrid g{e.x0 + lo[0], e.y0 + lo[1], e.z0 + lo[2], hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
-    std::vector<int8_t> last(g.size());
+    int8_t* last = w.last.get(g.size());
     int64_t voxels = 0;
     for (int z = 0; z < g.nz; ++z)
       for (int y = 0; y < g.ny; ++y) {
-        const int8_t* from = &lastE[indexIn(e, g.x0, g.y0 + y, g.z0 + z)];
-        int8_t* to = &last[(size_t(z) * g.ny + size_t(y)) * g.nx];
+        const int8_t* from = lastE + indexIn(e, g.x0, g.y0 + y, g.z0 + z);
+        int8_t* to = last + (size_t(z) * g.ny + size_t(y)) * g.nx;
         std::copy_n(from, g.nx, to);
         for (int x = 0; x < g.nx; ++x) voxels += to[x] >= 0;
       }
-    lastE.clear();
-    lastE.shrink_to_fit();
 
-    const cpu::SolidTables tables = tablesOf(a, li);
-    std::vector<uint32_t> cur(g.size() * 3, 0);
+    const cpu::SolidTables tables = tablesOf(a, li, prepared(li));
+    uint32_t* cur = w.cur.get(g.size() * 3);
     if (li == 0) {
       const auto jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
       parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidInitKernel(cur.data(), last.data(), g, tables, o.seed, jitter256, r0, r1);
+        cpu::solidInitKernel(cur, last, g, tables, o.seed, jitter256, r0, r1);
       }, kRowGrain);
     } else {
       const VolumeGrid pg{cpu::floorShift(g.x0, 1), cpu::floorShift(g.y0, 1), cpu::floorShift(g.z0, 1),
                           int(cpu::floorShift(g.x0 + g.nx - 1, 1) - cpu::floorShift(g.x0, 1) + 1),
                           int(cpu::floorShift(g.y0 + g.ny - 1, 1) - cpu::floorShift(g.y0, 1) + 1),
                           int(cpu::floorShift(g.z0 + g.nz - 1, 1) - cpu::floorShift(g.z0, 1) + 1)};
-      std::vector<uint8_t> pneed(pg.size(), 0);
+      uint8_t* pneed = w.pneed.get(pg.size());
+      std::fill_n(pneed, pg.size(), uint8_t(0));
       for (int z = 0; z < g.nz; ++z)
-        for (int y = 0; y < g.ny; ++y)
+        for (int y = 0; y < g.ny; ++y) {
+          const int8_t* row = last + (size_t(z) * g.ny + size_t(y)) * g.nx;
+          uint8_t* prow = pneed + indexIn(pg, pg.x0, cpu::floorShift(g.y0 + y, 1), cpu::floorShift(g.z0 + z, 1));
           for (int x = 0; x < g.nx; ++x)
-            if (last[(size_t(z) * g.ny + size_t(y)) * g.nx + size_t(x)] >= 0)
-              pneed[indexIn(pg, cpu::floorShift(g.x0 + x, 1), cpu::floorShift(g.y0 + y, 1),
-                            cpu::floorShift(g.z0 + z, 1))] = 1;
+            if (row[x] >= 0) prow[cpu::floorShift(g.x0 + x, 1) - pg.x0] = 1;
+        }
       stats[size_t(li)].seconds += since(started);
-      const std::vector<uint32_t> parent = final(li - 1, pg, pneed);
+      uint32_t* parent = w.parent.get(pg.size() * 3);
+      final(li - 1, pg, pneed, parent);
       started = Clock::now();
       parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidUpsampleKernel(parent.data(), pg, cur.data(), last.data(), g, tables.spacing, a.width, a.height, r0,
-                                 r1);
+        cpu::solidUpsampleKernel(parent, pg, cur, last, g, tables.spacing, a.width, a.height, r0, r1);
       }, kRowGrain);
     }
 
-    std::vector<uint32_t> next(cur.size());
-    int64_t corrections = 0;
+    // The colour buffer of the level (the correction kernel reads colours, not triples).
+    int16_t* curC = w.curC.get(g.size() * 4);
+    parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
+      cpu::solidColorKernel(cur, curC, last, 0, g, tables, r0, r1);
+    }, kRowGrain);
+    uint32_t* next = w.next.get(g.size() * 3);
+    int16_t* nextC = w.nextC.get(g.size() * 4);
     for (int t = 1; t <= steps; ++t) {
       parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidCorrectKernel(cur.data(), next.data(), last.data(), g, tables, o.interleave, t, r0, r1);
+        cpu::solidCorrectKernel(cur, curC, next, nextC, last, g, tables, o.interleave, t, r0, r1);
       }, kRowGrain);
-      parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidCommitKernel(next.data(), cur.data(), last.data(), g, o.interleave, t, r0, r1);
-      }, kRowGrain);
+      if (o.interleave == 1) {
+        // Jacobi: every voxel still needed (last >= t) was just written; the others are never
+        // read again.
+        std::swap(cur, next);
+        std::swap(curC, nextC);
+      } else {
+        parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
+          cpu::solidCommitKernel(next, nextC, cur, curC, last, g, o.interleave, t, r0, r1);
+        }, kRowGrain);
+      }
     }
     const int subpasses = o.subpasses();
-    for (int8_t l : last) corrections += l > 0 ? (l + subpasses - 1) / subpasses : 0;  // passes (approx.)
+    int64_t corrections = 0;
+    for (size_t v = 0; v < g.size(); ++v) corrections += last[v] > 0 ? (last[v] + subpasses - 1) / subpasses : 0;
 
     for (int z = 0; z < box.nz; ++z)
       for (int y = 0; y < box.ny; ++y)
         for (int x = 0; x < box.nx; ++x) {
           const size_t v = (size_t(z) * box.ny + size_t(y)) * box.nx + size_t(x);
-          if (!need[v]) continue;
-          std::copy_n(cur.begin() + std::ptrdiff_t(indexIn(g, box.x0 + x, box.y0 + y, box.z0 + z) * 3), 3,
-                      out.begin() + std::ptrdiff_t(v * 3));
+          if (need[v]) std::copy_n(cur + indexIn(g, box.x0 + x, box.y0 + y, box.z0 + z) * 3, 3, out + v * 3);
         }
     SolidLevelStats& s = stats[size_t(li)];
     s.voxels += voxels;
     s.corrections += corrections;
     s.seconds += since(started);
-    return out;
   }
 };
 
@@ -329,13 +408,16 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
-  Engine engine{a, o, cache, threads, o.passes * o.subpasses(), result.levels};
-
   std::map<std::array<int64_t, 3>, std::vector<size_t>> tiles;
   for (size_t i = 0; i < voxels.size(); ++i)
     tiles[{cpu::floorShift(voxels[i].x, kTileShift), cpu::floorShift(voxels[i].y, kTileShift),
            cpu::floorShift(voxels[i].z, kTileShift)}]
         .push_back(i);
+  // Several tiles share coarse levels: without a cache of the caller's, one for this request.
+  SolidLevelCache local(SIZE_MAX);
+  Engine engine{a, o, cache ? cache : tiles.size() > 1 ? &local : nullptr, threads, result.levels};
+  Buffer<uint8_t> needBuffer;
+  Buffer<uint32_t> valueBuffer;
   for (const auto& [tile, members] : tiles) {
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (size_t i : members) {
@@ -346,9 +428,11 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
       }
     }
     const VolumeGrid box{lo[0], lo[1], lo[2], int(hi[0] - lo[0] + 1), int(hi[1] - lo[1] + 1), int(hi[2] - lo[2] + 1)};
-    std::vector<uint8_t> need(box.size(), 0);
+    uint8_t* need = needBuffer.get(box.size());
+    std::fill_n(need, box.size(), uint8_t(0));
     for (size_t i : members) need[indexIn(box, voxels[i].x, voxels[i].y, voxels[i].z)] = 1;
-    const std::vector<uint32_t> values = engine.final(engine.top(), box, need);
+    uint32_t* values = valueBuffer.get(box.size() * 3);
+    engine.final(engine.top(), box, need, values);
     for (size_t i : members) {
       const size_t v = indexIn(box, voxels[i].x, voxels[i].y, voxels[i].z) * 3;
       result.triples[i] = {values[v], values[v + 1], values[v + 2]};
@@ -368,9 +452,14 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(size_t(box.count()));
-  Engine engine{a, o, cache, threads, o.passes * o.subpasses(), result.levels};
   const int64_t side = int64_t(1) << kTileShift;
   auto tileStart = [&](int64_t p) { return cpu::floorShift(p, kTileShift) * side; };
+  const bool oneTile = tileStart(box.x) == tileStart(box.x + box.nx - 1) && tileStart(box.y) == tileStart(box.y + box.ny - 1) &&
+                       tileStart(box.z) == tileStart(box.z + box.nz - 1);
+  SolidLevelCache local(SIZE_MAX);
+  Engine engine{a, o, cache ? cache : oneTile ? nullptr : &local, threads, result.levels};
+  Buffer<uint8_t> needBuffer;
+  Buffer<uint32_t> valueBuffer;
   for (int64_t tz = tileStart(box.z); tz < box.z + box.nz; tz += side)
     for (int64_t ty = tileStart(box.y); ty < box.y + box.ny; ty += side)
       for (int64_t tx = tileStart(box.x); tx < box.x + box.nx; tx += side) {
@@ -378,8 +467,10 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
         const int64_t x1 = std::min(tx + side, box.x + box.nx), y1 = std::min(ty + side, box.y + box.ny),
                       z1 = std::min(tz + side, box.z + box.nz);
         const VolumeGrid sub{x0, y0, z0, int(x1 - x0), int(y1 - y0), int(z1 - z0)};
-        const std::vector<uint8_t> need(sub.size(), 1);
-        const std::vector<uint32_t> values = engine.final(engine.top(), sub, need);
+        uint8_t* need = needBuffer.get(sub.size());
+        std::fill_n(need, sub.size(), uint8_t(1));
+        uint32_t* values = valueBuffer.get(sub.size() * 3);
+        engine.final(engine.top(), sub, need, values);
         for (int z = 0; z < sub.nz; ++z)
           for (int y = 0; y < sub.ny; ++y)
             for (int x = 0; x < sub.nx; ++x) {

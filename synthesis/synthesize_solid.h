@@ -5,7 +5,8 @@
 //
 // Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis. EGSR 2008,
 //   §5.1 (sparse multi-resolution synthesis: tiling of the candidate slab, jitter once, upsampling
-//   by coordinate inheritance, 2 correction passes of 8 sub-passes with the two-step search,
+//   by coordinate inheritance, 2 correction passes (8 sub-passes each in the paper; Jacobi by
+//   default here, see below) with the two-step search,
 //   colour = mean of the three exemplar colours), §5.2 (masks dilated per pass and level), §6.2
 //   (a cache of coarse levels shared across requests).
 // Notes: ../shared/notes/lefebvre-hdr-notes.md §9; ../shared/notes/wei-levoy-and-jit-notes.md III.
@@ -18,9 +19,10 @@
 // threads, with or without the cache.
 //
 // Deviations from the paper, on purpose:
-//   * the dependency chain is exact for sub-passes (the paper dilates once per pass, which is
-//     only sufficient without sub-passes): one voxel needs ~10^5 voxels, not 6,778;
-//     dependencyChainSize() reports both;
+//   * Jacobi passes by default (SolidSynthesisOptions::interleave = 1), not 8 sub-passes: the
+//     dependency chain of §5.2 (dilated once per pass) is then exact, 5,037 voxels for one voxel
+//     with 3 levels (paper: 6,778); with sub-passes (interleave 2) the exact chain is ~10^5
+//     voxels, since every sub-pass dilates; dependencyChainSize() reports both;
 //   * the jitter warp is a sum of compactly supported polynomial bumps on two hashed grids (4 and
 //     8 voxels at the start level) instead of ~200 Gaussians in a unit volume: the volume is
 //     infinite, and integer arithmetic keeps backends identical;
@@ -61,8 +63,14 @@ struct SolidSynthesisOptions {
   float jitter = 1.0f;
   int passes = 2;        ///< correction passes per level; 0..4
   /// 2: each pass is 8 sub-passes over the 2x2x2 parity classes (§5.1, the paper's choice);
-  /// 1: each pass corrects every voxel at once (Jacobi), a dependency chain ~25x shorter.
-  int interleave = 2;
+  /// 1 (default): each pass corrects every voxel at once (Jacobi), a dependency chain ~25x shorter
+  /// (one voxel: 5,037 voxels instead of 125,187 with 3 levels; a thin shell: ~5x fewer voxels per
+  /// requested voxel). Measured on the 64^3 marble volume of the tests, slice fidelity (2-D
+  /// neighborhood measure, lower is better) is 0.0160/0.0158/0.0162 (x/y/z slices) with Jacobi
+  /// against 0.0159/0.0154/0.0156 with sub-passes (extruded exemplar 0.0208/0.0193, random 0.029):
+  /// within 4%, for a 3-6x faster lazy synthesis, hence the default. The paper's dilation (§5.2,
+  /// once per pass) is exact for Jacobi passes only.
+  int interleave = 1;
 
   int subpasses() const { return interleave == 2 ? 8 : 1; }
 

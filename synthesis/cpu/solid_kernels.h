@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace texfab::synthesis::cpu {
 
@@ -23,6 +24,23 @@ struct VolumeGrid {
   size_t size() const { return size_t(nx) * size_t(ny) * size_t(nz); }
   int rows() const { return ny * nz; }
 };
+
+/// An integer projection laid out for the correction kernel (prepareSolidProjection): inputs taken
+/// in pairs, the weights of each pair for every output dimension side by side, so that one pair
+/// of int16 inputs updates all dimensions at once (a pmaddwd on x86). The centring by the mean is
+/// folded into `offset`: q_d = clamp((sum_j basis[d][j] * x_j + offset[d]) >> shift, +-127), with
+/// offset[d] = divisor/2 - sum_j basis[d][j] * mean_j. Bit for bit the projection of
+/// SolidProjection::project (all terms are exact int32).
+struct SolidPairProjection {
+  static constexpr int kLanes = 16;  ///< output dimensions padded to 16
+  int dims = 0;
+  int pairs = 0;                     ///< ceil(inputs / 2)
+  int shift = 0;
+  std::vector<int16_t> weights;      ///< pairs * kLanes * 2: (basis[d][2p], basis[d][2p+1]) for d < 16
+  alignas(32) int32_t offset[kLanes] = {};
+};
+SolidPairProjection prepareSolidProjection(const int32_t* mean, const int16_t* basis, int inputs, int dims,
+                                           int32_t divisor);
 
 /// What the correction kernel reads about one synthesized level (views into SolidLevel).
 struct SolidTables {
@@ -45,6 +63,8 @@ struct SolidTables {
   const int32_t* mean3d = nullptr;       ///< 183
   const int16_t* basis3d = nullptr;      ///< dims * 183
   int32_t divisor3d = 1;
+  const SolidPairProjection* pairs2d = nullptr;  ///< the 2-D projection, prepared
+  const SolidPairProjection* pairs3d = nullptr;  ///< the 3-D projection, prepared
 };
 
 /// `interleave` is 2 (sub-pass t corrects the voxels of parity class (t-1) mod 8, §5.1) or 1
@@ -71,16 +91,30 @@ void solidUpsampleKernel(const uint32_t* parent, const VolumeGrid& parentGrid, u
                          const VolumeGrid& grid, int spacing, int exemplarWidth, int exemplarHeight, int rowBegin,
                          int rowEnd);
 
+/// A colour buffer holds, per voxel, 4 int16: 2 x the sum of the voxel's three exemplar colours
+/// (R, G, B; so 6 x their mean, the scale of the projection inputs), then 0. It is derived from
+/// the level buffer (a cache of the 183 colour lookups a 3-neighborhood would otherwise cost).
+/// Writes the colours of the voxels with last >= minLast.
+void solidColorKernel(const uint32_t* triples, int16_t* colors, const int8_t* last, int minLast, const VolumeGrid& grid,
+                      const SolidTables& tables, int rowBegin, int rowEnd);
+
 /// Correction sub-pass `step` (class (step-1) mod 8 of the 2x2x2 interleave): for every voxel of
 /// that class with last >= step, the two-step search (§5.1): the best 2-D candidate in each
 /// direction among the k-coherence candidates of its 3x3 plane neighbors, then the best of the
 /// 3-D candidates of those three pixels, by integer SSD of projected neighborhoods; ties go to the
-/// earliest candidate (direction x, y, z; then rank). Writes only those voxels of `out`.
-void solidCorrectKernel(const uint32_t* in, uint32_t* out, const int8_t* last, const VolumeGrid& grid,
-                        const SolidTables& tables, int interleave, int step, int rowBegin, int rowEnd);
+/// earliest candidate (direction x, y, z; then rank). Reads triples `in` and their colours
+/// `inColors`; writes only those voxels of `out` and `outColors`. `tables.pairs2d/pairs3d` must be
+/// set. Uses AVX2 where the CPU has it (same integers, same result).
+void solidCorrectKernel(const uint32_t* in, const int16_t* inColors, uint32_t* out, int16_t* outColors,
+                        const int8_t* last, const VolumeGrid& grid, const SolidTables& tables, int interleave, int step,
+                        int rowBegin, int rowEnd);
 
-/// Copies the voxels corrected at `step` from `from` to `to`.
-void solidCommitKernel(const uint32_t* from, uint32_t* to, const int8_t* last, const VolumeGrid& grid, int interleave,
-                       int step, int rowBegin, int rowEnd);
+/// Lets the correction kernel use SIMD (default) or forces its portable path (for tests: both give
+/// the same bytes).
+void solidAllowSimd(bool allow);
+
+/// Copies the voxels corrected at `step` (triples and colours) from `from` to `to`.
+void solidCommitKernel(const uint32_t* from, const int16_t* fromColors, uint32_t* to, int16_t* toColors,
+                       const int8_t* last, const VolumeGrid& grid, int interleave, int step, int rowBegin, int rowEnd);
 
 } // namespace texfab::synthesis::cpu
