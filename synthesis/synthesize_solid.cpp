@@ -27,7 +27,7 @@ using cpu::VolumeGrid;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kTileShift = 7;   // requests are cut into 128^3 finest-level tiles
-constexpr int kBrickShift = 3;  // the cache holds 8^3 bricks
+constexpr int kBrickShift = 2;  // the cache holds 4^3 bricks (little padding around thin shells)
 constexpr int kBrickSide = 1 << kBrickShift;
 constexpr int kRowGrain = 4;
 

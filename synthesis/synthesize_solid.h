@@ -93,7 +93,7 @@ struct SolidSynthesisResult {
   int64_t voxelsSynthesized() const;     ///< sum over levels
 };
 
-/// Final values of coarse levels, kept across requests in 8^3 bricks, least recently used
+/// Final values of coarse levels, kept across requests in 4^3 bricks, least recently used
 /// evicted beyond `maxBytes`. Owned by the caller; one cache serves one (analysis, options) pair
 /// at a time (it clears itself when they change). Not thread-safe: one request at a time.
 class SolidLevelCache {
@@ -108,7 +108,7 @@ public:
   // Used by the synthesizer.
   using Key = std::tuple<int, int64_t, int64_t, int64_t>;  // level index, brick x, y, z
   struct Brick {
-    std::vector<uint32_t> values;  // 8^3 * 3
+    std::vector<uint32_t> values;  // 4^3 * 3
   };
   void bind(uint64_t owner);
   std::shared_ptr<const Brick> find(const Key& key);
