@@ -35,8 +35,6 @@ std::vector<uint8_t> readFileBytes(const std::filesystem::path& path, uint64_t m
 /// Writes bytes to `path` (no rename), throwing texfab::Error naming `shownAs` on failure.
 void writeFileBytes(const std::filesystem::path& path, std::string_view bytes, const std::filesystem::path& shownAs);
 
-/// Encodes an image as PNG (8-bit, or 16-bit for UInt16/Float images) in memory.
-std::vector<uint8_t> encodePng(const Image& image);
 /// Decodes PNG/JPEG bytes (glTF embedded images); `name` names errors.
 Image decodeImage(const uint8_t* data, size_t size, const std::string& name);
 

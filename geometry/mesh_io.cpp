@@ -6,7 +6,6 @@
 #include "render/image_io.h"
 
 #include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
 
 #include <algorithm>
 #include <charconv>
@@ -108,24 +107,6 @@ void writeFileBytes(const fs::path& path, std::string_view bytes, const fs::path
   if (!out) throw Error(shownAs.string() + ": cannot create file");
   out.write(bytes.data(), std::streamsize(bytes.size()));
   if (!out.flush()) throw Error(shownAs.string() + ": write error");
-}
-
-std::vector<uint8_t> encodePng(const Image& image) {
-  if (image.empty() || image.channels < 1 || image.channels > 4) throw Error("cannot encode an image with " +
-                                                                            std::to_string(image.channels) + " channels as PNG");
-  // stb writes 8-bit PNGs; 16-bit sources are rounded to 8 bits (textures are displayed, not measured).
-  std::vector<uint8_t> pixels(image.pixels.size());
-  for (size_t i = 0; i < pixels.size(); ++i)
-    pixels[i] = uint8_t(std::lround(std::clamp(image.pixels[i], 0.0f, 1.0f) * 255.0f));
-  std::vector<uint8_t> png;
-  auto sink = [](void* context, void* data, int size) {
-    auto* out = static_cast<std::vector<uint8_t>*>(context);
-    out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
-  };
-  if (!stbi_write_png_to_func(sink, &png, image.width, image.height, image.channels, pixels.data(),
-                              image.width * image.channels))
-    throw Error("PNG encoding failed");
-  return png;
 }
 
 Image decodeImage(const uint8_t* data, size_t size, const std::string& name) {

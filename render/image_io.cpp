@@ -3,6 +3,7 @@
 
 #include "render/error.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -205,6 +206,22 @@ void writeImage(const Image& image, const fs::path& path) {
     throw Error(name + ": cannot write image: " + oneLine(out->geterror()));
   }
   commitFile(tmp, path);
+}
+
+std::vector<uint8_t> encodePng(const Image& image) {
+  if (image.empty() || image.channels < 1 || image.channels > 4 || image.pixels.size() != image.index(0, image.height))
+    throw Error("cannot encode an image with " + std::to_string(image.channels) + " channels as PNG");
+  checkSize(image.width, image.height, "PNG");
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput proxy(bytes);
+  auto out = OIIO::ImageOutput::create("memory.png", &proxy);
+  if (!out) throw Error("PNG encoding is not available");
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::UINT8);
+  spec.attribute("png:compressionLevel", 6);
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (!out->open("memory.png", spec) || !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
+    throw Error("PNG encoding failed: " + oneLine(out->geterror()));
+  return {bytes.begin(), bytes.end()};
 }
 
 } // namespace texfab

@@ -13,6 +13,7 @@
 #include <span>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace texfab {
 
@@ -49,5 +50,8 @@ void commitFile(const std::filesystem::path& tmp, const std::filesystem::path& p
 
 /// A temporary name next to `path` (same folder, so the final rename is atomic).
 std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
+
+/// The image as 8-bit PNG file bytes (zlib level 6), for files that embed images (GLB).
+std::vector<uint8_t> encodePng(const Image& image);
 
 } // namespace texfab
