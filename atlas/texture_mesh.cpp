@@ -225,6 +225,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex.analysis, domain, o.surface, o.threads);
     r.coords = std::move(s.coords);
     r.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
+    r.synthesisLevels = s.levels;
     stages.finish("synthesis", std::to_string(s.levels.size()) + " levels, " + format(s.exemplarPixelsPerTexel) +
                                    " exemplar pixels per texel");
   } else {

@@ -70,6 +70,7 @@ struct TextureMeshResult {
   std::vector<synthesis::Triple> triples;   ///< solid mode: exemplar triple per site
   double textureScale = 0;                  ///< exemplar pixels per model unit used
   double exemplarPixelsPerTexel = 0;
+  std::vector<synthesis::LevelStats> synthesisLevels; ///< surface mode: per atlas level, coarsest first
   int64_t voxelsRequested = 0, voxelsSynthesized = 0; ///< solid mode
   TextureMeasures measures;
   std::vector<std::string> warnings;        ///< e.g. a scale at which features are smaller than a texel

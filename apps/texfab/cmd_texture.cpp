@@ -218,6 +218,10 @@ void runTexture(const TextureArgs& args) {
     report["measures"] = measures;
     if (options.mode == atlas::TextureMode::Solid)
       report["solid"] = {{"voxels_requested", result.voxelsRequested}, {"voxels_synthesized", result.voxelsSynthesized}};
+    nlohmann::json levels = nlohmann::json::array();
+    for (const synthesis::LevelStats& l : result.synthesisLevels)
+      levels.push_back({{"atlas_level", l.level}, {"texels", l.texels}, {"seconds", l.seconds}});
+    report["synthesis_levels"] = levels;
     report["warnings"] = result.warnings;
     report["timings"] = progress.timings();
     report["peak_memory_mib"] = peakMemoryMiB();

@@ -93,12 +93,23 @@ void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t s
 
 void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_t* out, const LevelTables& t,
                           int cls, size_t begin, size_t end) {
-  const int ew = t.exemplarWidth, eh = t.exemplarHeight;
-  const int64_t sw = int64_t(ew) * kOne, sh = int64_t(eh) * kOne;
+  const auto ew = uint32_t(t.exemplarWidth), eh = uint32_t(t.exemplarHeight);
+  const uint32_t sw = ew * kOne, sh = eh * kOne;  // exemplar size in subpixels
+  // Offsets are reduced into [0, size) once per site, so that every shift below is one add and at
+  // most one subtract: no division in the inner loops.
+  const auto reduce = [](int64_t v, uint32_t m) {
+    if (v < 0 || v >= int64_t(m)) v = floorMod(v, m);
+    return uint32_t(v);
+  };
+  const auto add = [](uint32_t a, uint32_t b, uint32_t m) {  // (a + b) mod m for a, b < m
+    const uint32_t sum = a + b;
+    return sum >= m ? sum - m : sum;
+  };
   const auto pixelIndex = [&](uint32_t c) {  // the exemplar pixel nearest subpixel coordinate c
-    const size_t u = size_t(floorMod((int64_t(coordU(c)) + kOne / 2) >> kSubpixelBits, ew));
-    const size_t v = size_t(floorMod((int64_t(coordV(c)) + kOne / 2) >> kSubpixelBits, eh));
-    return v * size_t(ew) + u;
+    uint32_t u = (coordU(c) + kOne / 2) >> kSubpixelBits, v = (coordV(c) + kOne / 2) >> kSubpixelBits;
+    if (u == ew) u = 0;
+    if (v == eh) v = 0;
+    return size_t(v) * ew + u;
   };
   for (size_t s = begin; s < end; ++s) {
     out[s] = in[s];
@@ -107,7 +118,7 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
     const std::array<int32_t, 8>& nb = level.neighbors[s];
     const uint32_t current = in[s];
 
-    // -J(p)δ for the 8 unit steps, rounded once.
+    // -J(p)δ for the 8 unit steps, rounded once (subpixels, signed).
     Offset back[8];
     for (int d = 0; d < 8; ++d) {
       const Offset o = applyJ(j, float(kSurfaceStepX[d]), float(kSurfaceStepY[d]));
@@ -124,8 +135,10 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
       const float fx = sgn * (j[3] * float(dx) - j[1] * float(dy)), fy = sgn * (j[0] * float(dy) - j[2] * float(dx));
       const int d = det != 0.0f ? stepToward(fx, fy) : stepToward(float(dx), float(dy));
       const int32_t n = nb[size_t(d)];
-      const uint32_t predicted = n >= 0 ? shifted(in[n], back[d].x + dx * kOne, back[d].y + dy * kOne, sw, sh)
-                                        : shifted(current, dx * kOne, dy * kOne, sw, sh);
+      const uint32_t from = n >= 0 ? in[n] : current;
+      const int64_t ox = int64_t(dx) * kOne + (n >= 0 ? back[d].x : 0);
+      const int64_t oy = int64_t(dy) * kOne + (n >= 0 ? back[d].y : 0);
+      const uint32_t predicted = packCoord(add(coordU(from), reduce(ox, sw), sw), add(coordV(from), reduce(oy, sh), sh));
       const int8_t* a = t.appearance + pixelIndex(predicted) * kAppearanceDims;
       for (int c = 0; c < kAppearanceDims; ++c) target[i * kAppearanceDims + c] = a[c];
     }
@@ -138,13 +151,13 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
       const uint32_t base = in[n];
       const size_t basePixel = pixelIndex(base);
       // C_i(S[n]) - J(p)δ, keeping S[n]'s subpixel offset from its nearest pixel.
-      const int fracX = int(floorMod(int64_t(coordU(base)) + kOne / 2, kOne)) - kOne / 2;
-      const int fracY = int(floorMod(int64_t(coordV(base)) + kOne / 2, kOne)) - kOne / 2;
-      const Offset o = d < 8 ? back[d] : Offset{0, 0};
+      const int fracX = int((coordU(base) + kOne / 2) & (kOne - 1)) - kOne / 2;
+      const int fracY = int((coordV(base) + kOne / 2) & (kOne - 1)) - kOne / 2;
+      const uint32_t ox = reduce(int64_t(fracX) + (d < 8 ? back[d].x : 0), sw);
+      const uint32_t oy = reduce(int64_t(fracY) + (d < 8 ? back[d].y : 0), sh);
       const uint32_t* cand = t.candidates + basePixel * size_t(t.k);
       for (int i = 0; i < t.k; ++i) {
-        const uint32_t pixel = packCoord(coordU(cand[i]) * kOne, coordV(cand[i]) * kOne);
-        const uint32_t c = shifted(pixel, o.x + fracX, o.y + fracY, sw, sh);
+        const uint32_t c = packCoord(add(coordU(cand[i]) * kOne, ox, sw), add(coordV(cand[i]) * kOne, oy, sh));
         if (c == best) continue;
         const int32_t dist = squaredDistance(target, t.neighborhood + pixelIndex(c) * kNeighborhoodDims);
         if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {
