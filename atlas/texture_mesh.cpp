@@ -110,6 +110,59 @@ TexelField<TexelJacobian> isotropicJacobians(const AtlasFields& fields, double p
   return jac;
 }
 
+// Solid mode: the triple of each texel's voxel (its 3-D position times the scale), each distinct
+// voxel synthesized once, in one request (values do not depend on how voxels are requested).
+std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& sites, const AtlasFields& fields,
+                                                 const synthesis::SolidAnalysis& analysis,
+                                                 const synthesis::SolidSynthesisOptions& options, double scale,
+                                                 int threads, int64_t& requested, int64_t& synthesized) {
+  std::vector<synthesis::Voxel> voxels(sites.size());
+  for (size_t s = 0; s < sites.size(); ++s) {
+    const Float3& p = fields.position.at(sites.x[s], sites.y[s]);
+    voxels[s] = {int64_t(std::floor(double(p.x) * scale)), int64_t(std::floor(double(p.y) * scale)),
+                 int64_t(std::floor(double(p.z) * scale))};
+    for (int64_t c : {voxels[s].x, voxels[s].y, voxels[s].z})
+      if (std::abs(c) > synthesis::kMaxSolidPosition)
+        throw Error("the scale puts the model outside the solid texture's range (|position × scale| <= 2^30)");
+  }
+  std::vector<uint32_t> order(voxels.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    return std::tie(voxels[a].z, voxels[a].y, voxels[a].x, a) < std::tie(voxels[b].z, voxels[b].y, voxels[b].x, b);
+  });
+  std::vector<synthesis::Voxel> unique;
+  std::vector<uint32_t> voxelOf(voxels.size());
+  for (uint32_t i : order) {
+    if (unique.empty() || !(unique.back() == voxels[i])) unique.push_back(voxels[i]);
+    voxelOf[i] = uint32_t(unique.size() - 1);
+  }
+  synthesis::SolidLevelCache cache;
+  const synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, unique, options, &cache, threads);
+  requested = int64_t(unique.size());
+  synthesized = result.voxelsSynthesized();
+  std::vector<synthesis::Triple> triples(sites.size());
+  for (size_t s = 0; s < sites.size(); ++s) triples[s] = result.triples[voxelOf[s]];
+  return triples;
+}
+
+// The input mesh with the atlas's UVs and one PBR material carrying the synthesized maps.
+geometry::Mesh texturedMesh(const geometry::Mesh& mesh, const Atlas& atlas, const TextureMeshResult& r) {
+  geometry::Mesh out = mesh;
+  out.uvs.resize(3 * mesh.triangleCount());
+  for (size_t c = 0; c < out.uvs.size(); ++c) out.uvs[c] = atlas.normalizedUv(atlas.texelUvs[c]);
+  out.tangents.clear();  // they belonged to the old UVs; readers derive them from the new ones
+  geometry::Material m;
+  m.name = "texfab";
+  m.metallicFactor = 0.0f;
+  m.roughnessFactor = r.metallicRoughness ? 1.0f : 0.8f;
+  m.baseColorTexture = {r.baseColor, "basecolor.png"};
+  if (r.normal) m.normalTexture = {r.normal, "normal.png"};
+  if (r.metallicRoughness) m.metallicRoughnessTexture = {r.metallicRoughness, "metallic_roughness.png"};
+  out.materials = {m};
+  out.faceMaterials.clear();
+  return out;
+}
+
 } // namespace
 
 void fillGutters(Image& image, std::vector<uint8_t> filled, int rounds, int threads) {
@@ -219,8 +272,6 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
 
   const synthesis::SurfaceLevel& sites = domain.levels[0];
   const int gutter = o.atlas.pack.gutter;
-  std::vector<uint32_t> voxelOfSite;        // solid mode: index into the unique voxels
-  std::vector<float> voxelColors;
   if (surface) {
     synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex.analysis, domain, o.surface, o.threads);
     r.coords = std::move(s.coords);
@@ -230,37 +281,9 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
                                    " exemplar pixels per texel");
   } else {
     r.exemplarPixelsPerTexel = pixelsPerTexel;
-    std::vector<synthesis::Voxel> voxels(sites.size());
-    for (size_t s = 0; s < sites.size(); ++s) {
-      const Float3& p = r.atlas.fields.position.at(sites.x[s], sites.y[s]);
-      voxels[s] = {int64_t(std::floor(double(p.x) * r.textureScale)), int64_t(std::floor(double(p.y) * r.textureScale)),
-                   int64_t(std::floor(double(p.z) * r.textureScale))};
-      if (std::abs(voxels[s].x) > synthesis::kMaxSolidPosition || std::abs(voxels[s].y) > synthesis::kMaxSolidPosition ||
-          std::abs(voxels[s].z) > synthesis::kMaxSolidPosition)
-        throw Error("the scale puts the model outside the solid texture's range (|position × scale| <= 2^30)");
-    }
-    // Each distinct voxel once.
-    std::vector<uint32_t> order(voxels.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
-    auto less = [&](uint32_t a, uint32_t b) {
-      const auto &va = voxels[a], &vb = voxels[b];
-      return std::tie(va.z, va.y, va.x, a) < std::tie(vb.z, vb.y, vb.x, b);
-    };
-    std::sort(order.begin(), order.end(), less);
-    std::vector<synthesis::Voxel> unique;
-    voxelOfSite.resize(voxels.size());
-    for (uint32_t i : order) {
-      if (unique.empty() || !(unique.back() == voxels[i])) unique.push_back(voxels[i]);
-      voxelOfSite[i] = uint32_t(unique.size() - 1);
-    }
-    synthesis::SolidLevelCache cache;
-    synthesis::SolidSynthesisResult s = synthesizeSolid(*ex.solidAnalysis, unique, o.solid, &cache, o.threads);
-    r.voxelsRequested = int64_t(unique.size());
-    r.voxelsSynthesized = s.voxelsSynthesized();
-    r.triples.resize(sites.size());
-    for (size_t i = 0; i < sites.size(); ++i) r.triples[i] = s.triples[voxelOfSite[i]];
-    synthesis::solidColors(s.triples, exemplar, exemplar, exemplar, voxelColors);
-    stages.finish("synthesis", std::to_string(unique.size()) + " voxels requested, " +
+    r.triples = solidTexelTriples(sites, r.atlas.fields, *ex.solidAnalysis, o.solid, r.textureScale, o.threads,
+                                  r.voxelsRequested, r.voxelsSynthesized);
+    stages.finish("synthesis", std::to_string(r.voxelsRequested) + " voxels requested, " +
                                    std::to_string(r.voxelsSynthesized) + " synthesized");
   }
 
@@ -276,15 +299,14 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
       if (magnified) return bilinearToroidal(map, u, v, channel);
       return map.at(int(std::floor(u + 0.5f)) % map.width, int(std::floor(v + 0.5f)) % map.height, channel);
     }
+    // Solid: the mean over the three exemplar coordinates (as solidColors()).
     float sum = 0;
     for (uint32_t c : r.triples[site]) sum += map.at(int(synthesis::coordU(c)), int(synthesis::coordV(c)), channel);
     return sum / 3.0f;
   };
-  Image base = bake(atlas, sites, colourChannels, gutter, o.threads, [&](size_t s, float* out) {
-    for (int ch = 0; ch < colourChannels; ++ch)
-      out[ch] = surface ? lookup(exemplar, s, ch) : voxelColors[size_t(voxelOfSite[s]) * size_t(colourChannels) + size_t(ch)];
-  });
-  r.baseColor = std::make_shared<const Image>(std::move(base));
+  r.baseColor = std::make_shared<const Image>(bake(atlas, sites, colourChannels, gutter, o.threads, [&](size_t s, float* out) {
+    for (int ch = 0; ch < colourChannels; ++ch) out[ch] = lookup(exemplar, s, ch);
+  }));
   if (ex.normal)
     r.normal = std::make_shared<const Image>(bake(atlas, sites, 3, gutter, o.threads, [&](size_t s, float* out) {
       float n[3];
@@ -316,20 +338,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     stages.finish("measures", detail);
   }
 
-  // The textured mesh: atlas UVs and one material with the maps.
-  r.mesh = mesh;
-  r.mesh.uvs.resize(3 * mesh.triangleCount());
-  for (size_t c = 0; c < r.mesh.uvs.size(); ++c) r.mesh.uvs[c] = atlas.normalizedUv(atlas.texelUvs[c]);
-  r.mesh.tangents.clear();  // they belonged to the old UVs; readers derive them from the new ones
-  geometry::Material m;
-  m.name = "texfab";
-  m.metallicFactor = 0.0f;
-  m.roughnessFactor = ex.roughness ? 1.0f : 0.8f;
-  m.baseColorTexture = {r.baseColor, "basecolor.png"};
-  if (r.normal) m.normalTexture = {r.normal, "normal.png"};
-  if (r.metallicRoughness) m.metallicRoughnessTexture = {r.metallicRoughness, "metallic_roughness.png"};
-  r.mesh.materials = {m};
-  r.mesh.faceMaterials.clear();
+  r.mesh = texturedMesh(mesh, atlas, r);
   r.sites = std::move(domain.levels[0]);
   return r;
 }
