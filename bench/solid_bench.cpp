@@ -19,6 +19,8 @@
 
 #include <cmath>
 
+#include <sys/resource.h>
+
 namespace {
 
 using namespace texfab;
@@ -26,6 +28,21 @@ using namespace texfab::synthesis;
 
 using bench::marbleExemplar;
 using bench::peakMemoryMiB;
+
+// CPU seconds of the whole process (every thread): on the shared 2-core machine wall times are
+// noisy, and the benchmark library's CPU column counts the main thread only.
+double processCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) + 1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+// Voxels synthesized per level (coarsest first), per requested voxel: where the chain's work goes.
+void levelCounters(benchmark::State& state, const SolidSynthesisResult& r, double requested) {
+  static const char* const names[] = {"L0_per_requested", "L1_per_requested", "L2_per_requested", "L3_per_requested",
+                                      "L4_per_requested", "L5_per_requested", "L6_per_requested", "L7_per_requested"};
+  for (size_t l = 0; l < r.levels.size() && l < 8; ++l) state.counters[names[l]] = double(r.levels[l].voxels) / requested;
+}
 
 // The analysis synthesis benchmarks use, through the on-disk cache (computed once).
 const SolidAnalysis& analysis(int side) {
@@ -57,11 +74,13 @@ void BM_SolidVolume(benchmark::State& state) {
   const SolidAnalysis& a = analysis(n);
   const SolidSynthesisOptions o = optionsFor(state.range(1));
   int64_t synthesized = 0;
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     const SolidSynthesisResult r = synthesizeSolidBox(a, {0, 0, 0, n, n, n}, o);
     synthesized = r.voxelsSynthesized();
     benchmark::DoNotOptimize(r.triples.data());
   }
+  state.counters["process_cpu_s"] = (processCpuSeconds() - cpu0) / double(state.iterations());
   state.counters["synth_per_voxel"] = double(synthesized) / (double(n) * n * n);
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
@@ -87,6 +106,7 @@ void BM_SolidCut256Cached(benchmark::State& state) {
   for (int64_t z = 36; z < 44; ++z) synthesizeSolid(a, zPlane(256, z), o, &cache);
   int64_t z = 0, finest = 0, all = 0, corrections = 0;
   double seconds = 0;
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     const SolidSynthesisResult r = synthesizeSolid(a, zPlane(256, z++ % 8 + 36), o, &cache);
     finest = r.levels.back().voxels;
@@ -95,6 +115,7 @@ void BM_SolidCut256Cached(benchmark::State& state) {
     all = r.voxelsSynthesized();
     benchmark::DoNotOptimize(r.triples.data());
   }
+  state.counters["process_cpu_ms"] = (processCpuSeconds() - cpu0) * 1e3 / double(state.iterations());
   state.counters["finest_voxels_per_pixel"] = double(finest) / (256.0 * 256.0);
   state.counters["coarse_voxels"] = double(all - finest);
   state.counters["finest_corrections"] = double(corrections);
@@ -134,13 +155,16 @@ void BM_SolidShell(benchmark::State& state) {
         if (d2 >= (r - 0.5) * (r - 0.5) && d2 < (r + 0.5) * (r + 0.5)) shell.push_back({x + 300, y + 300, z + 300});
       }
   int64_t synthesized = 0, corrections = 0;
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     SolidLevelCache cache(size_t(1) << 30);
     const SolidSynthesisResult res = synthesizeSolid(a, shell, o, &cache);
     synthesized = res.voxelsSynthesized();
     corrections = 0;
     for (const auto& l : res.levels) corrections += l.corrections;
+    levelCounters(state, res, double(shell.size()));
   }
+  state.counters["process_cpu_s"] = (processCpuSeconds() - cpu0) / double(state.iterations());
   state.counters["voxels"] = double(shell.size());
   state.counters["synth_per_requested"] = double(synthesized) / double(shell.size());
   state.counters["corrections_per_requested"] = double(corrections) / double(shell.size());

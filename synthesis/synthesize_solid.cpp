@@ -17,7 +17,8 @@
 #include <cmath>
 #include <set>
 #include <string>
-#include <unordered_set>
+#include <stdexcept>
+#include <unordered_map>
 
 namespace texfab::synthesis {
 
@@ -26,10 +27,8 @@ namespace {
 using cpu::VolumeGrid;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kTileShift = 7;   // requests are cut into 128^3 finest-level tiles
 constexpr int kBrickShift = 2;  // the cache holds 4^3 bricks (little padding around thin shells)
 constexpr int kBrickSide = 1 << kBrickShift;
-constexpr int kRowGrain = 4;
 
 // The projections of a level laid out for the correction kernel.
 struct Prepared {
@@ -74,10 +73,6 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
   return t;
 }
 
-size_t indexIn(const VolumeGrid& g, int64_t x, int64_t y, int64_t z) {
-  return (size_t(z - g.z0) * size_t(g.ny) + size_t(y - g.y0)) * size_t(g.nx) + size_t(x - g.x0);
-}
-
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
@@ -90,28 +85,108 @@ uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   return h.h;
 }
 
-// A grow-only scratch array, not initialized: every kernel writes a voxel before it reads it, and
-// reusing the memory across tiles spares the page faults of fresh allocations.
-template <class T> struct Buffer {
-  std::unique_ptr<T[]> data;
-  size_t capacity = 0;
-  T* get(size_t size) {
-    if (size > capacity) {
-      data.reset(new T[size]);
-      capacity = size;
-    }
-    return data.get();
+// The engine works level by level over the whole request (Dong et al. §5.2): first the masks of
+// every level, from the finest to the coarsest (the requested voxels, dilated exactly per
+// sub-pass; their parents seed the level below, unless the coarse-level cache holds their final
+// values, §6.2), then each level is synthesized once over its whole mask, coarsest first. Every
+// voxel of a level is computed exactly once per request, as far as its mask says (no tile
+// margins computed twice, no padding to whole cache bricks), which is what the per-sub-pass mask
+// makes exact: each voxel's value is the same pure function of its position whatever the mask.
+//
+// A level lives in sparse 16^3 chunks of level voxels. Its synthesis sweeps the chunks' z-layers
+// in a pipeline: correction step t of layer j runs once step t-1 of layers j-1..j+1 is done, and
+// a step's values are dropped as soon as the next step of both neighbouring layers has read them,
+// so the working memory is a few z-layers of chunks, not the level. Each correction gathers its
+// chunk's values with a 2-voxel halo (the 3-neighborhood's radius) from its neighbours.
+
+constexpr int kChunkShift = 4;
+constexpr int kChunk = 1 << kChunkShift;  // 16
+constexpr int kChunkVoxels = kChunk * kChunk * kChunk;
+constexpr int kHalo = 2;                   // radius of the 61-voxel 3-neighborhood
+constexpr int kGathered = kChunk + 2 * kHalo;
+constexpr int kGatheredVoxels = kGathered * kGathered * kGathered;
+
+using ChunkKey = std::array<int64_t, 3>;
+
+struct ChunkKeyHash {
+  size_t operator()(const ChunkKey& k) const {
+    uint64_t h = uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full + (h >> 29);
+    h ^= uint64_t(k[2]) * 0x165667B19E3779F9ull + (h >> 32);
+    return size_t(h ^ (h >> 31));
   }
 };
 
-// Scratch memory of one level (compute and final of a level run nested inside those of the level
-// below it, never inside their own).
-struct Workspace {
-  Buffer<int8_t> lastE, last;
-  Buffer<uint32_t> cur, next, parent, values;
-  Buffer<int16_t> curC, nextC;
-  Buffer<uint8_t> pneed, touched, mneed;
+template <int Shift = kChunkShift> inline int localIndex(int64_t x, int64_t y, int64_t z) {
+  constexpr int64_t m = (1 << Shift) - 1;
+  return int((((z & m) << Shift) + (y & m)) << Shift) + int(x & m);
+}
+
+// Dense chunks of (2^Shift)^3 voxels, N values of T per voxel, created on demand (filled with
+// `fill`).
+template <class T, int N, int Shift = kChunkShift> struct ChunkStore {
+  static constexpr int kVoxels = 1 << (3 * Shift);
+  T fill{};
+  std::unordered_map<ChunkKey, uint32_t, ChunkKeyHash> index;
+  std::vector<ChunkKey> keys;
+  std::vector<std::unique_ptr<T[]>> chunks;
+
+  int32_t find(const ChunkKey& k) const {
+    const auto it = index.find(k);
+    return it == index.end() ? -1 : int32_t(it->second);
+  }
+  uint32_t get(const ChunkKey& k) {
+    const auto [it, inserted] = index.try_emplace(k, uint32_t(keys.size()));
+    if (inserted) {
+      keys.push_back(k);
+      chunks.emplace_back(new T[size_t(kVoxels) * N]);
+      std::fill_n(chunks.back().get(), size_t(kVoxels) * N, fill);
+    }
+    return it->second;
+  }
+  T* at(uint32_t slot) { return chunks[slot].get(); }
+  const T* at(uint32_t slot) const { return chunks[slot].get(); }
+  size_t size() const { return keys.size(); }
+  size_t bytes() const { return chunks.size() * size_t(kVoxels) * N * sizeof(T); }
+  void release() { *this = ChunkStore{fill, {}, {}, {}}; }
 };
+
+// last[v] per voxel (-1 = not needed), see solid_kernels.h.
+struct Mask : ChunkStore<int8_t, 1> {
+  Mask() { fill = -1; }
+};
+// Final values (triples) of a coarse level where the finer level's upsampling reads them, in 8^3
+// blocks: block k holds the parents of chunk k of the finer level.
+constexpr int kBlockShift = kChunkShift - 1;
+constexpr int kBlock = 1 << kBlockShift;
+using Finals = ChunkStore<uint32_t, 3, kBlockShift>;
+
+// One chunk's values after one step: triples and colours (solidColorKernel).
+struct ChunkValues {
+  std::unique_ptr<uint32_t[]> triples{new uint32_t[size_t(kChunkVoxels) * 3]};
+  std::unique_ptr<int16_t[]> colors{new int16_t[size_t(kChunkVoxels) * 4]};
+};
+
+// Per-thread scratch of one correction: the chunk with its halo (not initialized: the masks
+// guarantee that no value is read that was not written for this step).
+struct Gathered {
+  std::unique_ptr<int8_t[]> last{new int8_t[kGatheredVoxels]};
+  std::unique_ptr<uint32_t[]> in{new uint32_t[size_t(kGatheredVoxels) * 3]}, out{new uint32_t[size_t(kGatheredVoxels) * 3]};
+  std::unique_ptr<int16_t[]> inC{new int16_t[size_t(kGatheredVoxels) * 4]}, outC{new int16_t[size_t(kGatheredVoxels) * 4]};
+};
+
+// Along one axis, neighbour d in {-1, 0, 1} of a chunk: its voxels [from, from + n) (chunk-local)
+// land at gathered positions [to, to + n).
+struct Span1 {
+  int from, to, n;
+};
+constexpr Span1 kSpans[3] = {{kChunk - kHalo, 0, kHalo}, {0, kHalo, kChunk}, {0, kHalo + kChunk, kHalo}};
+
+template <class F> void forNeighbours(F&& f) {
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) f(dx, dy, dz);
+}
 
 struct Engine {
   const SolidAnalysis& a;
@@ -119,216 +194,355 @@ struct Engine {
   SolidLevelCache* cache;
   int threads;
   std::vector<SolidLevelStats>& stats;
-  std::vector<std::unique_ptr<Prepared>> preparedLevels = std::vector<std::unique_ptr<Prepared>>(a.levels.size());
-  std::vector<Workspace> ws = std::vector<Workspace>(a.levels.size());
+  std::vector<Mask> masks = std::vector<Mask>(a.levels.size());
+  std::vector<Finals> finals = std::vector<Finals>(a.levels.size());
+  size_t peakBytes = 0;  // masks + finals + step values held at once (diagnostics)
 
   int top() const { return int(a.levels.size()) - 1; }
-  int stepsAt(int) const { return o.passes * o.subpasses(); }
+  int steps() const { return o.passes * o.subpasses(); }
 
+  size_t storeBytes() const {
+    size_t b = 0;
+    for (const auto& m : masks) b += m.bytes();
+    for (const auto& f : finals) b += f.bytes();
+    return b;
+  }
+
+  bool inClass(int step, int64_t x, int64_t y, int64_t z) const {
+    if (o.interleave == 1) return true;
+    const int cls = (step - 1) % 8;
+    return (x & 1) == (cls & 1) && (y & 1) == ((cls >> 1) & 1) && (z & 1) == ((cls >> 2) & 1);
+  }
+
+  // §5.2, exact per sub-pass, over the level's chunks: for t = T..1, every voxel of step t's
+  // class with last >= t needs its 3-neighborhood after step t-1.
+  void dilate(int li) {
+    Mask& m = masks[size_t(li)];
+    std::vector<int8_t> g(kGatheredVoxels);
+    for (int t = steps(); t >= 1; --t) {
+      const size_t n = m.size();  // chunks created in this step hold no voxel with last >= t
+      for (size_t s = 0; s < n; ++s) {
+        const int8_t* c = m.at(uint32_t(s));
+        if (std::none_of(c, c + kChunkVoxels, [&](int8_t v) { return v >= t; })) continue;
+        const ChunkKey key = m.keys[s];
+        std::fill(g.begin(), g.end(), int8_t(-1));
+        for (int z = 0; z < kChunk; ++z)
+          for (int y = 0; y < kChunk; ++y)
+            std::copy_n(c + (z * kChunk + y) * kChunk, kChunk,
+                        g.data() + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo);
+        const VolumeGrid grid{key[0] * kChunk - kHalo, key[1] * kChunk - kHalo, key[2] * kChunk - kHalo,
+                              kGathered, kGathered, kGathered};
+        cpu::solidDilateKernel(g.data(), grid, o.interleave, t, 0, grid.rows());
+        forNeighbours([&](int dx, int dy, int dz) {
+          const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
+          bool any = false;
+          for (int z = 0; z < sz.n && !any; ++z)
+            for (int y = 0; y < sy.n && !any; ++y) {
+              const int8_t* row = g.data() + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
+              any = std::any_of(row, row + sx.n, [](int8_t v) { return v >= 0; });
+            }
+          if (!any) return;
+          int8_t* d = m.at(m.get({key[0] + dx, key[1] + dy, key[2] + dz}));
+          for (int z = 0; z < sz.n; ++z)
+            for (int y = 0; y < sy.n; ++y) {
+              const int8_t* row = g.data() + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
+              int8_t* to = d + ((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from;
+              for (int x = 0; x < sx.n; ++x) to[x] = std::max(to[x], row[x]);
+            }
+        });
+      }
+    }
+  }
+
+  // The voxels of level li whose final values level li+1 upsamples from (the parents of its
+  // mask): read from the cache where it has them, else seeds of level li's mask.
+  void seedFromChild(int li) {
+    const Mask& child = masks[size_t(li) + 1];
+    Mask& m = masks[size_t(li)];
+    Finals& f = finals[size_t(li)];
+    const auto T = int8_t(steps());
+    for (size_t s = 0; s < child.size(); ++s) {
+      const int8_t* c = child.at(uint32_t(s));
+      const ChunkKey key = child.keys[s];
+      // The parents of this chunk fill one octant (8^3) of one chunk of level li.
+      uint8_t need[8 * 8 * 8] = {};
+      bool any = false;
+      for (int z = 0; z < kChunk; ++z)
+        for (int y = 0; y < kChunk; ++y)
+          for (int x = 0; x < kChunk; ++x)
+            if (c[(z * kChunk + y) * kChunk + x] >= 0) {
+              need[((z >> 1) * 8 + (y >> 1)) * 8 + (x >> 1)] = 1;
+              any = true;
+            }
+      if (!any) continue;
+      const ChunkKey pkey{cpu::floorShift(key[0], 1), cpu::floorShift(key[1], 1), cpu::floorShift(key[2], 1)};
+      const int64_t origin[3] = {key[0] * kBlock, key[1] * kBlock, key[2] * kBlock};
+      uint32_t* fv = f.at(f.get(key));
+      int8_t* mv = nullptr;
+      // Per 4^3 cache brick of the octant.
+      for (int bz = 0; bz < 2; ++bz)
+        for (int by = 0; by < 2; ++by)
+          for (int bx = 0; bx < 2; ++bx) {
+            bool brickNeeded = false;
+            for (int z = 0; z < kBrickSide && !brickNeeded; ++z)
+              for (int y = 0; y < kBrickSide && !brickNeeded; ++y)
+                for (int x = 0; x < kBrickSide && !brickNeeded; ++x)
+                  brickNeeded = need[((bz * 4 + z) * 8 + by * 4 + y) * 8 + bx * 4 + x] != 0;
+            if (!brickNeeded) continue;
+            const int64_t b0[3] = {origin[0] + bx * kBrickSide, origin[1] + by * kBrickSide, origin[2] + bz * kBrickSide};
+            std::shared_ptr<const SolidLevelCache::Brick> brick;
+            if (cache) brick = cache->find({li, b0[0] >> kBrickShift, b0[1] >> kBrickShift, b0[2] >> kBrickShift});
+            for (int z = 0; z < kBrickSide; ++z)
+              for (int y = 0; y < kBrickSide; ++y)
+                for (int x = 0; x < kBrickSide; ++x) {
+                  if (!need[((bz * 4 + z) * 8 + by * 4 + y) * 8 + bx * 4 + x]) continue;
+                  const int local = localIndex(b0[0] + x, b0[1] + y, b0[2] + z);
+                  const int inBrick = (z * kBrickSide + y) * kBrickSide + x;
+                  if (brick && (brick->valid >> inBrick & 1)) {
+                    std::copy_n(brick->values.data() + inBrick * 3, 3, fv + localIndex<kBlockShift>(b0[0] + x, b0[1] + y, b0[2] + z) * 3);
+                  } else {
+                    if (!mv) mv = m.at(m.get(pkey));
+                    mv[local] = T;
+                  }
+                }
+          }
+    }
+  }
+
+  // Final values of level li < top computed in this request go to the cache, per 4^3 brick
+  // (only the voxels computed: `valid`).
+  void fillCache(int li) {
+    const Mask& m = masks[size_t(li)];
+    const Finals& f = finals[size_t(li)];
+    const auto T = int8_t(steps());
+    for (size_t s = 0; s < m.size(); ++s) {
+      const int8_t* c = m.at(uint32_t(s));
+      const ChunkKey key = m.keys[s];
+      for (int bz = 0; bz < kChunk; bz += kBrickSide)
+        for (int by = 0; by < kChunk; by += kBrickSide)
+          for (int bx = 0; bx < kChunk; bx += kBrickSide) {
+            uint64_t valid = 0;
+            for (int z = 0; z < kBrickSide; ++z)
+              for (int y = 0; y < kBrickSide; ++y)
+                for (int x = 0; x < kBrickSide; ++x)
+                  if (c[((bz + z) * kChunk + by + y) * kChunk + bx + x] == T)
+                    valid |= uint64_t(1) << ((z * kBrickSide + y) * kBrickSide + x);
+            if (!valid) continue;
+            const int64_t b0[3] = {key[0] * kChunk + bx, key[1] * kChunk + by, key[2] * kChunk + bz};
+            const int32_t fs = f.find({b0[0] >> kBlockShift, b0[1] >> kBlockShift, b0[2] >> kBlockShift});
+            if (fs < 0) throw std::logic_error("lazy solid synthesis: final values missing");
+            const uint32_t* fv = f.at(uint32_t(fs));
+            auto brick = std::make_shared<SolidLevelCache::Brick>();
+            brick->values.assign(size_t(kBrickSide) * kBrickSide * kBrickSide * 3, 0);
+            brick->valid = valid;
+            for (int z = 0; z < kBrickSide; ++z)
+              for (int y = 0; y < kBrickSide; ++y)
+                for (int x = 0; x < kBrickSide; ++x)
+                  std::copy_n(fv + localIndex<kBlockShift>(b0[0] + x, b0[1] + y, b0[2] + z) * 3, 3,
+                              brick->values.data() + ((z * kBrickSide + y) * kBrickSide + x) * 3);
+            cache->insert({li, key[0] * (kChunk / kBrickSide) + bx / kBrickSide, key[1] * (kChunk / kBrickSide) + by / kBrickSide,
+                           key[2] * (kChunk / kBrickSide) + bz / kBrickSide},
+                          std::move(brick));
+          }
+    }
+  }
+
+  // Step 0 of one chunk: initialization (coarsest level) or upsampling, then colours.
+  void start(int li, uint32_t slot, const cpu::SolidTables& tables, ChunkValues& out) {
+    const Mask& m = masks[size_t(li)];
+    const ChunkKey key = m.keys[slot];
+    const int8_t* last = m.at(slot);
+    const VolumeGrid grid{key[0] * kChunk, key[1] * kChunk, key[2] * kChunk, kChunk, kChunk, kChunk};
+    if (li == 0) {
+      const auto jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
+      cpu::solidInitKernel(out.triples.get(), last, grid, tables, o.seed, jitter256, 0, grid.rows());
+    } else {
+      const Finals& f = finals[size_t(li) - 1];
+      const int32_t ps = f.find(key);  // the block of this chunk's parents
+      if (ps < 0) throw std::logic_error("lazy solid synthesis: parent values missing");
+      const VolumeGrid pg{key[0] * kBlock, key[1] * kBlock, key[2] * kBlock, kBlock, kBlock, kBlock};
+      cpu::solidUpsampleKernel(f.at(uint32_t(ps)), pg, out.triples.get(), last, grid, tables.spacing, a.width, a.height, 0, grid.rows());
+    }
+    cpu::solidColorKernel(out.triples.get(), out.colors.get(), last, 0, grid, tables, 0, grid.rows());
+  }
+
+  // Correction step t >= 1 of one chunk, from step t-1 of it and its neighbours.
+  void correct(int li, uint32_t slot, int t, const std::vector<int32_t>& before, std::vector<ChunkValues>& pool,
+               const cpu::SolidTables& tables, Gathered& g, ChunkValues& out) {
+    const Mask& m = masks[size_t(li)];
+    const ChunkKey key = m.keys[slot];
+    const int8_t* last = m.at(slot);
+    std::fill_n(g.last.get(), kGatheredVoxels, int8_t(-1));
+    for (int z = 0; z < kChunk; ++z)
+      for (int y = 0; y < kChunk; ++y)
+        std::copy_n(last + (z * kChunk + y) * kChunk, kChunk, g.last.get() + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo);
+    forNeighbours([&](int dx, int dy, int dz) {
+      const int32_t ns = m.find({key[0] + dx, key[1] + dy, key[2] + dz});
+      if (ns < 0 || before[size_t(ns)] < 0) return;  // none of its voxels is read at this step
+      const ChunkValues& src = pool[size_t(before[size_t(ns)])];
+      const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
+      for (int z = 0; z < sz.n; ++z)
+        for (int y = 0; y < sy.n; ++y) {
+          const size_t from = size_t(((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from);
+          const size_t to = size_t(((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to);
+          std::copy_n(src.triples.get() + from * 3, size_t(sx.n) * 3, g.in.get() + to * 3);
+          std::copy_n(src.colors.get() + from * 4, size_t(sx.n) * 4, g.inC.get() + to * 4);
+        }
+    });
+    const VolumeGrid grid{key[0] * kChunk - kHalo, key[1] * kChunk - kHalo, key[2] * kChunk - kHalo,
+                          kGathered, kGathered, kGathered};
+    // Rows of the halo hold no voxel to correct: only the chunk's rows.
+    for (int z = kHalo; z < kHalo + kChunk; ++z)
+      cpu::solidCorrectKernel(g.in.get(), g.inC.get(), g.out.get(), g.outC.get(), g.last.get(), grid, tables, o.interleave,
+                              t, z * kGathered + kHalo, z * kGathered + kHalo + kChunk);
+    for (int z = 0; z < kChunk; ++z)
+      for (int y = 0; y < kChunk; ++y)
+        for (int x = 0; x < kChunk; ++x) {
+          const size_t v = size_t((z * kChunk + y) * kChunk + x);
+          const size_t gv = size_t(((z + kHalo) * kGathered + y + kHalo) * kGathered + x + kHalo);
+          const bool corrected = last[v] >= t && inClass(t, key[0] * kChunk + x, key[1] * kChunk + y, key[2] * kChunk + z);
+          std::copy_n((corrected ? g.out.get() : g.in.get()) + gv * 3, 3, out.triples.get() + v * 3);
+          std::copy_n((corrected ? g.outC.get() : g.inC.get()) + gv * 4, 4, out.colors.get() + v * 4);
+        }
+  }
+
+  // Synthesizes level li over its whole mask; emit(slot, triples) receives the final values of
+  // each chunk of the finest level.
+  template <class Emit> void synthesizeLevel(int li, const Emit& emit) {
+    const auto started = Clock::now();
+    Mask& m = masks[size_t(li)];
+    const int T = steps();
+    const size_t n = m.size();
+    std::vector<int8_t> maxLast(n, -1);
+    int64_t voxels = 0, corrections = 0;
+    const int subpasses = o.subpasses();
+    for (size_t s = 0; s < n; ++s) {
+      const int8_t* c = m.at(uint32_t(s));
+      for (int v = 0; v < kChunkVoxels; ++v) {
+        maxLast[s] = std::max(maxLast[s], c[v]);
+        voxels += c[v] >= 0;
+        corrections += c[v] > 0 ? (c[v] + subpasses - 1) / subpasses : 0;
+      }
+    }
+    // Chunks in z-layers (then y, x: neighbours close in memory).
+    std::vector<uint32_t> order(n);
+    for (size_t s = 0; s < n; ++s) order[s] = uint32_t(s);
+    std::sort(order.begin(), order.end(), [&](uint32_t p, uint32_t q) {
+      const ChunkKey &kp = m.keys[p], &kq = m.keys[q];
+      return std::tie(kp[2], kp[1], kp[0]) < std::tie(kq[2], kq[1], kq[0]);
+    });
+    std::vector<std::pair<size_t, size_t>> layers;
+    for (size_t b = 0; b < n;) {
+      size_t e = b + 1;
+      while (e < n && m.keys[order[e]][2] == m.keys[order[b]][2]) ++e;
+      layers.push_back({b, e});
+      b = e;
+    }
+    const cpu::SolidTables tables = tablesOf(a, li, prepared(li));
+    std::vector<ChunkValues> pool;
+    std::vector<int32_t> freeList;
+    std::vector<std::vector<int32_t>> bufferOf(size_t(T) + 1, std::vector<int32_t>(n, -1));
+    auto release = [&](int step, size_t layer) {
+      for (size_t k = layers[layer].first; k < layers[layer].second; ++k) {
+        int32_t& b = bufferOf[size_t(step)][order[k]];
+        if (b >= 0) freeList.push_back(b);
+        b = -1;
+      }
+    };
+    const int L = int(layers.size());
+    const auto TT = int8_t(T);
+    for (int i = 0; i < L + T; ++i) {
+      for (int t = 0; t <= T; ++t) {
+        const int j = i - t;
+        if (j < 0 || j >= L) continue;
+        const auto [b, e] = layers[size_t(j)];
+        for (size_t k = b; k < e; ++k) {
+          const uint32_t slot = order[k];
+          if (maxLast[slot] < t) continue;
+          if (freeList.empty()) {
+            freeList.push_back(int32_t(pool.size()));
+            pool.emplace_back();
+          }
+          bufferOf[size_t(t)][slot] = freeList.back();
+          freeList.pop_back();
+        }
+        peakBytes = std::max(peakBytes, storeBytes() + pool.size() * sizeof(uint32_t) * kChunkVoxels * 5);
+        parallelFor(int(b), int(e), threads, [&](int k0, int k1) {
+          thread_local std::unique_ptr<Gathered> scratch;
+          if (!scratch) scratch = std::make_unique<Gathered>();
+          for (int k = k0; k < k1; ++k) {
+            const uint32_t slot = order[size_t(k)];
+            const int32_t ob = bufferOf[size_t(t)][slot];
+            if (ob < 0) continue;
+            ChunkValues& out = pool[size_t(ob)];
+            if (t == 0) start(li, slot, tables, out);
+            else correct(li, slot, t, bufferOf[size_t(t) - 1], pool, tables, *scratch, out);
+            if (t < T) continue;
+            if (li == top()) {
+              emit(slot, out.triples.get());
+            } else {
+              // Seeds (last = T) are the voxels whose final values level li+1 reads; each 8^3
+              // block of the chunk holding one has its store block.
+              const ChunkKey key = m.keys[slot];
+              const int8_t* last = m.at(slot);
+              for (int bz = 0; bz < kChunk; bz += kBlock)
+                for (int by = 0; by < kChunk; by += kBlock)
+                  for (int bx = 0; bx < kChunk; bx += kBlock) {
+                    uint32_t* fv = nullptr;
+                    for (int z = 0; z < kBlock; ++z)
+                      for (int y = 0; y < kBlock; ++y)
+                        for (int x = 0; x < kBlock; ++x) {
+                          const int v = ((bz + z) * kChunk + by + y) * kChunk + bx + x;
+                          if (last[v] != TT) continue;
+                          if (!fv) {
+                            const int32_t fs = finals[size_t(li)].find(
+                                {(key[0] * kChunk + bx) >> kBlockShift, (key[1] * kChunk + by) >> kBlockShift,
+                                 (key[2] * kChunk + bz) >> kBlockShift});
+                            if (fs < 0) throw std::logic_error("lazy solid synthesis: final block missing");
+                            fv = finals[size_t(li)].at(uint32_t(fs));
+                          }
+                          std::copy_n(out.triples.get() + v * 3, 3, fv + ((z * kBlock + y) * kBlock + x) * 3);
+                        }
+                  }
+            }
+          }
+        });
+        if (t == T) release(T, size_t(j));
+      }
+      // Step t-1 of layer j was read by step t of layers j-1, j, j+1; the last of them just ran.
+      for (int t = 1; t <= T; ++t) {
+        const int j = i - t - 1;
+        if (j >= 0 && j < L) release(t - 1, size_t(j));
+      }
+    }
+    if (cache && li < top()) fillCache(li);
+    SolidLevelStats& st = stats[size_t(li)];
+    st.voxels += voxels;
+    st.corrections += corrections;
+    st.seconds += since(started);
+  }
+
+  std::vector<std::unique_ptr<Prepared>> preparedLevels = std::vector<std::unique_ptr<Prepared>>(a.levels.size());
   const Prepared& prepared(int li) {
     auto& p = preparedLevels[size_t(li)];
     if (!p) p = std::make_unique<Prepared>(prepare(a.levels[size_t(li)]));
     return *p;
   }
 
-  // Writes into `out` (3 words per voxel of `box`) the values after the last sub-pass of level li
-  // where `need`; leaves the other voxels unspecified.
-  void final(int li, const VolumeGrid& box, const uint8_t* need, uint32_t* out) {
-    if (!cache || li == top()) return compute(li, box, need, out);
-    Workspace& w = ws[size_t(li)];
-    // The bricks `box` touches where needed, as a dense grid of brick slots (no per-voxel lookup).
-    const int64_t bx0 = cpu::floorShift(box.x0, kBrickShift), by0 = cpu::floorShift(box.y0, kBrickShift),
-                  bz0 = cpu::floorShift(box.z0, kBrickShift);
-    const VolumeGrid bg{bx0, by0, bz0, int(cpu::floorShift(box.x0 + box.nx - 1, kBrickShift) - bx0 + 1),
-                        int(cpu::floorShift(box.y0 + box.ny - 1, kBrickShift) - by0 + 1),
-                        int(cpu::floorShift(box.z0 + box.nz - 1, kBrickShift) - bz0 + 1)};
-    auto slotOf = [&](int x, int y, int z) {  // buffer voxel of `box` -> brick slot of `bg`
-      return indexIn(bg, cpu::floorShift(box.x0 + x, kBrickShift), cpu::floorShift(box.y0 + y, kBrickShift),
-                     cpu::floorShift(box.z0 + z, kBrickShift));
-    };
-    uint8_t* touched = w.touched.get(bg.size());
-    std::fill_n(touched, bg.size(), uint8_t(0));
-    for (int z = 0; z < box.nz; ++z)
-      for (int y = 0; y < box.ny; ++y) {
-        const uint8_t* row = need + (size_t(z) * box.ny + size_t(y)) * box.nx;
-        for (int x = 0; x < box.nx; ++x)
-          if (row[x]) touched[slotOf(x, y, z)] = 1;
-      }
-    std::vector<std::shared_ptr<const SolidLevelCache::Brick>> bricks(bg.size());
-    std::vector<size_t> missing;
-    auto brickOrigin = [&](size_t i, int64_t b[3]) {
-      b[0] = (bg.x0 + int64_t(i % size_t(bg.nx))) * kBrickSide;
-      b[1] = (bg.y0 + int64_t(i / size_t(bg.nx) % size_t(bg.ny))) * kBrickSide;
-      b[2] = (bg.z0 + int64_t(i / (size_t(bg.nx) * size_t(bg.ny)))) * kBrickSide;
-    };
-    for (size_t i = 0; i < bg.size(); ++i) {
-      if (!touched[i]) continue;
-      int64_t b[3];
-      brickOrigin(i, b);
-      bricks[i] = cache->find({li, b[0] / kBrickSide, b[1] / kBrickSide, b[2] / kBrickSide});
-      if (!bricks[i]) missing.push_back(i);
-    }
-    if (!missing.empty()) {
-      int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
-      for (size_t i : missing) {
-        int64_t b[3];
-        brickOrigin(i, b);
-        for (int k = 0; k < 3; ++k) {
-          lo[k] = std::min(lo[k], b[k]);
-          hi[k] = std::max(hi[k], b[k] + kBrickSide);
-        }
-      }
-      const VolumeGrid mbox{lo[0], lo[1], lo[2], int(hi[0] - lo[0]), int(hi[1] - lo[1]), int(hi[2] - lo[2])};
-      uint8_t* mneed = w.mneed.get(mbox.size());
-      std::fill_n(mneed, mbox.size(), uint8_t(0));
-      for (size_t i : missing) {
-        int64_t b[3];
-        brickOrigin(i, b);
-        for (int z = 0; z < kBrickSide; ++z)
-          for (int y = 0; y < kBrickSide; ++y)
-            std::fill_n(mneed + indexIn(mbox, b[0], b[1] + y, b[2] + z), kBrickSide, uint8_t(1));
-      }
-      uint32_t* values = w.values.get(mbox.size() * 3);
-      compute(li, mbox, mneed, values);
-      for (size_t i : missing) {
-        int64_t b[3];
-        brickOrigin(i, b);
-        auto brick = std::make_shared<SolidLevelCache::Brick>();
-        brick->values.resize(size_t(kBrickSide) * kBrickSide * kBrickSide * 3);
-        for (int z = 0; z < kBrickSide; ++z)
-          for (int y = 0; y < kBrickSide; ++y)
-            std::copy_n(values + indexIn(mbox, b[0], b[1] + y, b[2] + z) * 3, kBrickSide * 3,
-                        brick->values.begin() + std::ptrdiff_t((size_t(z) * kBrickSide + size_t(y)) * kBrickSide * 3));
-        cache->insert({li, b[0] / kBrickSide, b[1] / kBrickSide, b[2] / kBrickSide}, brick);
-        bricks[i] = std::move(brick);
-      }
-    }
-    for (int z = 0; z < box.nz; ++z)
-      for (int y = 0; y < box.ny; ++y)
-        for (int x = 0; x < box.nx; ++x) {
-          const size_t v = (size_t(z) * box.ny + size_t(y)) * box.nx + size_t(x);
-          if (!need[v]) continue;
-          const int64_t q[3] = {box.x0 + x, box.y0 + y, box.z0 + z};
-          const SolidLevelCache::Brick& brick = *bricks[slotOf(x, y, z)];
-          const size_t from = ((size_t(cpu::floorMod(q[2], kBrickSide)) * kBrickSide + size_t(cpu::floorMod(q[1], kBrickSide))) *
-                                   kBrickSide +
-                               size_t(cpu::floorMod(q[0], kBrickSide))) *
-                              3;
-          std::copy_n(brick.values.data() + from, 3, out + v * 3);
-        }
-  }
-
-  void compute(int li, const VolumeGrid& box, const uint8_t* need, uint32_t* out) {
-    auto started = Clock::now();
-    Workspace& w = ws[size_t(li)];
-    const int steps = stepsAt(li);
-    // §5.2, exact per sub-pass: last[v] = the last step after which v's value is needed.
-    const int margin = 2 * steps;
-    const VolumeGrid e{box.x0 - margin, box.y0 - margin, box.z0 - margin, box.nx + 2 * margin, box.ny + 2 * margin,
-                       box.nz + 2 * margin};
-    int8_t* lastE = w.lastE.get(e.size());
-    std::fill_n(lastE, e.size(), int8_t(-1));
-    for (int z = 0; z < box.nz; ++z)
-      for (int y = 0; y < box.ny; ++y) {
-        const uint8_t* row = need + (size_t(z) * box.ny + size_t(y)) * box.nx;
-        int8_t* to = lastE + indexIn(e, box.x0, box.y0 + y, box.z0 + z);
-        for (int x = 0; x < box.nx; ++x)
-          if (row[x]) to[x] = int8_t(steps);
-      }
-    for (int t = steps; t >= 1; --t)
-      parallelFor(0, e.rows(), threads, [&](int r0, int r1) { cpu::solidDilateKernel(lastE, e, o.interleave, t, r0, r1); },
-                  kRowGrain);
-
-    // The level's working box: the bounding box of the chain.
-    int lo[3] = {e.nx, e.ny, e.nz}, hi[3] = {-1, -1, -1};
-    for (int z = 0; z < e.nz; ++z)
-      for (int y = 0; y < e.ny; ++y) {
-        const int8_t* row = lastE + (size_t(z) * e.ny + size_t(y)) * e.nx;
-        for (int x = 0; x < e.nx; ++x)
-          if (row[x] >= 0) {
-            lo[0] = std::min(lo[0], x), hi[0] = std::max(hi[0], x);
-            lo[1] = std::min(lo[1], y), hi[1] = std::max(hi[1], y);
-            lo[2] = std::min(lo[2], z), hi[2] = std::max(hi[2], z);
-          }
-      }
-    if (hi[0] < 0) return;  // nothing needed
-    const VolumeGrid g{e.x0 + lo[0], e.y0 + lo[1], e.z0 + lo[2], hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
-    int8_t* last = w.last.get(g.size());
-    int64_t voxels = 0;
-    for (int z = 0; z < g.nz; ++z)
-      for (int y = 0; y < g.ny; ++y) {
-        const int8_t* from = lastE + indexIn(e, g.x0, g.y0 + y, g.z0 + z);
-        int8_t* to = last + (size_t(z) * g.ny + size_t(y)) * g.nx;
-        std::copy_n(from, g.nx, to);
-        for (int x = 0; x < g.nx; ++x) voxels += to[x] >= 0;
-      }
-
-    const cpu::SolidTables tables = tablesOf(a, li, prepared(li));
-    uint32_t* cur = w.cur.get(g.size() * 3);
-    if (li == 0) {
-      const auto jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
-      parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidInitKernel(cur, last, g, tables, o.seed, jitter256, r0, r1);
-      }, kRowGrain);
-    } else {
-      const VolumeGrid pg{cpu::floorShift(g.x0, 1), cpu::floorShift(g.y0, 1), cpu::floorShift(g.z0, 1),
-                          int(cpu::floorShift(g.x0 + g.nx - 1, 1) - cpu::floorShift(g.x0, 1) + 1),
-                          int(cpu::floorShift(g.y0 + g.ny - 1, 1) - cpu::floorShift(g.y0, 1) + 1),
-                          int(cpu::floorShift(g.z0 + g.nz - 1, 1) - cpu::floorShift(g.z0, 1) + 1)};
-      uint8_t* pneed = w.pneed.get(pg.size());
-      std::fill_n(pneed, pg.size(), uint8_t(0));
-      for (int z = 0; z < g.nz; ++z)
-        for (int y = 0; y < g.ny; ++y) {
-          const int8_t* row = last + (size_t(z) * g.ny + size_t(y)) * g.nx;
-          uint8_t* prow = pneed + indexIn(pg, pg.x0, cpu::floorShift(g.y0 + y, 1), cpu::floorShift(g.z0 + z, 1));
-          for (int x = 0; x < g.nx; ++x)
-            if (row[x] >= 0) prow[cpu::floorShift(g.x0 + x, 1) - pg.x0] = 1;
-        }
+  // masks[top] holds the request (last = T); emit as in synthesizeLevel.
+  template <class Emit> void run(const Emit& emit) {
+    for (int li = top(); li >= 0; --li) {
+      const auto started = Clock::now();
+      if (li < top()) seedFromChild(li);
+      dilate(li);
       stats[size_t(li)].seconds += since(started);
-      uint32_t* parent = w.parent.get(pg.size() * 3);
-      final(li - 1, pg, pneed, parent);
-      started = Clock::now();
-      parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidUpsampleKernel(parent, pg, cur, last, g, tables.spacing, a.width, a.height, r0, r1);
-      }, kRowGrain);
+      peakBytes = std::max(peakBytes, storeBytes());
     }
-
-    // The colour buffer of the level (the correction kernel reads colours, not triples).
-    int16_t* curC = w.curC.get(g.size() * 4);
-    parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-      cpu::solidColorKernel(cur, curC, last, 0, g, tables, r0, r1);
-    }, kRowGrain);
-    uint32_t* next = w.next.get(g.size() * 3);
-    int16_t* nextC = w.nextC.get(g.size() * 4);
-    for (int t = 1; t <= steps; ++t) {
-      parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-        cpu::solidCorrectKernel(cur, curC, next, nextC, last, g, tables, o.interleave, t, r0, r1);
-      }, kRowGrain);
-      if (o.interleave == 1) {
-        // Jacobi: every voxel still needed (last >= t) was just written; the others are never
-        // read again.
-        std::swap(cur, next);
-        std::swap(curC, nextC);
-      } else {
-        parallelFor(0, g.rows(), threads, [&](int r0, int r1) {
-          cpu::solidCommitKernel(next, nextC, cur, curC, last, g, o.interleave, t, r0, r1);
-        }, kRowGrain);
-      }
+    for (int li = 0; li <= top(); ++li) {
+      if (masks[size_t(li)].size()) synthesizeLevel(li, emit);
+      masks[size_t(li)].release();
+      if (li > 0) finals[size_t(li) - 1].release();
     }
-    const int subpasses = o.subpasses();
-    int64_t corrections = 0;
-    for (size_t v = 0; v < g.size(); ++v) corrections += last[v] > 0 ? (last[v] + subpasses - 1) / subpasses : 0;
-
-    for (int z = 0; z < box.nz; ++z)
-      for (int y = 0; y < box.ny; ++y)
-        for (int x = 0; x < box.nx; ++x) {
-          const size_t v = (size_t(z) * box.ny + size_t(y)) * box.nx + size_t(x);
-          if (need[v]) std::copy_n(cur + indexIn(g, box.x0 + x, box.y0 + y, box.z0 + z) * 3, 3, out + v * 3);
-        }
-    SolidLevelStats& s = stats[size_t(li)];
-    s.voxels += voxels;
-    s.corrections += corrections;
-    s.seconds += since(started);
   }
 };
 
@@ -388,7 +602,21 @@ std::shared_ptr<const SolidLevelCache::Brick> SolidLevelCache::find(const Key& k
 }
 
 void SolidLevelCache::insert(const Key& key, std::shared_ptr<const Brick> brick) {
-  if (bricks_.count(key)) return;
+  const auto found = bricks_.find(key);
+  if (found != bricks_.end()) {
+    // Merge: the brick's values are final values, the same whoever computed them.
+    const Brick& old = *found->second.first;
+    const uint64_t added = brick->valid & ~old.valid;
+    if (added) {
+      auto merged = std::make_shared<Brick>(old);
+      for (int i = 0; i < 64; ++i)
+        if (added >> i & 1) std::copy_n(brick->values.data() + i * 3, 3, merged->values.data() + i * 3);
+      merged->valid |= added;
+      found->second.first = std::move(merged);
+    }
+    order_.splice(order_.begin(), order_, found->second.second);
+    return;
+  }
   const size_t size = brick->values.size() * sizeof(uint32_t);
   order_.push_front(key);
   bricks_[key] = {std::move(brick), order_.begin()};
@@ -408,36 +636,36 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
-  std::map<std::array<int64_t, 3>, std::vector<size_t>> tiles;
-  for (size_t i = 0; i < voxels.size(); ++i)
-    tiles[{cpu::floorShift(voxels[i].x, kTileShift), cpu::floorShift(voxels[i].y, kTileShift),
-           cpu::floorShift(voxels[i].z, kTileShift)}]
-        .push_back(i);
-  // Several tiles share coarse levels: without a cache of the caller's, one for this request.
-  SolidLevelCache local(SIZE_MAX);
-  Engine engine{a, o, cache ? cache : tiles.size() > 1 ? &local : nullptr, threads, result.levels};
-  Buffer<uint8_t> needBuffer;
-  Buffer<uint32_t> valueBuffer;
-  for (const auto& [tile, members] : tiles) {
-    int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
-    for (size_t i : members) {
-      const int64_t p[3] = {voxels[i].x, voxels[i].y, voxels[i].z};
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], p[k]);
-        hi[k] = std::max(hi[k], p[k]);
-      }
-    }
-    const VolumeGrid box{lo[0], lo[1], lo[2], int(hi[0] - lo[0] + 1), int(hi[1] - lo[1] + 1), int(hi[2] - lo[2] + 1)};
-    uint8_t* need = needBuffer.get(box.size());
-    std::fill_n(need, box.size(), uint8_t(0));
-    for (size_t i : members) need[indexIn(box, voxels[i].x, voxels[i].y, voxels[i].z)] = 1;
-    uint32_t* values = valueBuffer.get(box.size() * 3);
-    engine.final(engine.top(), box, need, values);
-    for (size_t i : members) {
-      const size_t v = indexIn(box, voxels[i].x, voxels[i].y, voxels[i].z) * 3;
-      result.triples[i] = {values[v], values[v + 1], values[v + 2]};
-    }
+  if (voxels.empty()) return result;
+  Engine engine{a, o, cache, threads, result.levels};
+  Mask& mask = engine.masks[size_t(engine.top())];
+  const auto T = int8_t(engine.steps());
+  // The requested voxels, grouped by finest chunk (counting sort).
+  std::vector<uint32_t> slotOf(voxels.size());
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    const Voxel& v = voxels[i];
+    const uint32_t slot = mask.get({v.x >> kChunkShift, v.y >> kChunkShift, v.z >> kChunkShift});
+    mask.at(slot)[localIndex(v.x, v.y, v.z)] = T;
+    slotOf[i] = slot;
   }
+  std::vector<size_t> first(mask.size() + 1, 0);
+  for (uint32_t s : slotOf) ++first[s + 1];
+  for (size_t s = 0; s < mask.size(); ++s) first[s + 1] += first[s];
+  std::vector<size_t> members(voxels.size());
+  {
+    std::vector<size_t> fill(first.begin(), first.end() - 1);
+    for (size_t i = 0; i < voxels.size(); ++i) members[fill[slotOf[i]]++] = i;
+  }
+  slotOf = {};
+  const size_t seeded = mask.size();
+  engine.run([&](uint32_t slot, const uint32_t* values) {
+    if (slot >= seeded) return;
+    for (size_t k = first[slot]; k < first[slot + 1]; ++k) {
+      const size_t i = members[k];
+      const uint32_t* v = values + localIndex(voxels[i].x, voxels[i].y, voxels[i].z) * 3;
+      result.triples[i] = {v[0], v[1], v[2]};
+    }
+  });
   return result;
 }
 
@@ -452,35 +680,39 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(size_t(box.count()));
-  const int64_t side = int64_t(1) << kTileShift;
-  auto tileStart = [&](int64_t p) { return cpu::floorShift(p, kTileShift) * side; };
-  const bool oneTile = tileStart(box.x) == tileStart(box.x + box.nx - 1) && tileStart(box.y) == tileStart(box.y + box.ny - 1) &&
-                       tileStart(box.z) == tileStart(box.z + box.nz - 1);
-  SolidLevelCache local(SIZE_MAX);
-  Engine engine{a, o, cache ? cache : oneTile ? nullptr : &local, threads, result.levels};
-  Buffer<uint8_t> needBuffer;
-  Buffer<uint32_t> valueBuffer;
-  for (int64_t tz = tileStart(box.z); tz < box.z + box.nz; tz += side)
-    for (int64_t ty = tileStart(box.y); ty < box.y + box.ny; ty += side)
-      for (int64_t tx = tileStart(box.x); tx < box.x + box.nx; tx += side) {
-        const int64_t x0 = std::max(tx, box.x), y0 = std::max(ty, box.y), z0 = std::max(tz, box.z);
-        const int64_t x1 = std::min(tx + side, box.x + box.nx), y1 = std::min(ty + side, box.y + box.ny),
-                      z1 = std::min(tz + side, box.z + box.nz);
-        const VolumeGrid sub{x0, y0, z0, int(x1 - x0), int(y1 - y0), int(z1 - z0)};
-        uint8_t* need = needBuffer.get(sub.size());
-        std::fill_n(need, sub.size(), uint8_t(1));
-        uint32_t* values = valueBuffer.get(sub.size() * 3);
-        engine.final(engine.top(), sub, need, values);
-        for (int z = 0; z < sub.nz; ++z)
-          for (int y = 0; y < sub.ny; ++y)
-            for (int x = 0; x < sub.nx; ++x) {
-              const size_t from = ((size_t(z) * sub.ny + size_t(y)) * sub.nx + size_t(x)) * 3;
-              const size_t to = (size_t(sub.z0 + z - box.z) * size_t(box.ny) + size_t(sub.y0 + y - box.y)) *
-                                    size_t(box.nx) +
-                                size_t(sub.x0 + x - box.x);
-              result.triples[to] = {values[from], values[from + 1], values[from + 2]};
-            }
+  Engine engine{a, o, cache, threads, result.levels};
+  Mask& mask = engine.masks[size_t(engine.top())];
+  const auto T = int8_t(engine.steps());
+  const int64_t lo[3] = {box.x, box.y, box.z}, hi[3] = {box.x + box.nx, box.y + box.ny, box.z + box.nz};
+  // The part of chunk `key` inside the box, in level coordinates: [b, e) per axis.
+  auto clip = [&](const ChunkKey& key, int64_t b[3], int64_t e[3]) {
+    for (int k = 0; k < 3; ++k) {
+      b[k] = std::max(lo[k], key[size_t(k)] * kChunk);
+      e[k] = std::min(hi[k], key[size_t(k)] * kChunk + kChunk);
+    }
+  };
+  for (int64_t cz = box.z >> kChunkShift; cz <= (hi[2] - 1) >> kChunkShift; ++cz)
+    for (int64_t cy = box.y >> kChunkShift; cy <= (hi[1] - 1) >> kChunkShift; ++cy)
+      for (int64_t cx = box.x >> kChunkShift; cx <= (hi[0] - 1) >> kChunkShift; ++cx) {
+        const ChunkKey key{cx, cy, cz};
+        int8_t* last = mask.at(mask.get(key));
+        int64_t b[3], e[3];
+        clip(key, b, e);
+        for (int64_t z = b[2]; z < e[2]; ++z)
+          for (int64_t y = b[1]; y < e[1]; ++y) std::fill_n(last + localIndex(b[0], y, z), e[0] - b[0], T);
       }
+  const size_t seeded = mask.size();
+  engine.run([&](uint32_t slot, const uint32_t* values) {
+    if (slot >= seeded) return;
+    int64_t b[3], e[3];
+    clip(mask.keys[slot], b, e);
+    for (int64_t z = b[2]; z < e[2]; ++z)
+      for (int64_t y = b[1]; y < e[1]; ++y)
+        for (int64_t x = b[0]; x < e[0]; ++x) {
+          const uint32_t* v = values + localIndex(x, y, z) * 3;
+          result.triples[size_t(((z - box.z) * box.ny + (y - box.y)) * box.nx + (x - box.x))] = {v[0], v[1], v[2]};
+        }
+  });
   return result;
 }
 

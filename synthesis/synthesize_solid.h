@@ -93,8 +93,9 @@ struct SolidSynthesisResult {
   int64_t voxelsSynthesized() const;     ///< sum over levels
 };
 
-/// Final values of coarse levels, kept across requests in 4^3 bricks, least recently used
-/// evicted beyond `maxBytes`. Owned by the caller; one cache serves one (analysis, options) pair
+/// Final values of coarse levels, kept across requests in 4^3 bricks (a brick may hold only the
+/// voxels a request computed: `valid`; later requests add to it), least recently used evicted
+/// beyond `maxBytes`. Owned by the caller; one cache serves one (analysis, options) pair
 /// at a time (it clears itself when they change). Not thread-safe: one request at a time.
 class SolidLevelCache {
 public:
@@ -109,6 +110,7 @@ public:
   using Key = std::tuple<int, int64_t, int64_t, int64_t>;  // level index, brick x, y, z
   struct Brick {
     std::vector<uint32_t> values;  // 4^3 * 3
+    uint64_t valid = ~uint64_t(0);  // bit (z * 4 + y) * 4 + x: that voxel's values are set
   };
   void bind(uint64_t owner);
   std::shared_ptr<const Brick> find(const Key& key);
