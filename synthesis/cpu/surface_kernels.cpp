@@ -133,14 +133,29 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
       const int dx = t.spacing * kDiagonalX[i], dy = t.spacing * kDiagonalY[i];
       // φ = J⁻¹Δ up to the positive factor 1/|det|: only its direction matters.
       const float fx = sgn * (j[3] * float(dx) - j[1] * float(dy)), fy = sgn * (j[0] * float(dy) - j[2] * float(dx));
-      const int d = det != 0.0f ? stepToward(fx, fy) : stepToward(float(dx), float(dy));
-      const int32_t n = nb[size_t(d)];
-      const uint32_t from = n >= 0 ? in[n] : current;
-      const int64_t ox = int64_t(dx) * kOne + (n >= 0 ? back[d].x : 0);
-      const int64_t oy = int64_t(dy) * kOne + (n >= 0 ? back[d].y : 0);
-      const uint32_t predicted = packCoord(add(coordU(from), reduce(ox, sw), sw), add(coordV(from), reduce(oy, sh), sh));
-      const int8_t* a = t.appearance + pixelIndex(predicted) * kAppearanceDims;
-      for (int c = 0; c < kAppearanceDims; ++c) target[i * kAppearanceDims + c] = a[c];
+      const float gx = det != 0.0f ? fx : float(dx), gy = det != 0.0f ? fy : float(dy);
+      // The closest step and the next closest (the neighbouring sector on φ's side): the
+      // neighborhood sample is the mean of both estimates ("we average between several
+      // estimations taken around p + δ for improved stability", LH06 §5).
+      const int d1 = stepToward(gx, gy);
+      const int d2 = (d1 + (float(kSurfaceStepX[d1]) * gy - float(kSurfaceStepY[d1]) * gx > 0 ? 1 : 7)) % 8;
+      const int8_t* estimates[2];
+      int count = 0;
+      for (int d : {d1, d2}) {
+        const int32_t n = nb[size_t(d)];
+        if (n < 0) continue;
+        const uint32_t predicted = packCoord(add(coordU(in[n]), reduce(int64_t(dx) * kOne + back[d].x, sw), sw),
+                                             add(coordV(in[n]), reduce(int64_t(dy) * kOne + back[d].y, sh), sh));
+        estimates[count++] = t.appearance + pixelIndex(predicted) * kAppearanceDims;
+      }
+      if (count == 0) {  // no neighbor on that side (an open boundary): from the site itself
+        const uint32_t predicted = packCoord(add(coordU(current), reduce(int64_t(dx) * kOne, sw), sw),
+                                             add(coordV(current), reduce(int64_t(dy) * kOne, sh), sh));
+        estimates[count++] = t.appearance + pixelIndex(predicted) * kAppearanceDims;
+      }
+      for (int c = 0; c < kAppearanceDims; ++c)
+        target[i * kAppearanceDims + c] =
+            count == 1 ? estimates[0][c] : int8_t((int(estimates[0][c]) + int(estimates[1][c])) >> 1);
     }
 
     uint32_t best = current;
