@@ -5,8 +5,9 @@
 // Based on:
 //   S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §5 (anisometric
 //     synthesis: a per-texel Jacobian J maps atlas offsets to exemplar offsets; a neighborhood is
-//     predicted from the immediate neighbors only, E[S[p+δ] − J(p)δ + Δ] with δ the unit step
-//     closest in direction to J⁻¹(p)Δ; candidates C_i(S[p+δ]) − J(p)δ) and §6 (synthesis in an
+//     predicted from the immediate neighbors only, E[S[p+δ] − J(p)δ + Δ] with δ the unit steps
+//     closest in direction to J⁻¹(p)Δ (two estimates averaged); candidates C_i(S[p+δ]) − J(p)δ)
+//     and §6 (synthesis in an
 //     atlas: every neighbor access goes through an indirection map, so neighborhoods continue
 //     across chart seams).
 //   S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3 (coordinate

@@ -29,10 +29,10 @@ void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t s
                          int64_t amplitude256, int exemplarWidth, int exemplarHeight, size_t begin, size_t end);
 
 /// One correction sub-pass over the sites of class `cls` = (x mod 2) + 2 (y mod 2); other sites
-/// are copied. The neighborhood of site s: for each diagonal Δ = h(±1, ±1), δ = the unit step
-/// closest in direction to J⁻¹Δ, and the sample E[S[n] − round(Jδ) + Δ] with n the neighbor of s
-/// in direction δ (S[s] + Δ when s has none). Candidates: C_i(S[n]) − round(Jδ) over the 8
-/// neighbors and C_i(S[s]); ties as in correctKernel.
+/// are copied. The neighborhood of site s: for each diagonal Δ = h(±1, ±1), the mean appearance
+/// of the estimates E[S[n] − round(Jδ) + Δ] through the two unit steps δ closest in direction to
+/// J⁻¹Δ, n the neighbor of s in direction δ (E[S[s] + Δ] when s has neither). Candidates:
+/// C_i(S[n]) − round(Jδ) over the 8 neighbors and C_i(S[s]); ties as in correctKernel.
 void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_t* out, const LevelTables& tables,
                           int cls, size_t begin, size_t end);
 
