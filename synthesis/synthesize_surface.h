@@ -7,9 +7,8 @@
 //     synthesis: a per-texel Jacobian J maps atlas offsets to exemplar offsets; a neighborhood is
 //     predicted from the immediate neighbors only, E[S[p+δ] − J(p)δ + Δ] with δ the unit steps
 //     closest in direction to J⁻¹(p)Δ (two estimates averaged); candidates C_i(S[p+δ]) − J(p)δ)
-//     and §6 (synthesis in an
-//     atlas: every neighbor access goes through an indirection map, so neighborhoods continue
-//     across chart seams).
+//     and §6 (synthesis in an atlas: every neighbor access goes through an indirection map, so
+//     neighborhoods continue across chart seams).
 //   S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3 (coordinate
 //     upsampling, hash jitter, correction sub-passes, k-coherence).
 // Notes: ../shared/notes/lefebvre-hdr-notes.md §8 and errata 3 and 4 (§20).
