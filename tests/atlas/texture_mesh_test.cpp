@@ -306,6 +306,50 @@ TEST(TextureMesh, CompanionMapsUseTheSameCoordinates) {
   EXPECT_TRUE(r.mesh.materials.at(0).metallicRoughnessTexture);
 }
 
+TEST(TextureMesh, NormalMapsTurnWithTheTexture) {
+  // A plane facing +z, the texture's "up" along +y: the exemplar's right is +x on the surface. A
+  // normal map tilted to the exemplar's right must tilt the shaded normal towards +x, whatever
+  // rotation the packer gave the chart, once decoded the way glTF viewers do (tangent along +u,
+  // bitangent along +v of the mesh's UVs).
+  const Exemplar ex(bundledExemplar("brick.png"));
+  Image tilted(ex.image.width, ex.image.height, 3);
+  const Eigen::Vector3f tilt = Eigen::Vector3f(0.5f, 0.0f, 1.0f).normalized();
+  for (int y = 0; y < tilted.height; ++y)
+    for (int x = 0; x < tilted.width; ++x)
+      for (int c = 0; c < 3; ++c) tilted.at(x, y, c) = 0.5f * tilt[c] + 0.5f;
+  TextureExemplar e = ex.view();
+  e.normal = &tilted;
+  TextureMeshOptions o = surfaceOptions(256, {0, 1, 0});
+  o.measure = false;
+  const geometry::Mesh plane = test::makePlane(8, 2.0f, 1.0f);
+  const TextureMeshResult r = textureMesh(plane, e, o);
+  ASSERT_TRUE(r.normal);
+  int checked = 0;
+  for (size_t s = 0; s < r.sites.size(); s += 53) {
+    const SurfaceSample& sample = r.atlas.fields.samples.at(r.sites.x[s], r.sites.y[s]);
+    const size_t t = sample.triangle;
+    const Eigen::Vector3f p0 = r.mesh.positions[r.mesh.triangles[t][0]], p1 = r.mesh.positions[r.mesh.triangles[t][1]],
+                          p2 = r.mesh.positions[r.mesh.triangles[t][2]];
+    const Eigen::Vector2f u0 = r.mesh.uvs[3 * t], u1 = r.mesh.uvs[3 * t + 1], u2 = r.mesh.uvs[3 * t + 2];
+    Eigen::Matrix2f duv;
+    duv << u1 - u0, u2 - u0;
+    Eigen::Matrix<float, 3, 2> dp;
+    dp << p1 - p0, p2 - p0;
+    const Eigen::Matrix<float, 3, 2> dPduv = dp * duv.inverse();  // columns: ∂P/∂u, ∂P/∂v
+    const Eigen::Vector3f n(0, 0, 1);
+    const Eigen::Vector3f tangent = (dPduv.col(0) - n * n.dot(dPduv.col(0))).normalized();
+    const float handedness = n.cross(tangent).dot(dPduv.col(1)) < 0 ? -1.0f : 1.0f;
+    const Eigen::Vector3f bitangent = handedness * n.cross(tangent);
+    const float* m = r.normal->pixel(r.sites.x[s], r.sites.y[s]);
+    const Eigen::Vector3f shaded =
+        ((2 * m[0] - 1) * tangent + (2 * m[1] - 1) * bitangent + (2 * m[2] - 1) * n).normalized();
+    EXPECT_NEAR(shaded.x(), tilt.x(), 0.05f) << "site " << s;
+    EXPECT_NEAR(shaded.y(), 0.0f, 0.05f) << "site " << s;
+    ++checked;
+  }
+  EXPECT_GT(checked, 50);
+}
+
 TEST(TextureMesh, RefusesBadInput) {
   const Exemplar ex(bundledExemplar("brick.png"));
   geometry::Mesh empty;
