@@ -19,8 +19,32 @@ const fs::path kSource(TEXFAB_SOURCE_DIR);
 const fs::path kModel = kSource / "models" / "meshes" / "elephant.off";
 const fs::path kExemplar = kSource / "models" / "exemplars" / "brick.png";
 
-int texture(const std::string& args, const fs::path& stderrFile = "/dev/null") {
-  return texfab::test::run(std::string(TEXFAB_CLI) + " texture " + args + " 2>'" + stderrFile.string() + "'");
+// A command line built word by word; paths are quoted for the shell. (Appending, not
+// "'" + std::string: GCC 12 warns falsely on that.)
+struct Args {
+  std::string text;
+  Args& operator<<(const char* word) {
+    if (!text.empty()) text += ' ';
+    text += word;
+    return *this;
+  }
+  Args& operator<<(const std::string& word) { return *this << word.c_str(); }
+  Args& operator<<(const fs::path& path) {
+    if (!text.empty()) text += ' ';
+    text += '\'';
+    text += path.string();
+    text += '\'';
+    return *this;
+  }
+};
+
+int texture(const Args& args, const fs::path& stderrFile = "/dev/null") {
+  Args command;
+  command << TEXFAB_CLI << "texture";
+  command.text += ' ';
+  command.text += args.text;
+  command << "2>" << stderrFile;
+  return texfab::test::run(command.text);
 }
 
 std::string readText(const fs::path& p) {
@@ -43,10 +67,13 @@ void expectValidGltf(const fs::path& file) {
 
 TEST(CliTexture, SurfaceModeOnTheBundledModel) {
   TempDir d("texfab-texture-cli");
-  const std::string common = "'" + kModel.string() + "' -e '" + kExemplar.string() + "' --resolution 512 --cache-dir '" +
-                             (d / "cache").string() + "'";
-  ASSERT_EQ(0, texture(common + " -o '" + (d / "out.glb").string() + "' --preview '" + (d / "view.png").string() +
-                       "' --preview-size 200 --report '" + (d / "r.json").string() + "' -q"));
+  const auto common = [&] {
+    Args a;
+    a << kModel << "-e" << kExemplar << "--resolution 512 --cache-dir" << d / "cache" << "-q";
+    return a;
+  };
+  ASSERT_EQ(0, texture(common() << "-o" << d / "out.glb" << "--preview" << d / "view.png" << "--preview-size 200"
+                                << "--report" << d / "r.json"));
   const texfab::geometry::Mesh out = texfab::geometry::readMesh(d / "out.glb");
   ASSERT_TRUE(out.hasUvs());
   ASSERT_EQ(out.materials.size(), 1u);
@@ -63,7 +90,7 @@ TEST(CliTexture, SurfaceModeOnTheBundledModel) {
     EXPECT_TRUE(r["timings"].contains(stage)) << stage;
 
   // Same seed, same file: the whole job is deterministic (also on one thread).
-  ASSERT_EQ(0, texture(common + " -o '" + (d / "again.glb").string() + "' --threads 1 -q"));
+  ASSERT_EQ(0, texture(common() << "-o" << d / "again.glb" << "--threads 1"));
   EXPECT_EQ(readText(d / "out.glb"), readText(d / "again.glb"));
 }
 
@@ -76,9 +103,8 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
     for (int x = 0; x < 32; ++x)
       for (int c = 0; c < small.channels; ++c) crop.at(x, y, c) = small.at(x, y, c);
   texfab::writeImage(crop, d / "small.png");
-  ASSERT_EQ(0, texture("'" + kModel.string() + "' -e '" + (d / "small.png").string() +
-                       "' --mode solid --resolution 256 --cache-dir '" + (d / "cache").string() + "' -o '" +
-                       (d / "solid.glb").string() + "' --report '" + (d / "solid.json").string() + "' -q"));
+  ASSERT_EQ(0, texture(Args() << kModel << "-e" << d / "small.png" << "--mode solid --resolution 256 -q --cache-dir"
+                              << d / "cache" << "-o" << d / "solid.glb" << "--report" << d / "solid.json"));
   expectValidGltf(d / "solid.glb");
   const nlohmann::json r = readJson(d / "solid.json");
   EXPECT_LE(r["measures"]["seams"]["ratio"].get<double>(), 1.1);
@@ -95,17 +121,20 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
     }
   texfab::writeImage(normal, d / "n.png");
   texfab::writeImage(rough, d / "r.png");
-  const std::string maps = " --maps 'normal=" + (d / "n.png").string() + ",roughness=" + (d / "r.png").string() +
-                           ",height=" + (d / "r.png").string() + "'";
-  ASSERT_EQ(0, texture("'" + kModel.string() + "' -e '" + (d / "small.png").string() + "' --resolution 256 -q" +
-                       maps + " --draco -o '" + (d / "maps.glb").string() + "'"));
+  const std::string maps = "normal=" + (d / "n.png").string() + ",roughness=" + (d / "r.png").string() +
+                           ",height=" + (d / "r.png").string();
+  const auto withMapsTo = [&](const fs::path& out) {
+    Args a;
+    a << kModel << "-e" << d / "small.png" << "--resolution 256 -q --maps" << fs::path(maps) << "-o" << out;
+    return a;
+  };
+  ASSERT_EQ(0, texture(withMapsTo(d / "maps.glb") << "--draco"));
   expectValidGltf(d / "maps.glb");
   EXPECT_TRUE(fs::exists(d / "maps_height.png"));
   const texfab::geometry::Mesh withMaps = texfab::geometry::readMesh(d / "maps.glb");
   EXPECT_TRUE(withMaps.materials.at(0).normalTexture);
   EXPECT_TRUE(withMaps.materials.at(0).metallicRoughnessTexture);
-  ASSERT_EQ(0, texture("'" + kModel.string() + "' -e '" + (d / "small.png").string() + "' --resolution 256 -q" +
-                       maps + " -o '" + (d / "maps.obj").string() + "'"));
+  ASSERT_EQ(0, texture(withMapsTo(d / "maps.obj")));
   EXPECT_TRUE(fs::exists(d / "maps.mtl"));
 }
 
@@ -113,27 +142,32 @@ TEST(CliTexture, BadInputFailsWithOneLineAndNoOutput) {
   TempDir d("texfab-texture-cli");
   std::ofstream(d / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
   std::ofstream(d / "notimage.png") << "not an image";
-  const std::string model = "'" + kModel.string() + "'", ex = " -e '" + kExemplar.string() + "'";
-  const std::string out = " -o '" + (d / "out.glb").string() + "' --resolution 256 -q";
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"no triangles", "'" + (d / "points.obj").string() + "'" + ex + out},
-      {"missing model", "'" + (d / "missing.obj").string() + "'" + ex + out},
-      {"missing exemplar", model + " -e '" + (d / "missing.png").string() + "'" + out},
-      {"corrupt exemplar", model + " -e '" + (d / "notimage.png").string() + "'" + out},
-      {"unknown mode", model + ex + out + " --mode cloud"},
-      {"scale and feature size", model + ex + out + " --scale 10 --feature-size 1"},
-      {"scale too large", model + ex + out + " --scale 1e9"},
-      {"normal map in solid mode", model + ex + out + " --mode solid --maps normal='" + kExemplar.string() + "'"},
-      {"bad output format", model + ex + " -o '" + (d / "out.xyz").string() + "'"},
-      {"unknown flag", model + ex + out + " --frobnicate"},
-      {"bad direction", model + ex + out + " --direction 0,0,0"},
+  // Model, exemplar and a valid output, then what is wrong.
+  const auto base = [&](const fs::path& model, const fs::path& exemplar) {
+    Args a;
+    a << model << "-e" << exemplar << "-o" << d / "out.glb" << "--resolution 256 -q --cache-dir" << d / "cache";
+    return a;
+  };
+  const std::vector<std::pair<std::string, Args>> cases = {
+      {"no triangles", base(d / "points.obj", kExemplar)},
+      {"missing model", base(d / "missing.obj", kExemplar)},
+      {"missing exemplar", base(kModel, d / "missing.png")},
+      {"corrupt exemplar", base(kModel, d / "notimage.png")},
+      {"unknown mode", base(kModel, kExemplar) << "--mode cloud"},
+      {"scale and feature size", base(kModel, kExemplar) << "--scale 10 --feature-size 1"},
+      {"scale too large", base(kModel, kExemplar) << "--scale 1e9"},
+      {"normal map in solid mode", base(kModel, kExemplar) << "--mode solid --maps" << fs::path("normal=" + kExemplar.string())},
+      {"bad output format", Args() << kModel << "-e" << kExemplar << "-o" << d / "out.xyz" << "-q"},
+      {"unknown flag", base(kModel, kExemplar) << "--frobnicate"},
+      {"bad direction", base(kModel, kExemplar) << "--direction 0,0,0"},
   };
   for (const auto& [name, args] : cases) {
     const fs::path err = d / "stderr.txt";
-    EXPECT_NE(0, texture(args + " --cache-dir '" + (d / "cache").string() + "'", err)) << name;
+    EXPECT_NE(0, texture(args, err)) << name;
     const std::string text = readText(err);
     EXPECT_FALSE(text.empty()) << name;
     EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << name << ": " << text;
+    EXPECT_EQ(text.rfind("texfab", 0), 0u) << name << ": " << text;  // texfab's message, not the shell's
     EXPECT_FALSE(fs::exists(d / "out.glb")) << name;
   }
 }
@@ -145,10 +179,9 @@ TEST(CliTexture, TexturesABrokenMeshAndSaysWhatWasRepaired) {
   std::ofstream(d / "broken.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 2 2 2\nv 0.5 0 0\n"
                                      "f 1 2 3\nf 2 1 4\nf 1 2 5\nf 1 7 2\nf 1 2 3\n";
   const fs::path err = d / "stderr.txt";
-  std::string args = "'";  // (GCC 12 warns falsely on "'" + std::string)
-  args += (d / "broken.obj").string() + "' -e '" + kExemplar.string() + "' --resolution 256 -o '" +
-          (d / "out.glb").string() + "' --cache-dir '" + (d / "cache").string() + "'";
-  ASSERT_EQ(0, texture(args, err));
+  ASSERT_EQ(0, texture(Args() << d / "broken.obj" << "-e" << kExemplar << "--resolution 256 -o" << d / "out.glb"
+                              << "--cache-dir" << d / "cache",
+                       err));
   const std::string text = readText(err);
   EXPECT_NE(text.find("non-manifold"), std::string::npos) << text;
   EXPECT_NE(text.find("degenerate"), std::string::npos) << text;
