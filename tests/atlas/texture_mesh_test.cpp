@@ -176,7 +176,8 @@ TEST(TextureMesh, SphereMeetsTheSeamScaleAndFidelityTargets) {
   EXPECT_GT(r.measures.fidelity->samples, 300u);
   const synthesis::SynthesisResult plane = synthesis::synthesize2d(ex.analysis, {0, 0, 256, 256}, {});
   const double fidelity2d = rotatedFidelity(synthesis::applyCoords(plane.coords, ex.image), ex.image, 1024);
-  EXPECT_LE(r.measures.fidelity->fidelity, 1.5 * fidelity2d) << "2-D: " << fidelity2d;
+  std::cout << "fidelity in exemplar space: surface " << r.measures.fidelity->fidelity << ", 2-D " << fidelity2d << "\n";
+  EXPECT_LE(r.measures.fidelity->fidelity, 1.5 * fidelity2d);
 }
 
 TEST(TextureMesh, ScaleFollowsTheRequestedScale) {
