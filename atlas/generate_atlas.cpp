@@ -39,6 +39,7 @@ void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const At
 GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options) {
   options.segment.validate();
   options.parameterize.validate();
+  options.cut.validate();
   options.pack.validate();
   GenerateAtlasResult r;
   auto clock = std::chrono::steady_clock::now();
@@ -54,6 +55,9 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
   lap("charts");
   r.report.parameterize = parameterizeCharts(mesh, r.adjacency, r.atlas, options.parameterize, options.threads);
   lap("parameterization");
+  r.report.cut = cutChartsForPacking(mesh, r.adjacency, r.atlas, options.pack.width, options.pack.height,
+                                     options.pack.gutter, options.cut, options.threads);
+  lap("cutting");
   r.report.pack = packCharts(mesh, r.atlas, options.pack, options.threads);
   lap("packing");
   r.fields = rasterizeAtlas(mesh, r.atlas, options.threads);

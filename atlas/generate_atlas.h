@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The whole atlas pipeline in one call, with a report: adjacency -> segmentCharts ->
-// parameterizeCharts -> packCharts -> rasterizeAtlas. Fields that need a tangent field
+// parameterizeCharts -> cutChartsForPacking -> packCharts -> rasterizeAtlas. Fields that need a tangent field
 // (Jacobians) and indirection maps are separate calls (compute_jacobians.h,
 // build_indirection_map.h) since not every user needs them.
 
 #include "atlas/atlas.h"
+#include "atlas/cut_charts.h"
 #include "atlas/mesh_adjacency.h"
 #include "atlas/pack_charts.h"
 #include "atlas/parameterize_charts.h"
@@ -21,6 +22,7 @@ namespace texfab::atlas {
 struct GenerateAtlasOptions {
   SegmentChartsOptions segment;
   ParameterizeChartsOptions parameterize;
+  CutChartsOptions cut; ///< cuts of wasteful charts before packing (Box Cutter)
   PackChartsOptions pack;
   int threads = 0; ///< 0 = all cores; the atlas does not depend on it
 };
@@ -39,6 +41,7 @@ struct AtlasReport {
   double texelsPerUnit = 0;
   SegmentChartsReport segment;
   ParameterizeChartsReport parameterize;
+  CutChartsReport cut;
   PackChartsReport pack;
   std::vector<std::pair<std::string, double>> seconds; ///< per stage
   std::vector<std::string> repairs; ///< what was wrong with the input and what was done

@@ -9,9 +9,12 @@
 //  - Hole filling as in bottom-left-fill raster packers (xatlas's brute-force placement, and
 //    E. Hopper, B. Turton, "An empirical investigation of meta-heuristic and heuristic algorithms
 //    for a 2D packing problem", EJOR 2001): before dropping a chart on the horizon, look for the
-//    lowest free spot in the space left under earlier charts (a one-bit-per-texel occupancy
-//    grid tested a span at a time, widest spans first; bounded effort).
-//  - Conservative rasterization by the separating axis theorem (triangle vs texel square).
+//    lowest free spot in the space left under earlier charts. Each atlas row keeps its free runs;
+//    at a row, the positions where a mask span fits are the long-enough runs of its row, shifted,
+//    and the chart fits where those of all its spans intersect (exact, spans taken from far-apart
+//    mask rows first so most rows are ruled out after a few; bounded effort).
+//  - Masks sample texel centers like the atlas rasterizer (rasterize_atlas.cpp) and are dilated by
+//    half the gutter: any two charts' texels end up more than `gutter` texels apart.
 #include "atlas/pack_charts.h"
 
 #include "render/error.h"
@@ -113,18 +116,22 @@ struct Mask {
   std::array<std::vector<std::vector<std::pair<int, int>>>, 4> spans;
 };
 
-/// Whether the triangle (a, b, c) (any orientation) intersects the square [x, x+1]×[y, y+1].
-bool triangleTouchesSquare(const Eigen::Vector2d t[3], double x, double y) {
+/// Whether the center (x + ½, y + ½) of texel (x, y) lies in the triangle t (any orientation),
+/// with a tolerance of `eps` texels: the atlas rasterizer samples texel centers, so these are
+/// exactly the texels the chart will own (the tolerance absorbs the float rounding of the atlas
+/// coordinates).
+constexpr double kCenterEps = 0.02; ///< texels
+
+bool triangleCoversCenter(const Eigen::Vector2d t[3], double x, double y, double eps) {
   const double area = cross2(t[0], t[1], t[2]);
   const double sign = area >= 0 ? 1 : -1;
+  const Eigen::Vector2d c(x + 0.5, y + 0.5);
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector2d& a = t[k];
     const Eigen::Vector2d& b = t[(k + 1) % 3];
-    // Inward normal of edge ab (for a counter-clockwise triangle in these coordinates).
-    const Eigen::Vector2d n = sign * Eigen::Vector2d(-(b.y() - a.y()), b.x() - a.x());
-    // The square's corner farthest along n must be on the inner side.
-    const double cx = n.x() >= 0 ? x + 1 : x, cy = n.y() >= 0 ? y + 1 : y;
-    if (n.x() * (cx - a.x()) + n.y() * (cy - a.y()) < 0) return false;
+    const double len = (b - a).norm();
+    if (len == 0) continue;
+    if (sign * cross2(a, b, c) < -eps * len) return false;
   }
   return true;
 }
@@ -144,80 +151,104 @@ Mask rasterizeMask(const PreparedChart& chart, double density, int pad) {
       x0 = std::min(x0, t[k].x()), x1 = std::max(x1, t[k].x());
       y0 = std::min(y0, t[k].y()), y1 = std::max(y1, t[k].y());
     }
-    const int ix0 = std::max(0, int(std::floor(x0)) - 1), ix1 = std::min(m.w - 1, int(std::floor(x1)) + 1);
-    const int iy0 = std::max(0, int(std::floor(y0)) - 1), iy1 = std::min(m.h - 1, int(std::floor(y1)) + 1);
+    // The texels whose centers the atlas rasterizer tests (rasterize_atlas.cpp): a triangle
+    // whose area rounds to zero claims all of them there, so it reserves them all here.
+    const int ix0 = std::max(0, int(std::floor(x0 - 0.5))), ix1 = std::min(m.w - 1, int(std::ceil(x1 - 0.5)));
+    const int iy0 = std::max(0, int(std::floor(y0 - 0.5))), iy1 = std::min(m.h - 1, int(std::ceil(y1 - 0.5)));
+    const bool sliver = std::abs(cross2(t[0], t[1], t[2])) < 1e-4;
     for (int y = iy0; y <= iy1; ++y)
       for (int x = ix0; x <= ix1; ++x) {
         uint8_t& c = cover[size_t(y) * size_t(m.w) + size_t(x)];
-        if (c) continue;
-        // Squares outside the triangle's bounding box never touch it; the SAT edge test does the rest.
-        if (x + 1 < x0 || x > x1 || y + 1 < y0 || y > y1) continue;
-        if (triangleTouchesSquare(t, x, y)) c = 1;
+        if (!c && (sliver || triangleCoversCenter(t, x, y, kCenterEps))) c = 1;
       }
   }
-  // Chebyshev dilation by pad (separable max filter).
+  // A chart too small to hold a texel center still reserves the texel of its first corner, so
+  // every chart has a place of its own.
+  if (std::find(cover.begin(), cover.end(), uint8_t(1)) == cover.end() && !chart.corners.empty()) {
+    const Eigen::Vector2d& c = chart.corners[0];
+    const int x = std::clamp(int(m.origin + c.x() * density), 0, m.w - 1);
+    const int y = std::clamp(int(m.origin + (chart.extent.y() - c.y()) * density), 0, m.h - 1);
+    cover[size_t(y) * size_t(m.w) + size_t(x)] = 1;
+  }
+  // Chebyshev dilation by pad (separable max filter, sliding counts: O(w·h)).
+  const size_t W_ = size_t(m.w);
   std::vector<uint8_t> tmp(cover.size(), 0);
   m.bits.assign(cover.size(), 0);
-  for (int y = 0; y < m.h; ++y)
-    for (int x = 0; x < m.w; ++x)
-      if (cover[size_t(y) * size_t(m.w) + size_t(x)])
-        for (int d = std::max(0, x - pad); d <= std::min(m.w - 1, x + pad); ++d) tmp[size_t(y) * size_t(m.w) + size_t(d)] = 1;
-  for (int y = 0; y < m.h; ++y)
-    for (int x = 0; x < m.w; ++x)
-      if (tmp[size_t(y) * size_t(m.w) + size_t(x)])
-        for (int d = std::max(0, y - pad); d <= std::min(m.h - 1, y + pad); ++d) m.bits[size_t(d) * size_t(m.w) + size_t(x)] = 1;
-  for (int q = 0; q < 4; ++q) {
-    const int rw = (q % 2) ? m.h : m.w;
-    m.width[size_t(q)] = rw;
-    m.top[size_t(q)].assign(size_t(rw), std::numeric_limits<int>::max());
-    m.bottom[size_t(q)].assign(size_t(rw), std::numeric_limits<int>::min());
-  }
-  for (int y = 0; y < m.h; ++y)
+  for (int y = 0; y < m.h; ++y) {
+    const uint8_t* in = cover.data() + size_t(y) * W_;
+    uint8_t* out = tmp.data() + size_t(y) * W_;
+    int count = 0; // covered texels in [x - pad, x + pad]
+    for (int x = 0; x < std::min(pad, m.w); ++x) count += in[x];
     for (int x = 0; x < m.w; ++x) {
-      if (!m.bits[size_t(y) * size_t(m.w) + size_t(x)]) continue;
-      int px = x, py = y, pw = m.w, ph = m.h;
-      for (int q = 0; q < 4; ++q) {
-        auto& top = m.top[size_t(q)];
-        auto& bottom = m.bottom[size_t(q)];
-        top[size_t(px)] = std::min(top[size_t(px)], py);
-        bottom[size_t(px)] = std::max(bottom[size_t(px)], py + 1);
-        // Quarter turn: (x, y) -> (h - 1 - y, x) in a w×h grid.
-        const int nx = ph - 1 - py, ny = px;
-        px = nx, py = ny;
-        std::swap(pw, ph);
+      if (x + pad < m.w) count += in[x + pad];
+      if (x - pad - 1 >= 0) count -= in[x - pad - 1];
+      out[x] = count > 0;
+    }
+  }
+  for (int x = 0; x < m.w; ++x) {
+    int count = 0;
+    for (int y = 0; y < std::min(pad, m.h); ++y) count += tmp[size_t(y) * W_ + size_t(x)];
+    for (int y = 0; y < m.h; ++y) {
+      if (y + pad < m.h) count += tmp[size_t(y + pad) * W_ + size_t(x)];
+      if (y - pad - 1 >= 0) count -= tmp[size_t(y - pad - 1) * W_ + size_t(x)];
+      m.bits[size_t(y) * W_ + size_t(x)] = count > 0;
+    }
+  }
+  // Runs of every row and every column; the four quarter turns are read off them:
+  //   q = 1: (x, y) -> (h-1-y, x); q = 2: (x, y) -> (w-1-x, h-1-y); q = 3: (x, y) -> (y, w-1-x).
+  using Runs = std::vector<std::pair<int, int>>;
+  std::vector<Runs> rowRuns(size_t(m.h)), colRuns(size_t(m.w));
+  for (int y = 0; y < m.h; ++y) {
+    const uint8_t* row = m.bits.data() + size_t(y) * W_;
+    for (int x = 0; x < m.w;) {
+      if (!row[x]) {
+        ++x;
+        continue;
       }
+      int e = x;
+      while (e < m.w && row[e]) ++e;
+      rowRuns[size_t(y)].push_back({x, e});
+      x = e;
+    }
+  }
+  std::vector<int> colStart(size_t(m.w), -1); // start of the open run of each column
+  for (int y = 0; y <= m.h; ++y)
+    for (int x = 0; x < m.w; ++x) {
+      const bool on = y < m.h && m.bits[size_t(y) * W_ + size_t(x)];
+      int& st = colStart[size_t(x)];
+      if (on && st < 0) st = y;
+      if (!on && st >= 0) colRuns[size_t(x)].push_back({st, y}), st = -1;
     }
   for (int q = 0; q < 4; ++q) {
-    int mb = 0;
-    for (int& b : m.bottom[size_t(q)]) mb = std::max(mb, b);
-    m.maxBottom[size_t(q)] = mb;
-    // Rotated grid, then its row spans.
     const int rw = (q % 2) ? m.h : m.w, rh = (q % 2) ? m.w : m.h;
-    std::vector<uint8_t> rot(size_t(rw) * size_t(rh), 0);
-    for (int y = 0; y < m.h; ++y)
-      for (int x = 0; x < m.w; ++x) {
-        if (!m.bits[size_t(y) * size_t(m.w) + size_t(x)]) continue;
-        int px = x, py = y, ph = m.h, pw = m.w;
-        for (int k = 0; k < q; ++k) {
-          const int nx = ph - 1 - py, ny = px;
-          px = nx, py = ny;
-          std::swap(pw, ph);
-        }
-        rot[size_t(py) * size_t(rw) + size_t(px)] = 1;
-      }
-    auto& rows = m.spans[size_t(q)];
-    rows.assign(size_t(rh), {});
-    for (int y = 0; y < rh; ++y)
-      for (int x = 0; x < rw;) {
-        if (!rot[size_t(y) * size_t(rw) + size_t(x)]) {
-          ++x;
-          continue;
-        }
-        int e = x;
-        while (e < rw && rot[size_t(y) * size_t(rw) + size_t(e)]) ++e;
-        rows[size_t(y)].push_back({x, e});
-        x = e;
-      }
+    m.width[size_t(q)] = rw;
+    // A column with no texel (a chart thinner than the dilation's reach there) constrains nothing.
+    m.top[size_t(q)].assign(size_t(rw), rh);
+    m.bottom[size_t(q)].assign(size_t(rw), std::numeric_limits<int>::min());
+    m.spans[size_t(q)].assign(size_t(rh), {});
+  }
+  for (int x = 0; x < m.w; ++x) {
+    const Runs& c = colRuns[size_t(x)];
+    if (c.empty()) continue;
+    m.top[0][size_t(x)] = c.front().first, m.bottom[0][size_t(x)] = c.back().second;
+    m.top[2][size_t(m.w - 1 - x)] = m.h - c.back().second, m.bottom[2][size_t(m.w - 1 - x)] = m.h - c.front().first;
+    auto& s1 = m.spans[1][size_t(x)];
+    for (auto it = c.rbegin(); it != c.rend(); ++it) s1.push_back({m.h - it->second, m.h - it->first});
+    m.spans[3][size_t(m.w - 1 - x)] = c;
+  }
+  for (int y = 0; y < m.h; ++y) {
+    const Runs& r = rowRuns[size_t(y)];
+    if (r.empty()) continue;
+    m.top[1][size_t(m.h - 1 - y)] = r.front().first, m.bottom[1][size_t(m.h - 1 - y)] = r.back().second;
+    m.top[3][size_t(y)] = m.w - r.back().second, m.bottom[3][size_t(y)] = m.w - r.front().first;
+    auto& s2 = m.spans[2][size_t(m.h - 1 - y)];
+    for (auto it = r.rbegin(); it != r.rend(); ++it) s2.push_back({m.w - it->second, m.w - it->first});
+    m.spans[0][size_t(y)] = r;
+  }
+  for (int q = 0; q < 4; ++q) {
+    int mb = 0;
+    for (int b : m.bottom[size_t(q)]) mb = std::max(mb, b);
+    m.maxBottom[size_t(q)] = mb;
   }
   return m;
 }
@@ -244,65 +275,116 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
   });
   std::vector<int> horizon(size_t(W), 0);
   int used = 0;
-  // Occupancy as one bit per texel, 64 texels a word (a 2048² atlas takes 512 KiB: the hole
-  // search stays in cache), and the longest free run of each row.
+  // Occupancy as one bit per texel, 64 texels a word, and per row the list of its free runs
+  // [start, end) (for hole filling) with the longest one's length.
   const size_t words = size_t(W + 63) / 64;
   std::vector<uint64_t> occ;
+  // Runs are kept in three lists by length (all, >= 16, >= 64 texels): a span only looks at the
+  // runs that can hold it.
+  constexpr std::array<int, 3> kRunClass{0, 16, 64};
+  using Runs = std::vector<std::pair<int32_t, int32_t>>;
+  std::vector<std::array<Runs, 3>> freeRuns;
   std::vector<int32_t> rowMaxRun;
   auto ensureRows = [&](int rows) {
     if (int(rowMaxRun.size()) < rows) {
       rowMaxRun.resize(size_t(rows), W);
+      freeRuns.resize(size_t(rows), {Runs{{0, W}}, Runs{{0, W}}, Runs{{0, W}}});
       occ.resize(size_t(rows) * words, 0);
     }
   };
-  // Last occupied texel of row y in [x0, x1), or -1 when all are free.
-  auto lastOccupied = [&](int y, int x0, int x1) {
+  auto refreshRuns = [&](int y) {
     const uint64_t* row = occ.data() + size_t(y) * words;
-    const int w0 = x0 >> 6, w1 = (x1 - 1) >> 6;
-    for (int w = w1; w >= w0; --w) {
-      uint64_t v = row[w];
-      if (w == w1 && ((x1 & 63) != 0)) v &= (uint64_t(1) << (x1 & 63)) - 1;
-      if (w == w0) v &= ~uint64_t(0) << (x0 & 63);
-      if (v) return w * 64 + 63 - std::countl_zero(v);
-    }
-    return -1;
-  };
-  auto longestFreeRun = [&](int y) {
-    const uint64_t* row = occ.data() + size_t(y) * words;
-    int32_t longest = 0, start = 0;
+    auto& lists = freeRuns[size_t(y)];
+    for (Runs& l : lists) l.clear();
+    int32_t longest = 0;
     int x = 0;
     while (x < W) {
-      const uint64_t v = row[size_t(x) >> 6] >> (x & 63);
-      const int left = std::min(64 - (x & 63), W - x);
-      const int zeros = std::min(v ? std::countr_zero(v) : 64, left);
-      if (zeros < left) { // an occupied texel at x + zeros
-        x += zeros;
-        longest = std::max(longest, x - start);
-        const int ones = std::min(std::countr_one(v >> zeros), left - zeros);
-        x += ones;
-        start = x;
-      } else {
+      // Skip occupied texels, then measure the free run.
+      while (x < W) {
+        const uint64_t v = ~row[size_t(x) >> 6] >> (x & 63); // free bits from x
+        const int left = std::min(64 - (x & 63), W - x);
+        const int ones = v ? std::countr_zero(v) : 64;
+        if (ones < left) {
+          x += ones;
+          break;
+        }
         x += left;
       }
+      if (x >= W) break;
+      const int start = x;
+      while (x < W) {
+        const uint64_t v = row[size_t(x) >> 6] >> (x & 63);
+        const int left = std::min(64 - (x & 63), W - x);
+        const int zeros = v ? std::countr_zero(v) : 64;
+        if (zeros < left) {
+          x += zeros;
+          break;
+        }
+        x += left;
+      }
+      for (size_t k = 0; k < kRunClass.size(); ++k)
+        if (x - start >= kRunClass[k]) lists[k].push_back({start, x});
+      longest = std::max(longest, x - start);
     }
-    return std::max(longest, W - start);
+    rowMaxRun[size_t(y)] = longest;
   };
   long long work = 0; // hole-search effort for the current chart (bounded: deterministic, not timed)
-  // A span (a, b) of mask row j; hole tests try the widest spans first, so a position that does
-  // not fit is usually rejected by the first test, with the longest skip.
+  // A span (a, b) of mask row j; hole tests take the widest spans first, which admit the fewest
+  // positions, so most rows are ruled out after a few spans.
   struct Span {
     int j, a, b;
   };
   std::vector<Span> spanOrder;
-  auto fits = [&](int X, int Y, int& skip) {
-    for (const Span& s : spanOrder) {
-      ++work;
-      const int last = lastOccupied(Y + s.j, X + s.a, X + s.b);
-      if (last < 0) continue;
-      skip = last + 1 - (X + s.a);
-      return false;
+  // Positions X (closed intervals) where every span tested so far lies in free texels.
+  std::vector<std::pair<int32_t, int32_t>> cand, next;
+  // The lowest X in [0, xMax] where the chart (spanOrder) fits at row Y, or -1. Exact: the
+  // allowed positions of each span are the free runs of its row long enough for it, shifted; the
+  // chart fits where all of them intersect.
+  auto fitRow = [&](int Y, int xMax) {
+    cand.assign(1, {0, xMax});
+    for (const Span& sp : spanOrder) {
+      const int len = sp.b - sp.a;
+      const auto& runs = freeRuns[size_t(Y + sp.j)][len >= kRunClass[2] ? 2 : len >= kRunClass[1] ? 1 : 0];
+      // Fast path: the span's whole window over the candidates is free (a few word tests).
+      {
+        const int x0 = cand.front().first + sp.a, x1 = cand.back().second + sp.b;
+        if (x1 - x0 <= 256) {
+          ++work;
+          const uint64_t* row = occ.data() + size_t(Y + sp.j) * words;
+          const int w0 = x0 >> 6, w1 = (x1 - 1) >> 6;
+          uint64_t any = 0;
+          for (int w = w0; w <= w1; ++w) {
+            uint64_t v = row[w];
+            if (w == w1 && (x1 & 63) != 0) v &= (uint64_t(1) << (x1 & 63)) - 1;
+            if (w == w0) v &= ~uint64_t(0) << (x0 & 63);
+            any |= v;
+          }
+          if (!any) continue;
+        }
+      }
+      next.clear();
+      size_t c = 0;
+      // Only the runs that can hold the span at a candidate position: e0 >= X + b for the first
+      // candidate X, s0 <= X + a for the last (binary search, then a walk).
+      const int firstEnd = cand.front().first + sp.b, lastStart = cand.back().second + sp.a;
+      auto r = std::partition_point(runs.begin(), runs.end(),
+                                    [&](const std::pair<int32_t, int32_t>& u) { return u.second < firstEnd; });
+      work += long(cand.size()) + 4;
+      for (; r != runs.end() && r->first <= lastStart; ++r) {
+        const auto [s0, e0] = *r;
+        ++work;
+        if (e0 - s0 < len) continue;
+        const int lo = s0 - sp.a, hi = e0 - sp.b; // allowed X for this run
+        while (c < cand.size() && cand[c].second < lo) ++c;
+        for (size_t d = c; d < cand.size() && cand[d].first <= hi; ++d) {
+          const int l = std::max(lo, cand[d].first), h = std::min(hi, cand[d].second);
+          if (l <= h) next.push_back({l, h});
+        }
+      }
+      cand.swap(next);
+      if (cand.empty()) return -1;
     }
-    return true;
+    return cand.front().first;
   };
   placements.assign(charts.size(), Placement{});
   std::vector<double> prefix(size_t(W) + 1, 0.0); // prefix sums of the horizon
@@ -359,29 +441,52 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
         for (size_t j = 0; j < rows.size(); ++j)
           for (const auto& [a, b] : rows[j]) need[j] = std::max(need[j], b - a);
         const int widest = int(std::max_element(need.begin(), need.end()) - need.begin());
+        const int minNeed = need.empty() ? 0 : *std::min_element(need.begin(), need.end());
         spanOrder.clear();
         for (size_t j = 0; j < rows.size(); ++j)
           for (const auto& [a, b] : rows[j]) spanOrder.push_back({int(j), a, b});
-        std::stable_sort(spanOrder.begin(), spanOrder.end(),
-                         [](const Span& u, const Span& v) { return u.b - u.a > v.b - v.a; });
+        // Order: the widest span, then the rows in bit-reversed order (middle, quarters, eighths,
+        // ...; each row's widest span first): far-apart rows meet different neighbours, so a
+        // position that does not fit is rejected after a few spans.
+        std::vector<int> rank(rows.size());
+        {
+          int bits = 0;
+          while ((size_t(1) << bits) < rows.size()) ++bits;
+          for (size_t j = 0; j < rows.size(); ++j) {
+            size_t r = 0;
+            for (int b = 0; b < bits; ++b)
+              if (j & (size_t(1) << b)) r |= size_t(1) << (bits - 1 - b);
+            rank[j] = int(r);
+          }
+        }
+        std::vector<int> rowOrder(rows.size());
+        std::iota(rowOrder.begin(), rowOrder.end(), 0);
+        std::sort(rowOrder.begin(), rowOrder.end(), [&](int u, int v) { return rank[size_t(u)] < rank[size_t(v)]; });
+        std::stable_sort(spanOrder.begin(), spanOrder.end(), [&](const Span& u, const Span& v) {
+          return rank[size_t(u.j)] != rank[size_t(v.j)] ? rank[size_t(u.j)] < rank[size_t(v.j)] : u.b - u.a > v.b - v.a;
+        });
+        const auto widestSpan = std::min_element(spanOrder.begin(), spanOrder.end(), [](const Span& u, const Span& v) {
+          return u.b - u.a > v.b - v.a;
+        });
+        if (widestSpan != spanOrder.end()) std::rotate(spanOrder.begin(), widestSpan, widestSpan + 1);
         for (int Y = 0; Y <= yLimit && (holeY < 0 || Y < holeY) && work < budget; ++Y) {
           // Rows too full for the chart's span there rule Y out at once (widest mask row first).
-          if (rowMaxRun[size_t(Y + widest)] < need[size_t(widest)]) continue;
-          bool blocked = false;
-          for (size_t j = 0; j < rows.size() && !blocked; ++j) blocked = rowMaxRun[size_t(Y) + j] < need[j];
+          // A row whose longest free run is shorter than every mask row blocks all the positions
+          // whose mask covers it: jump past it.
+          int blockedAt = -1;
+          if (rowMaxRun[size_t(Y + widest)] < need[size_t(widest)]) blockedAt = Y + widest;
+          for (size_t i = 0; i < rowOrder.size() && blockedAt < 0; ++i)
+            if (rowMaxRun[size_t(Y + rowOrder[i])] < need[size_t(rowOrder[i])]) blockedAt = Y + rowOrder[i];
           work += long(rows.size()) / 8 + 1;
-          if (blocked) continue;
-          bool found = false;
-          for (int X = 0; X + rw <= W && work < budget;) {
-            int skip = 1;
-            if (fits(X, Y, skip)) {
-              found = true;
-              if (holeY < 0 || Y < holeY || (Y == holeY && X < holeX)) holeY = Y, holeX = X, holeQ = q;
-              break;
-            }
-            X += std::max(1, skip);
+          if (blockedAt >= 0) {
+            if (rowMaxRun[size_t(blockedAt)] < minNeed) Y = blockedAt;
+            continue;
           }
-          if (found) break;
+          const int X = fitRow(Y, W - rw);
+          if (X >= 0) {
+            if (holeY < 0 || Y < holeY || (Y == holeY && X < holeX)) holeY = Y, holeX = X, holeQ = q;
+            break;
+          }
         }
       }
       if (holeY >= 0) bestY = holeY, bestX = holeX, bestQ = holeQ;
@@ -397,7 +502,7 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
         uint64_t* row = occ.data() + (size_t(Y) + j) * words;
         for (const auto& [a, b] : rows[j])
           for (int x = bestX + a; x < bestX + b; ++x) row[size_t(x) >> 6] |= uint64_t(1) << (x & 63);
-        rowMaxRun[size_t(Y) + j] = longestFreeRun(Y + int(j));
+        refreshRuns(Y + int(j));
       }
     }
     used = std::max(used, Y + m.maxBottom[size_t(bestQ)]);
@@ -454,12 +559,19 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   // Returns the best fitting density found (0 if none); keeps its pass when `keep`. The first
   // round packs start·first[0..1]; later rounds pack the prediction ·0.99 and ·0.997 (just under
   // it: the used height is not quite monotonic in the density).
-  auto search = [&](int w, int h, int p, double start, int rounds, std::array<double, 2> first, bool keep) {
+  // Rounds beyond `rounds` (up to `maxRounds`) are packed while the best pass fills less than
+  // 98.5 % of the height: the used height is not monotonic in the density, and a prediction that
+  // lands just over the height would otherwise waste the search.
+  auto search = [&](int w, int h, int p, double start, int rounds, int maxRounds, std::array<double, 2> first,
+                    bool keep) {
     double lo = 0, hi = std::numeric_limits<double>::infinity();
+    int loUsed = 0;
     std::array<Pass, 2> pair;
     std::array<double, 2> factors = first;
     double density = start;
-    for (int round = 0; round < rounds || (lo == 0 && round < rounds + 16); ++round) {
+    for (int round = 0; round < rounds || (lo == 0 && round < rounds + 16) ||
+                        (loUsed < 0.985 * h && round < maxRounds);
+         ++round) {
       packPair(w, p, density * factors[0], density * factors[1], pair);
       factors = {0.99, 0.997};
       // Prediction from the pass nearest to the target height.
@@ -467,7 +579,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
       for (Pass& r : pair) {
         if (r.used >= 0 && r.used <= h) {
           if (r.density > lo) {
-            lo = r.density;
+            lo = r.density, loUsed = r.used;
             if (keep)
               bestDensity = r.density, bestUsed = r.used, bestPlacements = std::move(r.placements),
               bestMasks = std::move(r.masks);
@@ -506,11 +618,12 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
     const int k = (W >= 512 && H >= 512) ? 4 : 1;
     const int rounds = std::max(1, options.maxPasses / 2);
     if (k > 1) {
-      const double coarse = search(W / k, H / k, (pad + k - 1) / k, start / k, std::min(rounds, 3), {0.97, 1.03}, false);
+      const double coarse = search(W / k, H / k, (pad + k - 1) / k, start / k, std::min(rounds, 3), std::min(rounds, 3),
+                                  {0.97, 1.03}, false);
       if (coarse > 0) start = coarse * k;
     }
-    if (k > 1) search(W, H, pad, start, 2, {1.0, 1.08}, true);
-    else search(W, H, pad, start, rounds, {0.97, 1.03}, true);
+    if (k > 1) search(W, H, pad, start, std::min(rounds, 2), rounds, {1.0, 1.08}, true);
+    else search(W, H, pad, start, rounds, rounds, {0.97, 1.03}, true);
     if (bestDensity == 0)
       throw Error("the " + std::to_string(atlas.charts.size()) + " charts cannot fit a " + std::to_string(W) + "x" +
                   std::to_string(H) + " atlas (each needs at least " + std::to_string(2 * pad + 3) +

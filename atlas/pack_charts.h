@@ -2,10 +2,11 @@
 #pragma once
 // Packing: every chart at one texel density (texels per model unit) into a W×H atlas with at
 // least `gutter` empty texels between any two charts; quarter-turn rotations allowed after each
-// chart is turned to its minimal-area bounding rectangle. Packing places conservative raster
-// masks of the charts (every texel a chart touches, dilated by half the gutter), so charts cannot
-// overlap by construction; the density is the largest found to fit (a few packing passes, two at
-// a time on two cores; the result does not depend on the thread count).
+// chart is turned to its minimal-area bounding rectangle. Packing places raster masks of the
+// charts: the texels whose centers a chart covers (exactly those the atlas rasterizer gives it),
+// dilated by half the gutter, so charts cannot overlap and gutters hold by construction; the
+// density is the largest found to fit (a few packing passes, two at a time on two cores; the
+// result does not depend on the thread count).
 // Re-runnable: call again with other options without redoing charts or parameterizations.
 
 #include "atlas/atlas.h"

@@ -102,6 +102,30 @@ TEST(AtlasOnCgalMeshes, SameAtlasWhateverTheThreadCount) {
   EXPECT_EQ(0, std::memcmp(ia.targets.data(), ib.targets.data(), ia.targets.size() * sizeof(ia.targets[0])));
 }
 
+TEST(AtlasOnCgalMeshes, CuttingChartsForPackingKeepsUvsAndDisks) {
+  // Box Cutter-style cuts (cut_charts.h): the pieces keep their chart-local UVs (so stretch and
+  // flips are unchanged), are disks, and the atlas packs tighter for a modest seam increase.
+  LOAD_OR_SKIP(mesh, "camel.off");
+  GenerateAtlasOptions whole = options(1024, 0);
+  whole.cut.enabled = false;
+  const GenerateAtlasResult a = generateAtlas(mesh, whole);
+  const GenerateAtlasResult b = generateAtlas(mesh, options(1024, 0));
+  EXPECT_EQ(a.report.cut.cuts, 0u);
+  EXPECT_GT(b.report.cut.cuts, 0u);
+  EXPECT_GT(b.report.charts, a.report.charts);
+  ASSERT_EQ(a.atlas.chartUvs.size(), b.atlas.chartUvs.size());
+  EXPECT_EQ(0, std::memcmp(a.atlas.chartUvs.data(), b.atlas.chartUvs.data(),
+                           a.atlas.chartUvs.size() * sizeof(Eigen::Vector2d)));
+  // Every piece lies inside one chart of the uncut atlas.
+  for (const Chart& c : b.atlas.charts)
+    for (uint32_t f : c.faces) EXPECT_EQ(a.atlas.faceChart[f], a.atlas.faceChart[c.faces.front()]);
+  checkAtlas(mesh, b, 4);
+  EXPECT_NEAR(b.report.l2Stretch, a.report.l2Stretch, 1e-3);
+  EXPECT_NEAR(b.report.seamLength - a.report.seamLength, b.report.cut.seamLengthAdded, 1e-6 * a.report.seamLength);
+  EXPECT_LT(b.report.seamLength, 1.25 * a.report.seamLength);
+  EXPECT_GT(b.report.utilization, a.report.utilization);
+}
+
 TEST(AtlasOnCgalMeshes, PackingIsRerunnableWithOtherOptions) {
   LOAD_OR_SKIP(mesh, "cow.off");
   GenerateAtlasResult r = generateAtlas(mesh, options(512, 0));
