@@ -33,8 +33,6 @@ constexpr uint32_t kCacheMagic = 0x41584654;  // "TFXA"
 constexpr uint32_t kCacheVersion = 2;         // bump whenever the analysis changes
 constexpr int kPatchRadius = 2;               // 5x5 appearance neighborhoods
 constexpr float kPatchSigma = 1.5f;           // Gaussian weighting of the 5x5 samples
-constexpr int kDiagonalX[kNeighborhoodSamples] = {-1, 1, -1, 1};  // as in cpu/synthesis_kernels.cpp
-constexpr int kDiagonalY[kNeighborhoodSamples] = {-1, -1, 1, 1};
 
 int wrap(int a, int m) {
   const int r = a % m;

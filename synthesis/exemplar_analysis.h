@@ -34,6 +34,9 @@ inline constexpr int kAppearanceDims = 8;
 /// Runtime neighborhood: the appearance vectors at the 4 diagonal neighbors.
 inline constexpr int kNeighborhoodSamples = 4;
 inline constexpr int kNeighborhoodDims = kAppearanceDims * kNeighborhoodSamples;
+/// The order of the runtime neighborhood's samples: u + spacing * (kDiagonalX[i], kDiagonalY[i]).
+inline constexpr int kDiagonalX[kNeighborhoodSamples] = {-1, 1, -1, 1};
+inline constexpr int kDiagonalY[kNeighborhoodSamples] = {-1, -1, 1, 1};
 /// Smallest exemplar side: the 5x5 appearance neighborhood needs at least this many pixels.
 inline constexpr int kMinExemplarSide = 5;
 

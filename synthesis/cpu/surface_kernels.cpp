@@ -14,10 +14,6 @@ namespace texfab::synthesis::cpu {
 
 namespace {
 
-// Must match exemplar_analysis.cpp and synthesis_kernels.cpp.
-constexpr int kDiagonalX[kNeighborhoodSamples] = {-1, 1, -1, 1};
-constexpr int kDiagonalY[kNeighborhoodSamples] = {-1, -1, 1, 1};
-
 // Neighbor index of step (dx, dy), indexed [dy + 1][dx + 1]; -1 for (0, 0).
 constexpr int kStepIndex[3][3] = {{5, 6, 7}, {4, -1, 0}, {3, 2, 1}};
 
@@ -40,15 +36,6 @@ inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
 // c + (dx, dy) subpixels, wrapped to the exemplar (sizes in subpixels).
 inline uint32_t shifted(uint32_t c, int dx, int dy, int64_t w, int64_t h) {
   return packCoord(uint32_t(floorMod(int64_t(coordU(c)) + dx, w)), uint32_t(floorMod(int64_t(coordV(c)) + dy, h)));
-}
-
-inline int32_t squaredDistance(const int8_t* a, const int8_t* b) {
-  int32_t sum = 0;
-  for (int i = 0; i < kNeighborhoodDims; ++i) {
-    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
-    sum += d * d;
-  }
-  return sum;
 }
 
 // The unit step (one of 8) closest in direction to (fx, fy): the rounding of errata 3 done on the
@@ -159,7 +146,7 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
     }
 
     uint32_t best = current;
-    int32_t bestDistance = squaredDistance(target, t.neighborhood + pixelIndex(current) * kNeighborhoodDims);
+    int32_t bestDistance = neighborhoodDistance(target, t.neighborhood + pixelIndex(current) * kNeighborhoodDims);
     for (int d = 0; d <= 8; ++d) {
       const int32_t n = d < 8 ? nb[size_t(d)] : int32_t(s);
       if (n < 0) continue;
@@ -174,7 +161,7 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
       for (int i = 0; i < t.k; ++i) {
         const uint32_t c = packCoord(add(coordU(cand[i]) * kOne, ox, sw), add(coordV(cand[i]) * kOne, oy, sh));
         if (c == best) continue;
-        const int32_t dist = squaredDistance(target, t.neighborhood + pixelIndex(c) * kNeighborhoodDims);
+        const int32_t dist = neighborhoodDistance(target, t.neighborhood + pixelIndex(c) * kNeighborhoodDims);
         if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {
           bestDistance = dist;
           best = c;

@@ -13,22 +13,9 @@ namespace texfab::synthesis::cpu {
 
 namespace {
 
-// Order of the diagonal samples in a runtime neighborhood; must match exemplar_analysis.cpp.
-constexpr int kDiagonalX[kNeighborhoodSamples] = {-1, 1, -1, 1};
-constexpr int kDiagonalY[kNeighborhoodSamples] = {-1, -1, 1, 1};
-
 inline uint32_t wrapAdd(uint32_t a, uint32_t b, uint32_t m) {  // (a + b) mod m for a, b < m
   const uint32_t s = a + b;
   return s >= m ? s - m : s;
-}
-
-inline int32_t squaredDistance(const int8_t* a, const int8_t* b) {
-  int32_t sum = 0;
-  for (int i = 0; i < kNeighborhoodDims; ++i) {
-    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
-    sum += d * d;
-  }
-  return sum;
 }
 
 } // namespace
@@ -118,7 +105,7 @@ void correctKernel(const uint32_t* in, uint32_t* out, const LevelGrid& grid, con
       const uint32_t current = row[x];
       uint32_t best = current;
       int32_t bestDistance =
-          squaredDistance(target, t.neighborhood + (size_t(coordV(current)) * ew + coordU(current)) * kNeighborhoodDims);
+          neighborhoodDistance(target, t.neighborhood + (size_t(coordV(current)) * ew + coordU(current)) * kNeighborhoodDims);
 
       for (int dy = -1; dy <= 1; ++dy) {
         const uint32_t* nrow = in + size_t(y + dy) * w;
@@ -129,7 +116,7 @@ void correctKernel(const uint32_t* in, uint32_t* out, const LevelGrid& grid, con
             const uint32_t c = packCoord(wrapAdd(coordU(cand[i]), backX[dx + 1], ew),
                                          wrapAdd(coordV(cand[i]), backY[dy + 1], eh));
             if (c == best) continue;
-            const int32_t d = squaredDistance(
+            const int32_t d = neighborhoodDistance(
                 target, t.neighborhood + (size_t(coordV(c)) * ew + coordU(c)) * kNeighborhoodDims);
             // Order-independent minimum of (distance, c != current, c).
             if (d < bestDistance || (d == bestDistance && best != current && c < best)) {

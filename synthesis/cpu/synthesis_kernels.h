@@ -9,6 +9,8 @@
 // rectangle of one level of the infinite plane; texel (x, y) of the buffer is level position
 // (grid.x0 + x, grid.y0 + y).
 
+#include "synthesis/exemplar_analysis.h"
+
 #include <cstdint>
 
 namespace texfab::synthesis::cpu {
@@ -30,6 +32,17 @@ struct LevelTables {
   const int8_t* neighborhood = nullptr; ///< exemplarWidth*exemplarHeight*kNeighborhoodDims
   const uint32_t* candidates = nullptr; ///< exemplarWidth*exemplarHeight*k packed coordinates
 };
+
+/// Integer SSD of two runtime neighborhoods (kNeighborhoodDims int8 values each): the distance
+/// every backend computes identically.
+inline int32_t neighborhoodDistance(const int8_t* a, const int8_t* b) {
+  int32_t sum = 0;
+  for (int i = 0; i < kNeighborhoodDims; ++i) {
+    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
+    sum += d * d;
+  }
+  return sum;
+}
 
 /// a mod m in [0, m), for any sign of a.
 constexpr int64_t floorMod(int64_t a, int64_t m) {
