@@ -559,6 +559,8 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   // Returns the best fitting density found (0 if none); keeps its pass when `keep`. The first
   // round packs start·first[0..1]; later rounds pack the prediction ·0.99 and ·0.997 (just under
   // it: the used height is not quite monotonic in the density).
+  int coarseUsed = 0;         // used height and mask texels of the best pass of the last search
+  size_t coarseMaskTexels = 0;
   // Rounds beyond `rounds` (up to `maxRounds`) are packed while the best pass fills less than
   // 98.5 % of the height: the used height is not monotonic in the density, and a prediction that
   // lands just over the height would otherwise waste the search.
@@ -580,6 +582,9 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
         if (r.used >= 0 && r.used <= h) {
           if (r.density > lo) {
             lo = r.density, loUsed = r.used;
+            coarseUsed = r.used, coarseMaskTexels = 0;
+            for (const Mask& m : r.masks)
+              for (uint8_t b : m.bits) coarseMaskTexels += b;
             if (keep)
               bestDensity = r.density, bestUsed = r.used, bestPlacements = std::move(r.placements),
               bestMasks = std::move(r.masks);
@@ -613,16 +618,36 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   } else {
     double start = std::sqrt(0.72 * double(W) * double(H) / totalArea);
     // A coarse search on a 4× smaller grid (16× cheaper) finds the density to within a few
-    // percent (its masks are fatter: the fine density is 0-10 % higher); two rounds of
-    // full-resolution pairs finish it.
+    // percent (its masks are fatter: the fine density is 0-10 % higher); calibrated by the mask
+    // areas, one or more rounds of full-resolution pairs finish it (until 98.5 % of the height).
     const int k = (W >= 512 && H >= 512) ? 4 : 1;
     const int rounds = std::max(1, options.maxPasses / 2);
+    bool calibrated = false;
     if (k > 1) {
       const double coarse = search(W / k, H / k, (pad + k - 1) / k, start / k, std::min(rounds, 3), std::min(rounds, 3),
                                   {0.97, 1.03}, false);
-      if (coarse > 0) start = coarse * k;
+      if (coarse > 0) {
+        start = coarse * k;
+        // Calibration: the fine masks at k times the coarse density are thinner than k² coarse
+        // masks (gutters and texel rounding are relatively smaller). At the same packing
+        // efficiency the fine pass would use k·used·ρ rows (ρ: the ratio of the mask areas);
+        // the area grows like the square of the density, which gives the fine density to try.
+        std::vector<size_t> fine(prepared.size(), 0);
+        parallelFor(0, int(prepared.size()), threads, [&](int b, int e) {
+          for (int i = b; i < e; ++i)
+            for (uint8_t bit : rasterizeMask(prepared[size_t(i)], start, pad).bits) fine[size_t(i)] += bit;
+        });
+        const double fineTexels = double(std::accumulate(fine.begin(), fine.end(), size_t(0)));
+        if (coarseMaskTexels > 0 && coarseUsed > 0 && fineTexels > 0) {
+          const double rho = fineTexels / (double(k) * double(k) * double(coarseMaskTexels));
+          const double rows = double(k) * double(coarseUsed) * rho;
+          start *= std::clamp(std::sqrt(double(H) / rows), 1.0, 1.15);
+          calibrated = true;
+        }
+      }
     }
-    if (k > 1) search(W, H, pad, start, std::min(rounds, 2), rounds, {1.0, 1.08}, true);
+    if (calibrated) search(W, H, pad, start, 1, rounds, {0.99, 1.0}, true);
+    else if (k > 1) search(W, H, pad, start, std::min(rounds, 2), rounds, {1.0, 1.08}, true);
     else search(W, H, pad, start, rounds, rounds, {0.97, 1.03}, true);
     if (bestDensity == 0)
       throw Error("the " + std::to_string(atlas.charts.size()) + " charts cannot fit a " + std::to_string(W) + "x" +
