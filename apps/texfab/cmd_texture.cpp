@@ -91,6 +91,9 @@ void runTexture(const TextureArgs& args) {
   options.atlas.pack.width = width;
   options.atlas.pack.height = height;
   options.atlas.pack.gutter = args.gutter;
+  if (args.gutter < 2)
+    throw Error("--gutter: at least 2 texels are needed (texture filtering reads across chart borders), got " +
+                std::to_string(args.gutter));
   try {
     options.atlas.pack.validate();
   } catch (const Error& e) {
