@@ -160,6 +160,8 @@ TEST(CliTexture, BadInputFailsWithOneLineAndNoOutput) {
       {"bad output format", Args() << kModel << "-e" << kExemplar << "-o" << d / "out.xyz" << "-q"},
       {"unknown flag", base(kModel, kExemplar) << "--frobnicate"},
       {"bad direction", base(kModel, kExemplar) << "--direction 0,0,0"},
+      {"gutter too small", base(kModel, kExemplar) << "--gutter 1"},
+      {"atlas larger than memory", base(kModel, kExemplar) << "--resolution 16384"},
   };
   for (const auto& [name, args] : cases) {
     const fs::path err = d / "stderr.txt";
