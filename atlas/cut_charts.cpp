@@ -9,6 +9,7 @@
 #include "atlas/cut_charts.h"
 
 #include "atlas/chart_mesh.h"
+#include "atlas/convex_hull.h"
 #include "atlas/measure_stretch.h"
 #include "render/error.h"
 #include "render/parallel.h"
@@ -29,34 +30,18 @@ void CutChartsOptions::validate() const {
 
 namespace {
 
-double cross2(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-}
-
 struct Rect {
   double area = std::numeric_limits<double>::infinity(); ///< padded: (w + 2g)(h + 2g)
   Eigen::Vector2d dir{1, 0};                              ///< long side direction
   double length = 0, width = 0;                           ///< unpadded sides (long, short)
 };
 
-bool lexLess(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); }
-
 /// Minimal-area padded rectangle of a point set sorted by lexLess (convex hull by Andrew's
 /// monotone chain, then every hull edge direction).
 Rect minimalRectangle(const std::vector<Eigen::Vector2d>& pts, double g) {
   Rect best;
   if (pts.empty()) return best;
-  std::vector<Eigen::Vector2d> hull(2 * pts.size());
-  size_t k = 0;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
-    hull[k++] = pts[i];
-  }
-  for (size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross2(hull[k - 2], hull[k - 1], pts[i - 1]) <= 0) --k;
-    hull[k++] = pts[i - 1];
-  }
-  hull.resize(k > 1 ? k - 1 : k);
+  const std::vector<Eigen::Vector2d> hull = convexHullOfSorted(pts);
   for (size_t i = 0; i < hull.size(); ++i) {
     Eigen::Vector2d d = hull[(i + 1) % hull.size()] - hull[i];
     if (!(d.norm() > 0)) continue;

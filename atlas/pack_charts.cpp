@@ -17,6 +17,7 @@
 //    half the gutter: any two charts' texels end up more than `gutter` texels apart.
 #include "atlas/pack_charts.h"
 
+#include "atlas/convex_hull.h"
 #include "render/error.h"
 #include "render/parallel.h"
 
@@ -57,22 +58,7 @@ PreparedChart prepareChart(const Atlas& atlas, const Chart& chart) {
   std::vector<Eigen::Vector2d> pts;
   for (uint32_t f : chart.faces)
     for (int k = 0; k < 3; ++k) pts.push_back(atlas.chartUvs[3 * size_t(f) + size_t(k)]);
-  // Convex hull (Andrew's monotone chain).
-  std::vector<Eigen::Vector2d> s = pts;
-  std::sort(s.begin(), s.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  std::vector<Eigen::Vector2d> hull(2 * s.size());
-  size_t k = 0;
-  for (size_t i = 0; i < s.size(); ++i) {
-    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], s[i]) <= 0) --k;
-    hull[k++] = s[i];
-  }
-  for (size_t i = s.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross2(hull[k - 2], hull[k - 1], s[i - 1]) <= 0) --k;
-    hull[k++] = s[i - 1];
-  }
-  hull.resize(k > 1 ? k - 1 : k);
+  const std::vector<Eigen::Vector2d> hull = convexHull(pts);
   // Minimal-area rectangle over hull edge directions.
   double bestArea = std::numeric_limits<double>::infinity();
   Eigen::Vector2d bestDir(1, 0);
