@@ -44,4 +44,22 @@ inline std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> poin
   return convexHullOfSorted(points);
 }
 
+/// Calls fn(d, n, along, across) for each hull edge direction d (unit), its normal n, and the
+/// hull's extents along d and along n: the candidate rectangles of a minimal-area bounding
+/// rectangle (one of them has a side on a hull edge).
+template <class Fn> void forEachHullEdgeRectangle(const std::vector<Eigen::Vector2d>& hull, Fn&& fn) {
+  for (size_t i = 0; i < hull.size(); ++i) {
+    Eigen::Vector2d d = hull[(i + 1) % hull.size()] - hull[i];
+    if (!(d.norm() > 0)) continue;
+    d.normalize();
+    const Eigen::Vector2d n(-d.y(), d.x());
+    double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
+    for (const auto& h : hull) {
+      a0 = std::min(a0, h.dot(d)), a1 = std::max(a1, h.dot(d));
+      b0 = std::min(b0, h.dot(n)), b1 = std::max(b1, h.dot(n));
+    }
+    fn(d, n, a1 - a0, b1 - b0);
+  }
+}
+
 } // namespace texfab::atlas

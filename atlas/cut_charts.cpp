@@ -42,25 +42,15 @@ Rect minimalRectangle(const std::vector<Eigen::Vector2d>& pts, double g) {
   Rect best;
   if (pts.empty()) return best;
   const std::vector<Eigen::Vector2d> hull = convexHullOfSorted(pts);
-  for (size_t i = 0; i < hull.size(); ++i) {
-    Eigen::Vector2d d = hull[(i + 1) % hull.size()] - hull[i];
-    if (!(d.norm() > 0)) continue;
-    d.normalize();
-    const Eigen::Vector2d n(-d.y(), d.x());
-    double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
-    for (const auto& h : hull) {
-      a0 = std::min(a0, h.dot(d)), a1 = std::max(a1, h.dot(d));
-      b0 = std::min(b0, h.dot(n)), b1 = std::max(b1, h.dot(n));
-    }
-    const double area = (a1 - a0 + 2 * g) * (b1 - b0 + 2 * g);
+  forEachHullEdgeRectangle(hull, [&](const Eigen::Vector2d& d, const Eigen::Vector2d& n, double along, double across) {
+    const double area = (along + 2 * g) * (across + 2 * g);
     if (area < best.area * (1 - 1e-12)) {
       best.area = area;
-      const bool longAlongD = a1 - a0 >= b1 - b0;
-      best.dir = longAlongD ? d : n;
-      best.length = std::max(a1 - a0, b1 - b0);
-      best.width = std::min(a1 - a0, b1 - b0);
+      best.dir = along >= across ? d : n;
+      best.length = std::max(along, across);
+      best.width = std::min(along, across);
     }
-  }
+  });
   if (hull.size() < 2) best.area = 4 * g * g, best.length = best.width = 0;
   return best;
 }

@@ -62,22 +62,13 @@ PreparedChart prepareChart(const Atlas& atlas, const Chart& chart) {
   // Minimal-area rectangle over hull edge directions.
   double bestArea = std::numeric_limits<double>::infinity();
   Eigen::Vector2d bestDir(1, 0);
-  for (size_t i = 0; i < hull.size(); ++i) {
-    Eigen::Vector2d d = hull[(i + 1) % hull.size()] - hull[i];
-    if (d.norm() <= 0) continue;
-    d.normalize();
-    const Eigen::Vector2d n(-d.y(), d.x());
-    double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
-    for (const auto& h : hull) {
-      a0 = std::min(a0, h.dot(d)), a1 = std::max(a1, h.dot(d));
-      b0 = std::min(b0, h.dot(n)), b1 = std::max(b1, h.dot(n));
-    }
-    const double area = (a1 - a0) * (b1 - b0);
+  forEachHullEdgeRectangle(hull, [&](const Eigen::Vector2d& d, const Eigen::Vector2d& n, double along, double across) {
+    const double area = along * across;
     if (area < bestArea * (1 - 1e-9)) {
       bestArea = area;
-      bestDir = (a1 - a0 >= b1 - b0) ? d : n; // long side along x
+      bestDir = along >= across ? d : n; // long side along x
     }
-  }
+  });
   const Eigen::Vector2d n(-bestDir.y(), bestDir.x());
   p.corners.resize(pts.size());
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
