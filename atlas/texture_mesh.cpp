@@ -165,6 +165,15 @@ geometry::Mesh texturedMesh(const geometry::Mesh& mesh, const Atlas& atlas, cons
 
 } // namespace
 
+void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
+  if (!ex.color) throw Error("texture: no exemplar image");
+  if (mode == TextureMode::Solid && ex.normal)
+    throw Error("a normal map needs surface mode: a solid texture has no tangent frame");
+  requireSize(ex.normal, *ex.color, "normal");
+  requireSize(ex.roughness, *ex.color, "roughness");
+  requireSize(ex.height, *ex.color, "height");
+}
+
 void fillGutters(Image& image, std::vector<uint8_t> filled, int rounds, int threads) {
   const int w = image.width, h = image.height, c = image.channels;
   std::vector<uint8_t> next = filled;
@@ -210,15 +219,11 @@ void fillGutters(Image& image, std::vector<uint8_t> filled, int rounds, int thre
 
 TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o,
                               const StageCallback& onStage) {
-  if (!ex.color) throw Error("texture: no exemplar image");
+  checkCompanionMaps(ex, o.mode);  // and that there is an exemplar
   const Image& exemplar = *ex.color;
   const bool surface = o.mode == TextureMode::Surface;
   if (surface && !ex.analysis) throw Error("texture: surface mode needs the exemplar analysis");
   if (!surface && !ex.solidAnalysis) throw Error("texture: solid mode needs the solid exemplar analysis");
-  if (!surface && ex.normal) throw Error("a normal map needs surface mode: a solid texture has no tangent frame");
-  requireSize(ex.normal, exemplar, "normal");
-  requireSize(ex.roughness, exemplar, "roughness");
-  requireSize(ex.height, exemplar, "height");
   if (mesh.triangleCount() == 0) throw Error("the model has no triangles");
   if (!(o.textureScale >= 0) || !std::isfinite(o.textureScale)) throw Error("texture scale must be >= 0");
   o.surface.validate();

@@ -76,6 +76,10 @@ struct TextureMeshResult {
   std::vector<std::string> warnings;        ///< e.g. a scale at which features are smaller than a texel
 };
 
+/// Throws texfab::Error unless the companion maps suit the mode (no normal map in solid mode) and
+/// have the exemplar's size. textureMesh() checks this too; callers may check before the analysis.
+void checkCompanionMaps(const TextureExemplar& exemplar, TextureMode mode);
+
 /// Called as each stage ends: its name, seconds, and a one-line detail.
 using StageCallback = std::function<void(const std::string& stage, double seconds, const std::string& detail)>;
 

@@ -131,12 +131,12 @@ void runTexture(const TextureArgs& args) {
   const Image exemplar = readImage(args.exemplar);
   synthesis::validateExemplarSize(exemplar);
   const CompanionMaps maps = readCompanionMaps(args.maps);
-  if (maps.normal && options.mode == atlas::TextureMode::Solid)
-    throw Error("--maps: a normal map needs surface mode (a solid texture has no tangent frame)");
-  for (const std::optional<Image>* map : {&maps.normal, &maps.roughness, &maps.height})
-    if (*map && ((*map)->width != exemplar.width || (*map)->height != exemplar.height))
-      throw Error("--maps: companion maps must have the exemplar's size (" + std::to_string(exemplar.width) + "x" +
-                  std::to_string(exemplar.height) + ")");
+  atlas::TextureExemplar ex;
+  ex.color = &exemplar;
+  ex.normal = maps.normal ? &*maps.normal : nullptr;
+  ex.roughness = maps.roughness ? &*maps.roughness : nullptr;
+  ex.height = maps.height ? &*maps.height : nullptr;
+  atlas::checkCompanionMaps(ex, options.mode);  // before the (possibly long) analysis
   const geometry::Mesh mesh = geometry::readMesh(args.model);
   if (mesh.triangleCount() == 0) throw Error(args.model + ": the model has no triangles");
   progress.finish(args.model + ": " + std::to_string(mesh.triangleCount()) + " triangles; " + args.exemplar + " " +
@@ -164,13 +164,8 @@ void runTexture(const TextureArgs& args) {
   if (args.featureSize > 0) options.textureScale = std::max(exemplar.width, exemplar.height) / args.featureSize;
   else options.textureScale = args.scale;
 
-  atlas::TextureExemplar ex;
-  ex.color = &exemplar;
   ex.analysis = analysis ? &*analysis : nullptr;
   ex.solidAnalysis = solidAnalysis ? &*solidAnalysis : nullptr;
-  ex.normal = maps.normal ? &*maps.normal : nullptr;
-  ex.roughness = maps.roughness ? &*maps.roughness : nullptr;
-  ex.height = maps.height ? &*maps.height : nullptr;
   const atlas::TextureMeshResult result =
       atlas::textureMesh(mesh, ex, options, [&](const std::string& stage, double seconds, const std::string& detail) {
         progress.record(stage, seconds, detail);
