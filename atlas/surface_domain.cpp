@@ -100,16 +100,8 @@ SurfaceLevel finestLevel(const Atlas& atlas, const AtlasFields& fields, const Te
   level.parent.assign(level.size(), -1);
   // A degenerate Jacobian (a singular point of the tangent field, a degenerate triangle) becomes
   // an isotropic one of the median scale, so every site can predict its neighborhood.
-  std::vector<float> scale;
-  for (const auto& j : level.jacobian) {
-    const float det = j[0] * j[3] - j[1] * j[2];
-    if (std::isfinite(det) && det != 0.0f) scale.push_back(std::sqrt(std::fabs(det)));
-  }
-  float median = 1.0f;
-  if (!scale.empty()) {
-    std::nth_element(scale.begin(), scale.begin() + std::ptrdiff_t(scale.size() / 2), scale.end());
-    median = scale[scale.size() / 2];
-  }
+  const double found = synthesis::medianPixelsPerTexel(level);
+  const float median = found > 0 ? float(found) : 1.0f;
   for (auto& j : level.jacobian) {
     const float det = j[0] * j[3] - j[1] * j[2];
     const bool finite = std::isfinite(j[0]) && std::isfinite(j[1]) && std::isfinite(j[2]) && std::isfinite(j[3]);

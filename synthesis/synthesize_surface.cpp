@@ -26,23 +26,24 @@ void forSites(size_t count, int threads, Fn&& fn) {
   });
 }
 
-double medianPixelsPerTexel(const SurfaceLevel& level) {
-  std::vector<float> scale(level.size());
-  for (size_t s = 0; s < level.size(); ++s) {
-    const auto& j = level.jacobian[s];
-    scale[s] = std::sqrt(std::fabs(j[0] * j[3] - j[1] * j[2]));
-  }
-  if (scale.empty()) return 1.0;
-  std::nth_element(scale.begin(), scale.begin() + std::ptrdiff_t(scale.size() / 2), scale.end());
-  return std::max(double(scale[scale.size() / 2]), 1e-6);
-}
-
 } // namespace
 
 void SurfaceSynthesisOptions::validate() const {
   for (float j : jitter)
     if (!(j >= 0.0f && j <= 1.0f)) throw Error("jitter must be in [0, 1], got " + std::to_string(j));
   if (passes < 0 || passes > 8) throw Error("passes must be in [0, 8], got " + std::to_string(passes));
+}
+
+double medianPixelsPerTexel(const SurfaceLevel& level) {
+  std::vector<float> scale;
+  scale.reserve(level.size());
+  for (const auto& j : level.jacobian) {
+    const float det = j[0] * j[3] - j[1] * j[2];
+    if (std::isfinite(det) && det != 0.0f) scale.push_back(std::sqrt(std::fabs(det)));
+  }
+  if (scale.empty()) return 0.0;
+  std::nth_element(scale.begin(), scale.begin() + std::ptrdiff_t(scale.size() / 2), scale.end());
+  return scale[scale.size() / 2];
 }
 
 int stackLevelForAtlasLevel(const ExemplarAnalysis& analysis, int atlasLevel, double pixelsPerTexel) {
@@ -66,7 +67,7 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
   }
 
   SurfaceSynthesisResult result;
-  result.exemplarPixelsPerTexel = medianPixelsPerTexel(domain.levels[0]);
+  result.exemplarPixelsPerTexel = std::max(medianPixelsPerTexel(domain.levels[0]), 1e-6);
   const double ppt = result.exemplarPixelsPerTexel;
   const int finest = analysis.finestLevel();
   std::vector<float> jitter = options.jitter.empty() ? defaultJitter(finest + 1) : options.jitter;

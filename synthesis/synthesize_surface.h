@@ -79,6 +79,10 @@ struct SurfaceSynthesisResult {
   double exemplarPixelsPerTexel = 0; ///< median sqrt|det J| at the finest level
 };
 
+/// Median over a level's sites of sqrt|det J| (exemplar pixels per texel), ignoring singular or
+/// non-finite Jacobians; 0 when there are none.
+double medianPixelsPerTexel(const SurfaceLevel& level);
+
 /// The exemplar stack level that atlas level `atlasLevel` synthesizes at, for a finest-level
 /// Jacobian of scale `pixelsPerTexel`: the level whose spacing is the power of two closest to
 /// 2^atlasLevel * pixelsPerTexel, clamped to the stack.
