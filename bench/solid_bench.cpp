@@ -7,8 +7,9 @@
 //   voxels synthesized per requested voxel for a plane and a thin shell; peak memory.
 // Exemplar: GIMP's marble (bundled as models/exemplars/marble.png), 64^2 = its top-left quarter.
 //   build/bench/solid_bench --benchmark_counters_tabular=true
-// Each synthesis benchmark runs with the paper's 8 sub-passes per pass (interleave 2) and with
-// Jacobi passes (interleave 1, a far shorter dependency chain).
+// Arguments: interleave (1: Jacobi passes, the default; 2: the paper's 8 sub-passes per pass) and
+// the finest level's passes (1, the default; 2, the paper's), so that the default and the paper's
+// schedule are both measured.
 #include "bench/bench_support.h"
 #include "render/image_io.h"
 #include "synthesis/exemplar_analysis.h"
@@ -55,9 +56,12 @@ const SolidAnalysis& analysis(int side) {
   return it->second;
 }
 
-SolidSynthesisOptions optionsFor(int64_t interleave) {
+// interleave 1 (Jacobi, the default) or 2 (the paper's 8 sub-passes); finest-level passes 1 (the
+// default) or 2 (the paper's).
+SolidSynthesisOptions optionsFor(int64_t interleave, int64_t finestPasses) {
   SolidSynthesisOptions o;
   o.interleave = int(interleave);
+  o.finestPasses = int(finestPasses);
   return o;
 }
 
@@ -72,7 +76,7 @@ BENCHMARK(BM_SolidPrecomputation)->Arg(64)->Arg(128)->Unit(benchmark::kMilliseco
 void BM_SolidVolume(benchmark::State& state) {
   const int n = int(state.range(0));
   const SolidAnalysis& a = analysis(n);
-  const SolidSynthesisOptions o = optionsFor(state.range(1));
+  const SolidSynthesisOptions o = optionsFor(state.range(1), state.range(2));
   int64_t synthesized = 0;
   const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
@@ -85,7 +89,7 @@ void BM_SolidVolume(benchmark::State& state) {
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
 BENCHMARK(BM_SolidVolume)
-    ->Args({64, 2})->Args({64, 1})->Args({128, 2})->Args({128, 1})
+    ->Args({64, 1, 1})->Args({64, 1, 2})->Args({64, 2, 2})->Args({128, 1, 1})->Args({128, 1, 2})->Args({128, 2, 2})
     ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 std::vector<Voxel> zPlane(int side, int64_t z) {
@@ -98,8 +102,8 @@ std::vector<Voxel> zPlane(int side, int64_t z) {
 // The interactive-cutting case (§6.4): a 256^2 axis-aligned cut with the coarse levels already in
 // the cache, 128^2 exemplar (256^3 equivalent volume).
 void BM_SolidCut256Cached(benchmark::State& state) {
-  const SolidAnalysis& a = analysis(state.range(1) ? int(state.range(1)) : 128);
-  const SolidSynthesisOptions o = optionsFor(state.range(0));
+  const SolidAnalysis& a = analysis(int(state.range(1)));
+  const SolidSynthesisOptions o = optionsFor(state.range(0), state.range(2));
   SolidLevelCache cache(size_t(1) << 30);
   // Warm the coarse levels of the 8 cuts z = 36..43 (as the paper's precomputed coarse volume),
   // then time the cuts themselves: only their finest level is synthesized.
@@ -123,12 +127,12 @@ void BM_SolidCut256Cached(benchmark::State& state) {
   state.counters["cache_MiB"] = double(cache.bytes()) / double(1 << 20);
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
-BENCHMARK(BM_SolidCut256Cached)->Args({2, 128})->Args({1, 128})->Args({1, 64})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_SolidCut256Cached)->Args({1, 128, 1})->Args({1, 128, 2})->Args({2, 128, 2})->Args({1, 64, 1})->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 // Cost of laziness: voxels synthesized (all levels) per requested voxel, cold cache.
 void BM_SolidPlaneCold(benchmark::State& state) {
   const SolidAnalysis& a = analysis(128);
-  const SolidSynthesisOptions o = optionsFor(state.range(0));
+  const SolidSynthesisOptions o = optionsFor(state.range(0), state.range(1));
   int64_t synthesized = 0;
   for (auto _ : state) {
     const SolidSynthesisResult r = synthesizeSolid(a, zPlane(256, 40), o);
@@ -137,7 +141,7 @@ void BM_SolidPlaneCold(benchmark::State& state) {
   state.counters["synth_per_requested"] = double(synthesized) / (256.0 * 256.0);
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
-BENCHMARK(BM_SolidPlaneCold)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_SolidPlaneCold)->Args({1, 1})->Args({1, 2})->Args({2, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 // A thin shell: the voxels at distance [r - 0.5, r + 0.5) from a centre, one voxel thick; r = 48
 // (~29,000 voxels) and r = 200 (~503,000 voxels, the case of `texfab texture --mode solid`: a
@@ -145,7 +149,7 @@ BENCHMARK(BM_SolidPlaneCold)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->Use
 // tiles.
 void BM_SolidShell(benchmark::State& state) {
   const SolidAnalysis& a = analysis(128);
-  const SolidSynthesisOptions o = optionsFor(state.range(0));
+  const SolidSynthesisOptions o = optionsFor(state.range(0), state.range(2));
   const int r = int(state.range(1));
   std::vector<Voxel> shell;
   for (int z = -r - 1; z <= r + 1; ++z)
@@ -170,7 +174,7 @@ void BM_SolidShell(benchmark::State& state) {
   state.counters["corrections_per_requested"] = double(corrections) / double(shell.size());
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
-BENCHMARK(BM_SolidShell)->Args({2, 48})->Args({1, 48})->Args({1, 200})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_SolidShell)->Args({1, 48, 1})->Args({2, 48, 2})->Args({1, 200, 1})->Args({1, 200, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 } // namespace
 

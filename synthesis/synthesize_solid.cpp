@@ -199,7 +199,8 @@ struct Engine {
   size_t peakBytes = 0;  // masks + finals + step values held at once (diagnostics)
 
   int top() const { return int(a.levels.size()) - 1; }
-  int steps() const { return o.passes * o.subpasses(); }
+  // Correction steps of level li (the finest may have its own number of passes).
+  int steps(int li) const { return o.passesAt(li == top()) * o.subpasses(); }
 
   size_t storeBytes() const {
     size_t b = 0;
@@ -219,7 +220,7 @@ struct Engine {
   void dilate(int li) {
     Mask& m = masks[size_t(li)];
     std::vector<int8_t> g(kGatheredVoxels);
-    for (int t = steps(); t >= 1; --t) {
+    for (int t = steps(li); t >= 1; --t) {
       const size_t n = m.size();  // chunks created in this step hold no voxel with last >= t
       for (size_t s = 0; s < n; ++s) {
         const int8_t* c = m.at(uint32_t(s));
@@ -260,7 +261,7 @@ struct Engine {
     const Mask& child = masks[size_t(li) + 1];
     Mask& m = masks[size_t(li)];
     Finals& f = finals[size_t(li)];
-    const auto T = int8_t(steps());
+    const auto T = int8_t(steps(li));
     for (size_t s = 0; s < child.size(); ++s) {
       const int8_t* c = child.at(uint32_t(s));
       const ChunkKey key = child.keys[s];
@@ -314,7 +315,7 @@ struct Engine {
   void fillCache(int li) {
     const Mask& m = masks[size_t(li)];
     const Finals& f = finals[size_t(li)];
-    const auto T = int8_t(steps());
+    const auto T = int8_t(steps(li));
     for (size_t s = 0; s < m.size(); ++s) {
       const int8_t* c = m.at(uint32_t(s));
       const ChunkKey key = m.keys[s];
@@ -366,41 +367,66 @@ struct Engine {
     cpu::solidColorKernel(out.triples.get(), out.colors.get(), last, 0, grid, tables, 0, grid.rows());
   }
 
-  // Correction step t >= 1 of one chunk, from step t-1 of it and its neighbours.
+  // Correction step t >= 1 of one chunk, from step t-1 of it and its neighbours. Only the box of
+  // the voxels needed after step t (last >= t) is corrected and written, and only that box with
+  // its halo is gathered: thin requests (a cut, a shell) fill a few layers of a chunk.
   void correct(int li, uint32_t slot, int t, const std::vector<int32_t>& before, std::vector<ChunkValues>& pool,
                const cpu::SolidTables& tables, Gathered& g, ChunkValues& out) {
     const Mask& m = masks[size_t(li)];
     const ChunkKey key = m.keys[slot];
     const int8_t* last = m.at(slot);
-    std::fill_n(g.last.get(), kGatheredVoxels, int8_t(-1));
+    int lo[3] = {kChunk, kChunk, kChunk}, hi[3] = {0, 0, 0};  // chunk-local box [lo, hi)
     for (int z = 0; z < kChunk; ++z)
       for (int y = 0; y < kChunk; ++y)
-        std::copy_n(last + (z * kChunk + y) * kChunk, kChunk, g.last.get() + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo);
+        for (int x = 0; x < kChunk; ++x)
+          if (last[(z * kChunk + y) * kChunk + x] >= t) {
+            const int p[3] = {x, y, z};
+            for (int a = 0; a < 3; ++a) {
+              lo[a] = std::min(lo[a], p[a]);
+              hi[a] = std::max(hi[a], p[a] + 1);
+            }
+          }
+    if (lo[0] >= hi[0]) return;  // (a chunk is only scheduled when it holds such a voxel)
+    std::fill_n(g.last.get(), kGatheredVoxels, int8_t(-1));
+    for (int z = lo[2]; z < hi[2]; ++z)
+      for (int y = lo[1]; y < hi[1]; ++y)
+        std::copy_n(last + (z * kChunk + y) * kChunk + lo[0], hi[0] - lo[0],
+                    g.last.get() + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo + lo[0]);
+    // The box with its halo, in gathered coordinates: [lo, hi + 2 halo).
     forNeighbours([&](int dx, int dy, int dz) {
       const int32_t ns = m.find({key[0] + dx, key[1] + dy, key[2] + dz});
       if (ns < 0 || before[size_t(ns)] < 0) return;  // none of its voxels is read at this step
       const ChunkValues& src = pool[size_t(before[size_t(ns)])];
-      const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
-      for (int z = 0; z < sz.n; ++z)
-        for (int y = 0; y < sy.n; ++y) {
-          const size_t from = size_t(((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from);
-          const size_t to = size_t(((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to);
-          std::copy_n(src.triples.get() + from * 3, size_t(sx.n) * 3, g.in.get() + to * 3);
-          std::copy_n(src.colors.get() + from * 4, size_t(sx.n) * 4, g.inC.get() + to * 4);
+      const int d[3] = {dx, dy, dz};
+      int from[3], to[3], n[3];
+      for (int a = 0; a < 3; ++a) {
+        const Span1& s = kSpans[d[a] + 1];
+        const int b = std::max(s.to, lo[a]), e = std::min(s.to + s.n, hi[a] + 2 * kHalo);
+        if (b >= e) return;
+        from[a] = s.from + b - s.to;
+        to[a] = b;
+        n[a] = e - b;
+      }
+      for (int z = 0; z < n[2]; ++z)
+        for (int y = 0; y < n[1]; ++y) {
+          const size_t f = size_t(((from[2] + z) * kChunk + from[1] + y) * kChunk + from[0]);
+          const size_t o = size_t(((to[2] + z) * kGathered + to[1] + y) * kGathered + to[0]);
+          std::copy_n(src.triples.get() + f * 3, size_t(n[0]) * 3, g.in.get() + o * 3);
+          std::copy_n(src.colors.get() + f * 4, size_t(n[0]) * 4, g.inC.get() + o * 4);
         }
     });
     const VolumeGrid grid{key[0] * kChunk - kHalo, key[1] * kChunk - kHalo, key[2] * kChunk - kHalo,
                           kGathered, kGathered, kGathered};
-    // Rows of the halo hold no voxel to correct: only the chunk's rows.
-    for (int z = kHalo; z < kHalo + kChunk; ++z)
+    for (int z = lo[2] + kHalo; z < hi[2] + kHalo; ++z)
       cpu::solidCorrectKernel(g.in.get(), g.inC.get(), g.out.get(), g.outC.get(), g.last.get(), grid, tables, o.interleave,
-                              t, z * kGathered + kHalo, z * kGathered + kHalo + kChunk);
-    for (int z = 0; z < kChunk; ++z)
-      for (int y = 0; y < kChunk; ++y)
-        for (int x = 0; x < kChunk; ++x) {
+                              t, z * kGathered + lo[1] + kHalo, z * kGathered + hi[1] + kHalo);
+    for (int z = lo[2]; z < hi[2]; ++z)
+      for (int y = lo[1]; y < hi[1]; ++y)
+        for (int x = lo[0]; x < hi[0]; ++x) {
           const size_t v = size_t((z * kChunk + y) * kChunk + x);
+          if (last[v] < t) continue;
           const size_t gv = size_t(((z + kHalo) * kGathered + y + kHalo) * kGathered + x + kHalo);
-          const bool corrected = last[v] >= t && inClass(t, key[0] * kChunk + x, key[1] * kChunk + y, key[2] * kChunk + z);
+          const bool corrected = inClass(t, key[0] * kChunk + x, key[1] * kChunk + y, key[2] * kChunk + z);
           std::copy_n((corrected ? g.out.get() : g.in.get()) + gv * 3, 3, out.triples.get() + v * 3);
           std::copy_n((corrected ? g.outC.get() : g.inC.get()) + gv * 4, 4, out.colors.get() + v * 4);
         }
@@ -411,7 +437,7 @@ struct Engine {
   template <class Emit> void synthesizeLevel(int li, const Emit& emit) {
     const auto started = Clock::now();
     Mask& m = masks[size_t(li)];
-    const int T = steps();
+    const int T = steps(li);
     const size_t n = m.size();
     std::vector<int8_t> maxLast(n, -1);
     int64_t voxels = 0, corrections = 0;
@@ -569,6 +595,8 @@ void prepare(const SolidAnalysis& a, const SolidSynthesisOptions& o, SolidLevelC
 void SolidSynthesisOptions::validate() const {
   if (!(jitter >= 0.0f && jitter <= 4.0f)) throw Error("jitter must be in [0, 4], got " + std::to_string(jitter));
   if (passes < 0 || passes > 4) throw Error("passes must be in [0, 4], got " + std::to_string(passes));
+  if (finestPasses < 0 || finestPasses > 4)
+    throw Error("finest-level passes must be in [0, 4], got " + std::to_string(finestPasses));
   if (interleave != 1 && interleave != 2)
     throw Error("interleave must be 1 (one sub-pass per pass) or 2 (8 sub-passes), got " + std::to_string(interleave));
 }
@@ -639,7 +667,7 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
   if (voxels.empty()) return result;
   Engine engine{a, o, cache, threads, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
-  const auto T = int8_t(engine.steps());
+  const auto T = int8_t(engine.steps(engine.top()));
   // The requested voxels, grouped by finest chunk (counting sort).
   std::vector<uint32_t> slotOf(voxels.size());
   for (size_t i = 0; i < voxels.size(); ++i) {
@@ -682,7 +710,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   result.triples.resize(size_t(box.count()));
   Engine engine{a, o, cache, threads, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
-  const auto T = int8_t(engine.steps());
+  const auto T = int8_t(engine.steps(engine.top()));
   const int64_t lo[3] = {box.x, box.y, box.z}, hi[3] = {box.x + box.nx, box.y + box.ny, box.z + box.nz};
   // The part of chunk `key` inside the box, in level coordinates: [b, e) per axis.
   auto clip = [&](const ChunkKey& key, int64_t b[3], int64_t e[3]) {
@@ -749,7 +777,7 @@ DependencyChain dependencyChainSize(const SolidAnalysis& a, const SolidSynthesis
   const auto& cross = solidCrossOffsets();
   std::set<std::array<int64_t, 3>> mask{{0, 0, 0}};
   for (size_t level = 0; level < a.levels.size(); ++level) {
-    for (int p = 0; p < o.passes; ++p) {
+    for (int p = 0; p < o.passesAt(level == 0); ++p) {  // level 0 of this loop is the finest
       std::set<std::array<int64_t, 3>> grown;
       for (const auto& v : mask)
         for (const auto& c : cross) grown.insert({v[0] + c[0], v[1] + c[1], v[2] + c[2]});

@@ -36,6 +36,7 @@ struct SolidArgs {
   double scale = 1.0;
   float jitter = synthesis::SolidSynthesisOptions{}.jitter;
   int passes = synthesis::SolidSynthesisOptions{}.passes;
+  int finestPasses = synthesis::SolidSynthesisOptions{}.finestPasses;
   int interleave = synthesis::SolidSynthesisOptions{}.interleave;
   int threads = 0;
   std::string report;
@@ -116,6 +117,7 @@ void runSolid(const SolidArgs& args) {
   options.seed = args.seed;
   options.jitter = args.jitter;
   options.passes = args.passes;
+  options.finestPasses = args.finestPasses;
   options.interleave = args.interleave;
   options.validate();
   if (!args.raw.empty() && args.volume == 0) throw Error("--raw: only with --volume");
@@ -355,6 +357,7 @@ void runSolid(const SolidArgs& args) {
                            {"mean_candidates_kept", analysis.stats.meanCandidatesBeforeFilter},
                            {"mean_candidates_coherent", analysis.stats.meanCandidatesAfterFilter}};
     report["parameters"] = {{"seed", options.seed}, {"jitter", options.jitter}, {"passes", options.passes},
+                            {"finest_passes", options.finestPasses},
                             {"subpasses", options.subpasses()}, {"scale", args.scale}};
     nlohmann::json levels = nlohmann::json::array();
     int64_t synthesized = 0;
@@ -404,7 +407,10 @@ Command addSolidCommand(CLI::App& root) {
       ->capture_default_str();
   app->add_option("--jitter", args->jitter, "Strength of the random warp applied once after initialization (0-4)")
       ->capture_default_str();
-  app->add_option("--passes", args->passes, "Correction passes per level (0-4)")->capture_default_str();
+  app->add_option("--passes", args->passes, "Correction passes per level above the finest (0-4)")->capture_default_str();
+  app->add_option("--finest-passes", args->finestPasses,
+                  "Correction passes at the finest level (0-4; the paper: 2, about 3x the finest level's work)")
+      ->capture_default_str();
   app->add_option("--interleave", args->interleave,
                   "2: 8 sub-passes per pass, as in the paper; 1: one (a far shorter dependency chain)")
       ->capture_default_str();

@@ -280,17 +280,22 @@ TEST(SolidSynthesis, DependencyChainOfOneVoxel) {
   ao.strips = 16;
   const SolidAnalysis a = analyzeSolid(e, e, e, ao, 2);
   ASSERT_EQ(a.levels.size(), 3u);
-  SolidSynthesisOptions jacobi;
+  SolidSynthesisOptions jacobi;  // the paper's 2 passes at every level
   jacobi.interleave = 1;
+  jacobi.finestPasses = 2;
   const DependencyChain j = dependencyChainSize(a, jacobi);
   EXPECT_EQ(j.exact, j.perPassDilation);
-  SolidSynthesisOptions subpasses;
+  const DependencyChain d = dependencyChainSize(a, SolidSynthesisOptions{});  // one finest pass
+  EXPECT_EQ(d.exact, d.perPassDilation);
+  EXPECT_LT(d.exact, j.exact);
+  SolidSynthesisOptions subpasses = jacobi;
   subpasses.interleave = 2;
   const DependencyChain s = dependencyChainSize(a, subpasses);
   std::printf("[ solid    ] dependency chain of one voxel, 3 levels, 2 passes: paper 6778; per-pass dilation %lld; "
-              "exact with 8 sub-passes %lld (per level %lld %lld %lld)\n",
+              "exact with 8 sub-passes %lld (per level %lld %lld %lld); default schedule (1 finest pass) %lld\n",
               (long long)s.perPassDilation, (long long)s.exact, (long long)s.exactPerLevel[0],
-              (long long)s.exactPerLevel[1], (long long)s.exactPerLevel[2]);
+              (long long)s.exactPerLevel[1], (long long)s.exactPerLevel[2], (long long)d.exact);
+  RecordProperty("chain_default", std::to_string(d.exact));
   RecordProperty("chain_per_pass", std::to_string(s.perPassDilation));
   RecordProperty("chain_exact_subpasses", std::to_string(s.exact));
   // Same order of magnitude as the paper's construction (the exact shape of their mask is not
@@ -398,7 +403,7 @@ TEST(SolidSynthesis, EachLevelIsSynthesizedOnceOverTheUnionOfTheChains) {
   for (const Voxel& v : seeds) mask.insert({v.x, v.y, v.z});
   std::vector<int64_t> expected;  // finest first
   for (size_t level = 0; level < a.levels.size(); ++level) {
-    for (int p = 0; p < o.passes; ++p) {
+    for (int p = 0; p < o.passesAt(level == 0); ++p) {  // level 0 here is the finest
       std::set<std::array<int64_t, 3>> grown;
       for (const auto& v : mask)
         for (const auto& c : solidCrossOffsets()) grown.insert({v[0] + c[0], v[1] + c[1], v[2] + c[2]});
