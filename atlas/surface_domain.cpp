@@ -91,11 +91,15 @@ SurfaceLevel finestLevel(const Atlas& atlas, const AtlasFields& fields, const Te
     for (int x = 0; x < atlas.width; ++x) {
       const int32_t chart = fields.samples.at(x, y).chart;
       if (chart < 0) continue;
-      const float* j = jacobians.at(x, y).j;
       level.x.push_back(x);
       level.y.push_back(y);
       level.chart.push_back(chart);
-      level.jacobian.push_back({-j[2], -j[3], -j[0], -j[1]}); // exemplar +u = -b, +v = -t (see header)
+      if (jacobians.values.empty()) {
+        level.jacobian.push_back({1.0f, 0.0f, 0.0f, 1.0f});
+      } else {
+        const float* j = jacobians.at(x, y).j;
+        level.jacobian.push_back({-j[2], -j[3], -j[0], -j[1]}); // exemplar +u = -b, +v = -t (see header)
+      }
     }
   level.parent.assign(level.size(), -1);
   // A degenerate Jacobian (a singular point of the tangent field, a degenerate triangle) becomes
@@ -171,8 +175,11 @@ synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const Me
                                             const TexelField<TexelJacobian>& jacobians,
                                             const SurfaceDomainOptions& options, int threads) {
   if (options.maxLevels < 1) throw Error("surface domain: maxLevels must be >= 1");
-  if (fields.samples.width != atlas.width || jacobians.width != atlas.width || jacobians.height != atlas.height)
-    throw Error("surface domain: texel fields and Jacobians must have the atlas's size");
+  if (fields.samples.width != atlas.width)
+    throw Error("surface domain: the texel fields must have the atlas's size");
+  if (!jacobians.values.empty() ? jacobians.width != atlas.width || jacobians.height != atlas.height
+                                : options.maxLevels != 1)
+    throw Error("surface domain: the Jacobians must have the atlas's size (or be empty, for one level)");
   synthesis::SurfaceDomain domain;
   domain.levels.push_back(finestLevel(atlas, fields, jacobians));
   std::vector<int32_t> repX = domain.levels[0].x, repY = domain.levels[0].y;

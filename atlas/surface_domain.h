@@ -31,7 +31,9 @@ struct SurfaceDomainOptions {
   int maxLevels = 16; ///< levels built at most (also stops when the grid is 1 texel); >= 1
 };
 
-/// Deterministic; `threads` (0 = all cores) only spreads the work.
+/// Deterministic; `threads` (0 = all cores) only spreads the work. `jacobians` may be empty when
+/// only level 0 is built (maxLevels = 1: sites and neighbors without a texture frame, as solid
+/// texturing needs): every site's Jacobian is then the identity.
 synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const MeshAdjacency& adjacency,
                                             const Atlas& atlas, const AtlasFields& fields,
                                             const TexelField<TexelJacobian>& jacobians,

@@ -99,17 +99,6 @@ float bilinearToroidal(const Image& image, float u, float v, int channel) {
   return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
-// Jacobians of the atlas without a tangent field: isotropic, for solid mode, where they only
-// serve the domain's bookkeeping.
-TexelField<TexelJacobian> isotropicJacobians(const AtlasFields& fields, double pixelsPerTexel) {
-  TexelField<TexelJacobian> jac(fields.samples.width, fields.samples.height);
-  TexelJacobian j;  // the domain swaps and negates the rows: this becomes pixelsPerTexel * I
-  j.j[1] = -float(pixelsPerTexel);
-  j.j[2] = -float(pixelsPerTexel);
-  for (size_t i = 0; i < jac.values.size(); ++i) jac.values[i] = j;
-  return jac;
-}
-
 // Solid mode: the triple of each texel's voxel (its 3-D position times the scale), each distinct
 // voxel synthesized once, in one request (values do not depend on how voxels are requested).
 std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& sites, const AtlasFields& fields,
@@ -266,8 +255,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     const int side = std::max(exemplar.width, exemplar.height);
     domainOptions.maxLevels = std::clamp(2 + int(std::ceil(std::log2(side / std::max(pixelsPerTexel, 1e-3)))), 1, 16);
   } else {
-    jacobians = isotropicJacobians(r.atlas.fields, pixelsPerTexel);
-    domainOptions.maxLevels = 1;
+    domainOptions.maxLevels = 1;  // texels and their neighbors only (no Jacobians: no texture frame)
   }
   synthesis::SurfaceDomain domain =
       buildSurfaceDomain(mesh, r.atlas.adjacency, atlas, r.atlas.fields, jacobians, domainOptions, o.threads);
