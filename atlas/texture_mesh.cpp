@@ -104,7 +104,8 @@ float bilinearToroidal(const Image& image, float u, float v, int channel) {
 std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& sites, const AtlasFields& fields,
                                                  const synthesis::SolidAnalysis& analysis,
                                                  const synthesis::SolidSynthesisOptions& options, double scale,
-                                                 int threads, int64_t& requested, int64_t& synthesized) {
+                                                 int threads, const synthesis::SolidLevelCallback& onLevel,
+                                                 int64_t& requested, int64_t& synthesized) {
   std::vector<synthesis::Voxel> voxels(sites.size());
   for (size_t s = 0; s < sites.size(); ++s) {
     const Float3& p = fields.position.at(sites.x[s], sites.y[s]);
@@ -126,7 +127,7 @@ std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& 
     voxelOf[i] = uint32_t(unique.size() - 1);
   }
   synthesis::SolidLevelCache cache;
-  const synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, unique, options, &cache, threads);
+  const synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, unique, options, &cache, threads, onLevel);
   requested = int64_t(unique.size());
   synthesized = result.voxelsSynthesized();
   std::vector<synthesis::Triple> triples(sites.size());
@@ -274,7 +275,13 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
                                    " exemplar pixels per texel");
   } else {
     r.exemplarPixelsPerTexel = pixelsPerTexel;
-    r.triples = solidTexelTriples(sites, r.atlas.fields, *ex.solidAnalysis, o.solid, r.textureScale, o.threads,
+    // Long on large atlases: each level is reported as it ends.
+    auto onLevel = [&](const synthesis::SolidLevelStats& level, int number, int levels) {
+      if (onStage)
+        onStage("level " + std::to_string(number) + "/" + std::to_string(levels), level.seconds,
+                std::to_string(level.voxels) + " voxels, " + std::to_string(level.corrections) + " corrections");
+    };
+    r.triples = solidTexelTriples(sites, r.atlas.fields, *ex.solidAnalysis, o.solid, r.textureScale, o.threads, onLevel,
                                   r.voxelsRequested, r.voxelsSynthesized);
     stages.finish("synthesis", std::to_string(r.voxelsRequested) + " voxels requested, " +
                                    std::to_string(r.voxelsSynthesized) + " synthesized");

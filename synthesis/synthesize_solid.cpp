@@ -194,6 +194,7 @@ struct Engine {
   SolidLevelCache* cache;
   int threads;
   std::vector<SolidLevelStats>& stats;
+  const SolidLevelCallback& onLevel;
   std::vector<Mask> masks = std::vector<Mask>(a.levels.size());
   std::vector<Finals> finals = std::vector<Finals>(a.levels.size());
   size_t peakBytes = 0;  // masks + finals + step values held at once (diagnostics)
@@ -566,6 +567,7 @@ struct Engine {
     }
     for (int li = 0; li <= top(); ++li) {
       if (masks[size_t(li)].size()) synthesizeLevel(li, emit);
+      if (onLevel) onLevel(stats[size_t(li)], li + 1, top() + 1);
       masks[size_t(li)].release();
       if (li > 0) finals[size_t(li) - 1].release();
     }
@@ -658,14 +660,15 @@ void SolidLevelCache::insert(const Key& key, std::shared_ptr<const Brick> brick)
 }
 
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
-                                     const SolidSynthesisOptions& o, SolidLevelCache* cache, int threads) {
+                                     const SolidSynthesisOptions& o, SolidLevelCache* cache, int threads,
+                                     const SolidLevelCallback& onLevel) {
   prepare(a, o, cache);
   for (const Voxel& v : voxels) validatePosition(v.x, v.y, v.z);
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
   if (voxels.empty()) return result;
-  Engine engine{a, o, cache, threads, result.levels};
+  Engine engine{a, o, cache, threads, result.levels, onLevel};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
   // The requested voxels, grouped by finest chunk (counting sort).
@@ -698,7 +701,7 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
 }
 
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& box, const SolidSynthesisOptions& o,
-                                        SolidLevelCache* cache, int threads) {
+                                        SolidLevelCache* cache, int threads, const SolidLevelCallback& onLevel) {
   prepare(a, o, cache);
   if (box.nx < 1 || box.ny < 1 || box.nz < 1)
     throw Error("voxel box " + std::to_string(box.nx) + "x" + std::to_string(box.ny) + "x" + std::to_string(box.nz) +
@@ -708,7 +711,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(size_t(box.count()));
-  Engine engine{a, o, cache, threads, result.levels};
+  Engine engine{a, o, cache, threads, result.levels, onLevel};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
   const int64_t lo[3] = {box.x, box.y, box.z}, hi[3] = {box.x + box.nx, box.y + box.ny, box.z + box.nz};

@@ -36,6 +36,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <map>
 #include <memory>
@@ -140,16 +141,20 @@ private:
   std::map<Key, std::pair<std::shared_ptr<const Brick>, std::list<Key>::iterator>> bricks_;
 };
 
+/// Called as each level is done (progress of long requests): its figures, its number (1 =
+/// coarsest) and the number of levels.
+using SolidLevelCallback = std::function<void(const SolidLevelStats& level, int number, int levels)>;
+
 /// Triples of the given finest-level voxels (any set: shell, plane, box, scattered; duplicates
 /// allowed). `cache` may be null (nothing kept between requests).
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
                                      const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
-                                     int threads = 0);
+                                     int threads = 0, const SolidLevelCallback& onLevel = {});
 
 /// Triples of every voxel of `box`, x fastest, then y, then z.
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& analysis, const VoxelBox& box,
                                         const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
-                                        int threads = 0);
+                                        int threads = 0, const SolidLevelCallback& onLevel = {});
 
 /// Colour of each triple: the mean of E_x, E_y and E_z at its three coordinates (first three
 /// channels, or grey). `channels` is 3, or 1 when all three exemplars are grey. Values are
