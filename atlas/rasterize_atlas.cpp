@@ -3,6 +3,8 @@
 //  - P.-E. Danielsson, "Euclidean distance mapping", CGIP 1980 (two-pass vector propagation).
 #include "atlas/rasterize_atlas.h"
 
+#include "render/parallel.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -23,7 +25,6 @@ void atlasBarycentrics(const Atlas& atlas, uint32_t t, const Eigen::Vector2d& p,
 }
 
 AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, int threads) {
-  (void)threads;
   const int W = atlas.width, H = atlas.height;
   AtlasFields fields;
   fields.samples = TexelField<SurfaceSample>(W, H);
@@ -51,31 +52,55 @@ AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, int t
     pos = {p.x(), p.y(), p.z()};
     nrm = {n.x(), n.y(), n.z()};
   };
+  // Triangles in chart order; the first to cover a texel centre owns it. Bands of rows are
+  // rasterized in parallel, each over every triangle in that order: the same result on any
+  // number of threads.
+  struct Triangle {
+    uint32_t t;
+    int32_t chart;
+    int x0, x1, y0, y1;  // texel bounds, inclusive
+  };
+  std::vector<Triangle> triangles;
   for (size_t c = 0; c < atlas.charts.size(); ++c)
     for (uint32_t t : atlas.charts[c].faces) {
       Eigen::Vector2d p[3];
       for (int k = 0; k < 3; ++k) p[k] = atlas.texelUvs[3 * size_t(t) + size_t(k)].cast<double>();
-      const int x0 = std::max(0, int(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}) - 0.5)));
-      const int x1 = std::min(W - 1, int(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}) - 0.5)));
-      const int y0 = std::max(0, int(std::floor(std::min({p[0].y(), p[1].y(), p[2].y()}) - 0.5)));
-      const int y1 = std::min(H - 1, int(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}) - 0.5)));
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          double b1, b2;
-          atlasBarycentrics(atlas, t, {x + 0.5, y + 0.5}, b1, b2);
-          const double b0 = 1 - b1 - b2;
-          const double eps = -1e-9;
-          if (b0 < eps || b1 < eps || b2 < eps) continue;
-          SurfaceSample& s = fields.samples.at(x, y);
-          if (s.chart >= 0) {
-            if (s.chart != int32_t(c)) ++fields.overlappingTexels;
-            continue;
-          }
-          s = {int32_t(c), t, float(b1), float(b2)};
-          evaluate(t, float(b1), float(b2), fields.position.at(x, y), fields.normal.at(x, y));
-          ++fields.chartTexels;
-        }
+      triangles.push_back({t, int32_t(c), std::max(0, int(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}) - 0.5))),
+                           std::min(W - 1, int(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}) - 0.5))),
+                           std::max(0, int(std::floor(std::min({p[0].y(), p[1].y(), p[2].y()}) - 0.5))),
+                           std::min(H - 1, int(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}) - 0.5)))});
     }
+  constexpr int kBand = 32;
+  const int bands = (H + kBand - 1) / kBand;
+  std::vector<size_t> chartTexels(size_t(bands), 0), overlapping(size_t(bands), 0);
+  parallelFor(0, bands, threads, [&](int b0, int b1) {
+    for (int band = b0; band < b1; ++band) {
+      const int rowBegin = band * kBand, rowEnd = std::min(H, rowBegin + kBand);
+      for (const Triangle& tri : triangles) {
+        if (tri.y1 < rowBegin || tri.y0 >= rowEnd) continue;
+        for (int y = std::max(tri.y0, rowBegin); y <= std::min(tri.y1, rowEnd - 1); ++y)
+          for (int x = tri.x0; x <= tri.x1; ++x) {
+            double b1, b2;
+            atlasBarycentrics(atlas, tri.t, {x + 0.5, y + 0.5}, b1, b2);
+            const double b0 = 1 - b1 - b2;
+            const double eps = -1e-9;
+            if (b0 < eps || b1 < eps || b2 < eps) continue;
+            SurfaceSample& s = fields.samples.at(x, y);
+            if (s.chart >= 0) {
+              if (s.chart != tri.chart) ++overlapping[size_t(band)];
+              continue;
+            }
+            s = {tri.chart, tri.t, float(b1), float(b2)};
+            evaluate(tri.t, float(b1), float(b2), fields.position.at(x, y), fields.normal.at(x, y));
+            ++chartTexels[size_t(band)];
+          }
+      }
+    }
+  }, 1);
+  for (int band = 0; band < bands; ++band) {
+    fields.chartTexels += chartTexels[size_t(band)];
+    fields.overlappingTexels += overlapping[size_t(band)];
+  }
   // Gutter fill: nearest chart texel by two-pass propagation of source coordinates.
   std::vector<int32_t> srcX(size_t(W) * size_t(H), -1), srcY(size_t(W) * size_t(H), -1);
   for (int y = 0; y < H; ++y)
