@@ -217,43 +217,61 @@ struct Engine {
   }
 
   // §5.2, exact per sub-pass, over the level's chunks: for t = T..1, every voxel of step t's
-  // class with last >= t needs its 3-neighborhood after step t-1.
+  // class with last >= t needs its 3-neighborhood after step t-1. The chunks holding such voxels
+  // are spread in parallel, batch by batch, each into its own gathered grid (reads only); the
+  // grids are then merged into the chunks and their neighbours one after the other.
   void dilate(int li) {
     Mask& m = masks[size_t(li)];
-    std::vector<int8_t> g(kGatheredVoxels);
+    constexpr size_t kBatch = 128;
+    std::vector<int8_t> grids(kBatch * kGatheredVoxels);
     for (int t = steps(li); t >= 1; --t) {
-      const size_t n = m.size();  // chunks created in this step hold no voxel with last >= t
-      for (size_t s = 0; s < n; ++s) {
+      std::vector<uint32_t> active;  // chunks created in this step hold no voxel with last >= t
+      for (size_t s = 0; s < m.size(); ++s) {
         const int8_t* c = m.at(uint32_t(s));
-        if (std::none_of(c, c + kChunkVoxels, [&](int8_t v) { return v >= t; })) continue;
-        const ChunkKey key = m.keys[s];
-        std::fill(g.begin(), g.end(), int8_t(-1));
-        for (int z = 0; z < kChunk; ++z)
-          for (int y = 0; y < kChunk; ++y)
-            std::copy_n(c + (z * kChunk + y) * kChunk, kChunk,
-                        g.data() + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo);
-        const VolumeGrid grid{key[0] * kChunk - kHalo, key[1] * kChunk - kHalo, key[2] * kChunk - kHalo,
-                              kGathered, kGathered, kGathered};
-        cpu::solidDilateKernel(g.data(), grid, o.interleave, t, 0, grid.rows());
-        forNeighbours([&](int dx, int dy, int dz) {
-          const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
-          bool any = false;
-          for (int z = 0; z < sz.n && !any; ++z)
-            for (int y = 0; y < sy.n && !any; ++y) {
-              const int8_t* row = g.data() + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
-              any = std::any_of(row, row + sx.n, [](int8_t v) { return v >= 0; });
-            }
-          if (!any) return;
-          int8_t* d = m.at(m.get({key[0] + dx, key[1] + dy, key[2] + dz}));
-          for (int z = 0; z < sz.n; ++z)
-            for (int y = 0; y < sy.n; ++y) {
-              const int8_t* row = g.data() + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
-              int8_t* to = d + ((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from;
-              for (int x = 0; x < sx.n; ++x) to[x] = std::max(to[x], row[x]);
-            }
+        if (std::any_of(c, c + kChunkVoxels, [&](int8_t v) { return v >= t; })) active.push_back(uint32_t(s));
+      }
+      for (size_t b = 0; b < active.size(); b += kBatch) {
+        const size_t e = std::min(active.size(), b + kBatch);
+        parallelFor(int(b), int(e), threads, [&](int k0, int k1) {
+          for (int k = k0; k < k1; ++k) spread(m, active[size_t(k)], t, grids.data() + size_t(k - int(b)) * kGatheredVoxels);
         });
+        for (size_t k = b; k < e; ++k) merge(m, m.keys[active[k]], grids.data() + (k - b) * kGatheredVoxels);
       }
     }
+  }
+
+  // Chunk `slot` with a halo, its voxels needed after step t spread to their 3-neighborhoods.
+  void spread(const Mask& m, uint32_t slot, int t, int8_t* g) const {
+    const int8_t* c = m.at(slot);
+    const ChunkKey key = m.keys[slot];
+    std::fill_n(g, kGatheredVoxels, int8_t(-1));
+    for (int z = 0; z < kChunk; ++z)
+      for (int y = 0; y < kChunk; ++y)
+        std::copy_n(c + (z * kChunk + y) * kChunk, kChunk, g + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo);
+    const VolumeGrid grid{key[0] * kChunk - kHalo, key[1] * kChunk - kHalo, key[2] * kChunk - kHalo,
+                          kGathered, kGathered, kGathered};
+    cpu::solidDilateKernel(g, grid, o.interleave, t, 0, grid.rows());
+  }
+
+  // The spread grid of the chunk at `key` into it and its neighbours (created where it reaches).
+  void merge(Mask& m, const ChunkKey key, const int8_t* g) {  // key by value: m.get() may move m.keys
+    forNeighbours([&](int dx, int dy, int dz) {
+      const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
+      bool any = false;
+      for (int z = 0; z < sz.n && !any; ++z)
+        for (int y = 0; y < sy.n && !any; ++y) {
+          const int8_t* row = g + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
+          any = std::any_of(row, row + sx.n, [](int8_t v) { return v >= 0; });
+        }
+      if (!any) return;
+      int8_t* d = m.at(m.get({key[0] + dx, key[1] + dy, key[2] + dz}));
+      for (int z = 0; z < sz.n; ++z)
+        for (int y = 0; y < sy.n; ++y) {
+          const int8_t* row = g + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
+          int8_t* to = d + ((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from;
+          for (int x = 0; x < sx.n; ++x) to[x] = std::max(to[x], row[x]);
+        }
+    });
   }
 
   // The voxels of level li whose final values level li+1 upsamples from (the parents of its
