@@ -126,8 +126,8 @@ std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& 
     if (unique.empty() || !(unique.back() == voxels[i])) unique.push_back(voxels[i]);
     voxelOf[i] = uint32_t(unique.size() - 1);
   }
-  synthesis::SolidLevelCache cache;
-  const synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, unique, options, &cache, threads, onLevel);
+  // One request: a coarse-level cache could not serve it (it only serves later requests).
+  const synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, unique, options, nullptr, threads, onLevel);
   requested = int64_t(unique.size());
   synthesized = result.voxelsSynthesized();
   std::vector<synthesis::Triple> triples(sites.size());
