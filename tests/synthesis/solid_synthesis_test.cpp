@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <numeric>
 #include <set>
 
 namespace texfab::synthesis {
@@ -398,7 +399,15 @@ TEST(SolidSynthesis, EachLevelIsSynthesizedOnceOverTheUnionOfTheChains) {
   const SolidAnalysis& a = analysis32();
   const SolidSynthesisOptions o;
   const std::vector<Voxel> seeds{{15, -1, 31}, {16, 0, 32}, {16, -1, 31}, {-17, 40, 3}, {20, 2, 30}, {900, -33, 64}};
-  const SolidSynthesisResult r = synthesizeSolid(a, seeds, o, nullptr, 2);
+  std::vector<int> reported;  // the progress callback: each level once, coarsest first
+  const SolidSynthesisResult r = synthesizeSolid(a, seeds, o, nullptr, 2, [&](const SolidLevelStats& l, int number, int levels) {
+    EXPECT_EQ(levels, int(a.levels.size()));
+    EXPECT_EQ(l.stackLevel, a.levels[size_t(number) - 1].stackLevel);
+    reported.push_back(number);
+  });
+  std::vector<int> expectedOrder(a.levels.size());
+  std::iota(expectedOrder.begin(), expectedOrder.end(), 1);
+  EXPECT_EQ(reported, expectedOrder);
   std::set<std::array<int64_t, 3>> mask;
   for (const Voxel& v : seeds) mask.insert({v.x, v.y, v.z});
   std::vector<int64_t> expected;  // finest first
