@@ -691,9 +691,13 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
   const auto T = int8_t(engine.steps(engine.top()));
   // The requested voxels, grouped by finest chunk (counting sort).
   std::vector<uint32_t> slotOf(voxels.size());
+  ChunkKey lastKey{};
+  uint32_t slot = 0;
   for (size_t i = 0; i < voxels.size(); ++i) {
     const Voxel& v = voxels[i];
-    const uint32_t slot = mask.get({v.x >> kChunkShift, v.y >> kChunkShift, v.z >> kChunkShift});
+    const ChunkKey key{v.x >> kChunkShift, v.y >> kChunkShift, v.z >> kChunkShift};
+    if (i == 0 || key != lastKey) slot = mask.get(key);  // neighbouring requests share chunks
+    lastKey = key;
     mask.at(slot)[localIndex(v.x, v.y, v.z)] = T;
     slotOf[i] = slot;
   }
