@@ -182,6 +182,10 @@ synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const Me
     throw Error("surface domain: the Jacobians must have the atlas's size (or be empty, for one level)");
   synthesis::SurfaceDomain domain;
   domain.levels.push_back(finestLevel(atlas, fields, jacobians));
+  if (!options.neighbors) {
+    if (options.maxLevels != 1) throw Error("surface domain: coarse levels need the neighbors");
+    return domain;
+  }
   std::vector<int32_t> repX = domain.levels[0].x, repY = domain.levels[0].y;
   linkNeighbors(mesh, adjacency, atlas, fields, domain.levels[0], repX, repY, 1, threads);
   for (int a = 1; a < options.maxLevels; ++a) {

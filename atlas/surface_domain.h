@@ -29,6 +29,7 @@ namespace texfab::atlas {
 
 struct SurfaceDomainOptions {
   int maxLevels = 16; ///< levels built at most (also stops when the grid is 1 texel); >= 1
+  bool neighbors = true; ///< link the sites' neighbors (false: the tables stay empty)
 };
 
 /// Deterministic; `threads` (0 = all cores) only spreads the work. `jacobians` may be empty when

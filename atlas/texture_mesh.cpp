@@ -256,7 +256,8 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     const int side = std::max(exemplar.width, exemplar.height);
     domainOptions.maxLevels = std::clamp(2 + int(std::ceil(std::log2(side / std::max(pixelsPerTexel, 1e-3)))), 1, 16);
   } else {
-    domainOptions.maxLevels = 1;  // texels and their neighbors only (no Jacobians: no texture frame)
+    domainOptions.maxLevels = 1;  // texels only (no Jacobians: no texture frame)
+    domainOptions.neighbors = o.measure;  // for the seam measure only
   }
   synthesis::SurfaceDomain domain =
       buildSurfaceDomain(mesh, r.atlas.adjacency, atlas, r.atlas.fields, jacobians, domainOptions, o.threads);
