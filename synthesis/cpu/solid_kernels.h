@@ -26,19 +26,23 @@ struct VolumeGrid {
 };
 
 /// An integer projection laid out for the correction kernel (prepareSolidProjection): inputs taken
-/// in pairs, the weights of each pair for every output dimension side by side, so that one pair
-/// of int16 inputs updates all dimensions at once (a pmaddwd on x86). The centring by the mean is
-/// folded into `offset`: q_d = clamp((sum_j basis[d][j] * x_j + offset[d]) >> shift, +-127), with
-/// offset[d] = divisor/2 - sum_j basis[d][j] * mean_j. Bit for bit the projection of
-/// SolidProjection::project (all terms are exact int32).
+/// in chunks of 16 (padded with zero weights), the weights of a chunk stored dimension after
+/// dimension, so that one chunk of int16 inputs, loaded once, updates every dimension in turn (a
+/// pmaddwd per dimension on x86). The centring by the mean is folded into `offset`: q_d =
+/// clamp((sum_j basis[d][j] * x_j + offset[d]) >> shift, +-127), with offset[d] = divisor/2 -
+/// sum_j basis[d][j] * mean_j. Bit for bit the projection of SolidProjection::project (all terms
+/// are exact int32).
 struct SolidPairProjection {
-  static constexpr int kLanes = 16;  ///< output dimensions padded to 16
+  static constexpr int kLanes = 16;  ///< output dimensions at most; outputs are padded to 16 with zeros
+  static constexpr int kChunk = 16;  ///< inputs per chunk
   int dims = 0;
-  int pairs = 0;                     ///< ceil(inputs / 2)
+  int rows = 0;                      ///< dims rounded up to a multiple of 4 (extra rows have zero weights)
+  int lanes = 0;                     ///< inputs rounded up to a multiple of kChunk
   int shift = 0;
-  std::vector<int16_t> weights;      ///< pairs * kLanes * 2: (basis[d][2p], basis[d][2p+1]) for d < 16
+  std::vector<int16_t> weights;      ///< lanes / kChunk chunks of rows x kChunk: basis[d][c * kChunk + i]
   alignas(32) int32_t offset[kLanes] = {};
 };
+/// `dims` at most SolidPairProjection::kLanes.
 SolidPairProjection prepareSolidProjection(const int32_t* mean, const int16_t* basis, int inputs, int dims,
                                            int32_t divisor);
 
@@ -101,10 +105,12 @@ void solidColorKernel(const uint32_t* triples, int16_t* colors, const int8_t* la
 /// Correction sub-pass `step` (class (step-1) mod 8 of the 2x2x2 interleave): for every voxel of
 /// that class with last >= step, the two-step search (§5.1): the best 2-D candidate in each
 /// direction among the k-coherence candidates of its 3x3 plane neighbors, then the best of the
-/// 3-D candidates of those three pixels, by integer SSD of projected neighborhoods; ties go to the
-/// earliest candidate (direction x, y, z; then rank). Reads triples `in` and their colours
-/// `inColors`; writes only those voxels of `out` and `outColors`. `tables.pairs2d/pairs3d` must be
-/// set. Uses AVX2 where the CPU has it (same integers, same result).
+/// 3-D candidates of those three pixels, by integer SSD of projected neighborhoods; step 1's ties
+/// go to the smaller packed coordinate, step 2's to the earliest candidate (direction x, y, z;
+/// then rank). Reads triples `in` and their colours `inColors`; writes only those voxels of `out`
+/// and `outColors`. `tables.pairs2d/pairs3d` must be set. Uses AVX2 where the CPU has it (same
+/// integers, same result); searches its voxels in batches, phase by phase, so that their table
+/// reads overlap (voxels are independent: a port may search them one by one).
 void solidCorrectKernel(const uint32_t* in, const int16_t* inColors, uint32_t* out, int16_t* outColors,
                         const int8_t* last, const VolumeGrid& grid, const SolidTables& tables, int interleave, int step,
                         int rowBegin, int rowEnd);
