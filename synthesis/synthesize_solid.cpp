@@ -32,7 +32,7 @@ constexpr int kBrickSide = 1 << kBrickShift;
 
 // The projections of a level laid out for the correction kernel.
 struct Prepared {
-  cpu::SolidPairProjection pairs2d, pairs3d;
+  cpu::SolidKernelProjection projection2d, projection3d;
 };
 
 Prepared prepare(const SolidLevel& l) {
@@ -57,19 +57,12 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
     const size_t s = a.shared ? 0 : size_t(e);
     t.colors[e] = l.colors[s].data();
     t.candidates2d[e] = l.candidates2d[s].data();
-    t.descriptors2d[e] = l.descriptors2d[s].data();
     t.candidateDescriptors2d[e] = l.candidateDescriptors2d[s].data();
     t.triples[e] = l.triples[size_t(e)].data();
     t.descriptors3d[e] = l.descriptors3d[size_t(e)].data();
   }
-  t.mean2d = l.projection2d.mean.data();
-  t.basis2d = l.projection2d.basis.data();
-  t.divisor2d = l.projection2d.divisor;
-  t.mean3d = l.projection3d.mean.data();
-  t.basis3d = l.projection3d.basis.data();
-  t.divisor3d = l.projection3d.divisor;
-  t.pairs2d = &prepared.pairs2d;
-  t.pairs3d = &prepared.pairs3d;
+  t.projection2d = &prepared.projection2d;
+  t.projection3d = &prepared.projection3d;
   return t;
 }
 

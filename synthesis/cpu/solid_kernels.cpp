@@ -75,20 +75,20 @@ inline uint32_t wrapCoord(int64_t u, int64_t v, int w, int h) {
   return packCoord(uint32_t(wrapNear(u, w)), uint32_t(wrapNear(v, h)));
 }
 
-// Projections of gathered colour records, see SolidPairProjection. Integer arithmetic only: both
+// Projections of gathered colour records, see SolidKernelProjection. Integer arithmetic only: both
 // variants return the same bytes (a sum of int32 products does not depend on its order).
 inline int8_t clampProjected(int32_t sum, int32_t offset, int shift) {
   const int32_t q = (sum + offset) >> shift;  // round half up, as SolidProjection
   return int8_t(q < -127 ? -127 : q > 127 ? 127 : q);
 }
 
-inline void finishProjection(const int32_t* sum, const SolidPairProjection& p, int8_t* out) {
-  for (int d = 0; d < SolidPairProjection::kLanes; ++d) out[d] = clampProjected(sum[d], p.offset[d], p.shift);
+inline void finishProjection(const int32_t* sum, const SolidKernelProjection& p, int8_t* out) {
+  for (int d = 0; d < SolidKernelProjection::kLanes; ++d) out[d] = clampProjected(sum[d], p.offset[d], p.shift);
 }
 
-void projectPortable(const int16_t* x, const SolidPairProjection& p, int8_t* out) {
-  constexpr int kChunk = SolidPairProjection::kChunk;
-  int32_t sum[SolidPairProjection::kLanes] = {};
+void projectPortable(const int16_t* x, const SolidKernelProjection& p, int8_t* out) {
+  constexpr int kChunk = SolidKernelProjection::kChunk;
+  int32_t sum[SolidKernelProjection::kLanes] = {};
   const int16_t* w = p.weights.data();
   for (int c = 0; c < p.lanes; c += kChunk)
     for (int d = 0; d < p.rows; ++d, w += kChunk)
@@ -102,21 +102,21 @@ void projectPortable(const int16_t* x, const SolidPairProjection& p, int8_t* out
 // and multiplied by every dimension's weights (stored chunk by chunk, read in order).
 
 // SSE2 (every x86-64): a chunk in two registers.
-template <int Rows> void projectSseRows(const int16_t* x, const SolidPairProjection& p, int8_t* out) {
+template <int Rows> void projectSseRows(const int16_t* x, const SolidKernelProjection& p, int8_t* out) {
   __m128i acc[Rows];
   for (int d = 0; d < Rows; ++d) acc[d] = _mm_setzero_si128();
   const int16_t* w = p.weights.data();
-  for (int c = 0; c < p.lanes; c += SolidPairProjection::kChunk) {
+  for (int c = 0; c < p.lanes; c += SolidKernelProjection::kChunk) {
     const __m128i x0 = _mm_load_si128(reinterpret_cast<const __m128i*>(x + c));
     const __m128i x1 = _mm_load_si128(reinterpret_cast<const __m128i*>(x + c + 8));
-    for (int d = 0; d < Rows; ++d, w += SolidPairProjection::kChunk) {
+    for (int d = 0; d < Rows; ++d, w += SolidKernelProjection::kChunk) {
       const __m128i m0 = _mm_madd_epi16(x0, _mm_loadu_si128(reinterpret_cast<const __m128i*>(w)));
       const __m128i m1 = _mm_madd_epi16(x1, _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + 8)));
       acc[d] = _mm_add_epi32(acc[d], _mm_add_epi32(m0, m1));
     }
   }
   alignas(16) int32_t parts[Rows][4];
-  int32_t sum[SolidPairProjection::kLanes] = {};
+  int32_t sum[SolidKernelProjection::kLanes] = {};
   for (int d = 0; d < Rows; ++d) {
     _mm_store_si128(reinterpret_cast<__m128i*>(parts[d]), acc[d]);
     sum[d] = parts[d][0] + parts[d][1] + parts[d][2] + parts[d][3];
@@ -124,7 +124,7 @@ template <int Rows> void projectSseRows(const int16_t* x, const SolidPairProject
   finishProjection(sum, p, out);
 }
 
-void projectSse(const int16_t* x, const SolidPairProjection& p, int8_t* out) {
+void projectSse(const int16_t* x, const SolidKernelProjection& p, int8_t* out) {
   switch (p.rows) {
   case 4: return projectSseRows<4>(x, p, out);
   case 8: return projectSseRows<8>(x, p, out);
@@ -156,13 +156,13 @@ __attribute__((target("avx2"))) inline void finish8(__m256i sum, const int32_t* 
 }
 
 template <int Rows>
-__attribute__((target("avx2"))) inline void projectAvx2(const int16_t* x, const SolidPairProjection& p, int8_t* out) {
+__attribute__((target("avx2"))) inline void projectAvx2(const int16_t* x, const SolidKernelProjection& p, int8_t* out) {
   __m256i acc[Rows];
   for (int d = 0; d < Rows; ++d) acc[d] = _mm256_setzero_si256();
   const int16_t* w = p.weights.data();
-  for (int c = 0; c < p.lanes; c += SolidPairProjection::kChunk) {
+  for (int c = 0; c < p.lanes; c += SolidKernelProjection::kChunk) {
     const __m256i xc = _mm256_load_si256(reinterpret_cast<const __m256i*>(x + c));
-    for (int d = 0; d < Rows; ++d, w += SolidPairProjection::kChunk)
+    for (int d = 0; d < Rows; ++d, w += SolidKernelProjection::kChunk)
       acc[d] = _mm256_add_epi32(acc[d], _mm256_madd_epi16(xc, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(w))));
   }
   const __m128i shift = _mm_cvtsi32_si128(p.shift);
@@ -172,7 +172,7 @@ __attribute__((target("avx2"))) inline void projectAvx2(const int16_t* x, const 
 }
 #endif
 
-using ProjectFn = void (*)(const int16_t* x, const SolidPairProjection& p, int8_t* out);
+using ProjectFn = void (*)(const int16_t* x, const SolidKernelProjection& p, int8_t* out);
 
 std::atomic<bool> gAllowSimd{true};
 
@@ -223,8 +223,8 @@ constexpr int kBatch = 32;
 struct VoxelSearch {
   size_t voxel;
   uint32_t bases[3][9];  // step 1's pixels (v * w + u) per direction, see BaseLayout
-  alignas(16) int8_t target3d[SolidPairProjection::kLanes];
-  alignas(16) int8_t target2d[3][SolidPairProjection::kLanes];
+  alignas(16) int8_t target3d[SolidKernelProjection::kLanes];
+  alignas(16) int8_t target2d[3][SolidKernelProjection::kLanes];
   uint32_t pixels[3];    // step 1's winners (v * w + u)
   const uint32_t* triple;  // step 2's winner
 };
@@ -255,7 +255,7 @@ struct Correction {
   BaseLayout bases;
 
   Correction(const VolumeGrid& g, const SolidTables& t) {
-    if (t.pairs3d->lanes > kCrossLanes || t.pairs2d->lanes > kPlaneLanes || t.pairs2d->dims != kSolid2dDims)
+    if (t.projection3d->lanes > kCrossLanes || t.projection2d->lanes > kPlaneLanes || t.projection2d->dims != kSolid2dDims)
       throw std::logic_error("solid correction: projections of other neighbourhoods");
     const CrossLayout l = layoutFor(g);
     for (int i = 0; i < kSolidCrossVoxels; ++i) cross[i] = l.linear[i] * 4;
@@ -404,10 +404,10 @@ void projectTargets(VoxelSearch* batch, int count, const int16_t* inColors, cons
   for (int i = 0; i < count; ++i) {
     VoxelSearch& s = batch[i];
     gatherNeighborhood(s, inColors, c, n);
-    Project(n.cross, *t.pairs3d, s.target3d);
-    Project(n.planes[0], *t.pairs2d, s.target2d[0]);
-    Project(n.planes[1], *t.pairs2d, s.target2d[1]);
-    Project(n.cross, *t.pairs2d, s.target2d[2]);  // layoutFor checks that E_z's plane leads
+    Project(n.cross, *t.projection3d, s.target3d);
+    Project(n.planes[0], *t.projection2d, s.target2d[0]);
+    Project(n.planes[1], *t.projection2d, s.target2d[1]);
+    Project(n.cross, *t.projection2d, s.target2d[2]);  // layoutFor checks that E_z's plane leads
   }
 }
 
@@ -482,10 +482,10 @@ __attribute__((target("avx2"))) void projectTargetsAvx2(VoxelSearch* batch, int 
   for (int i = 0; i < count; ++i) {
     VoxelSearch& s = batch[i];
     gatherNeighborhood(s, inColors, c, n);
-    projectAvx2<Rows3d>(n.cross, *t.pairs3d, s.target3d);
-    projectAvx2<kSolid2dDims>(n.planes[0], *t.pairs2d, s.target2d[0]);
-    projectAvx2<kSolid2dDims>(n.planes[1], *t.pairs2d, s.target2d[1]);
-    projectAvx2<kSolid2dDims>(n.cross, *t.pairs2d, s.target2d[2]);  // layoutFor checks that E_z's plane leads
+    projectAvx2<Rows3d>(n.cross, *t.projection3d, s.target3d);
+    projectAvx2<kSolid2dDims>(n.planes[0], *t.projection2d, s.target2d[0]);
+    projectAvx2<kSolid2dDims>(n.planes[1], *t.projection2d, s.target2d[1]);
+    projectAvx2<kSolid2dDims>(n.cross, *t.projection2d, s.target2d[2]);  // layoutFor checks that E_z's plane leads
   }
 }
 
@@ -675,7 +675,7 @@ Variant variantFor(const SolidTables& t) {
                                                                  searchStep1Avx2<3>, searchStep1Avx2<4>};
     static constexpr decltype(Variant::projectTargets) kProject[4] = {projectTargetsAvx2<4>, projectTargetsAvx2<8>,
                                                                         projectTargetsAvx2<12>, projectTargetsAvx2<16>};
-    return {findBasesAvx2, kProject[t.pairs3d->rows / 4 - 1], kStep1[(t.k2d - 1) / 2],
+    return {findBasesAvx2, kProject[t.projection3d->rows / 4 - 1], kStep1[(t.k2d - 1) / 2],
             t.dims == kSolid2dDims ? searchStep2Avx2Pairs
             : t.dims > kSolid2dDims ? searchStep2Avx2Singles
                                     : searchStep2Portable};
@@ -785,12 +785,12 @@ void solidUpsampleKernel(const uint32_t* parent, const VolumeGrid& pg, uint32_t*
   }
 }
 
-SolidPairProjection prepareSolidProjection(const int32_t* mean, const int16_t* basis, int inputs, int dims,
+SolidKernelProjection prepareSolidProjection(const int32_t* mean, const int16_t* basis, int inputs, int dims,
                                            int32_t divisor) {
-  if (dims < 1 || dims > SolidPairProjection::kLanes)
+  if (dims < 1 || dims > SolidKernelProjection::kLanes)
     throw std::invalid_argument("prepareSolidProjection: 1 to 16 dimensions");
-  constexpr int kChunk = SolidPairProjection::kChunk;
-  SolidPairProjection p;
+  constexpr int kChunk = SolidKernelProjection::kChunk;
+  SolidKernelProjection p;
   p.dims = dims;
   p.rows = (dims + 3) / 4 * 4;
   p.lanes = (inputs + kChunk - 1) / kChunk * kChunk;

@@ -32,7 +32,7 @@ struct VolumeGrid {
 /// clamp((sum_j basis[d][j] * x_j + offset[d]) >> shift, +-127), with offset[d] = divisor/2 -
 /// sum_j basis[d][j] * mean_j. Bit for bit the projection of SolidProjection::project (all terms
 /// are exact int32).
-struct SolidPairProjection {
+struct SolidKernelProjection {
   static constexpr int kLanes = 16;  ///< output dimensions at most; outputs are padded to 16 with zeros
   static constexpr int kChunk = 16;  ///< inputs per chunk
   int dims = 0;
@@ -42,8 +42,8 @@ struct SolidPairProjection {
   std::vector<int16_t> weights;      ///< lanes / kChunk chunks of rows x kChunk: basis[d][c * kChunk + i]
   alignas(32) int32_t offset[kLanes] = {};
 };
-/// `dims` at most SolidPairProjection::kLanes.
-SolidPairProjection prepareSolidProjection(const int32_t* mean, const int16_t* basis, int inputs, int dims,
+/// `dims` at most SolidKernelProjection::kLanes.
+SolidKernelProjection prepareSolidProjection(const int32_t* mean, const int16_t* basis, int inputs, int dims,
                                            int32_t divisor);
 
 /// What the correction kernel reads about one synthesized level (views into SolidLevel).
@@ -57,18 +57,11 @@ struct SolidTables {
   int k3d = 1;          ///< 3-D candidates compared per pixel
   const uint8_t* colors[3] = {};         ///< per exemplar: w*h*3 8-bit colours of this level
   const uint32_t* candidates2d[3] = {};  ///< per exemplar: w*h*k2dStride packed coordinates
-  const int8_t* descriptors2d[3] = {};   ///< per exemplar: w*h*8
   const int8_t* candidateDescriptors2d[3] = {};  ///< per exemplar: w*h*k2dStride*8, each candidate's descriptor
   const uint32_t* triples[3] = {};       ///< per exemplar: w*h*12*3 packed coordinates
   const int8_t* descriptors3d[3] = {};   ///< per exemplar: w*h*12*dims
-  const int32_t* mean2d = nullptr;       ///< 75
-  const int16_t* basis2d = nullptr;      ///< 8 * 75
-  int32_t divisor2d = 1;
-  const int32_t* mean3d = nullptr;       ///< 183
-  const int16_t* basis3d = nullptr;      ///< dims * 183
-  int32_t divisor3d = 1;
-  const SolidPairProjection* pairs2d = nullptr;  ///< the 2-D projection, prepared
-  const SolidPairProjection* pairs3d = nullptr;  ///< the 3-D projection, prepared
+  const SolidKernelProjection* projection2d = nullptr;  ///< the 2-D projection, prepared
+  const SolidKernelProjection* projection3d = nullptr;  ///< the 3-D projection, prepared
 };
 
 /// `interleave` is 2 (sub-pass t corrects the voxels of parity class (t-1) mod 8, §5.1) or 1
@@ -108,7 +101,7 @@ void solidColorKernel(const uint32_t* triples, int16_t* colors, const int8_t* la
 /// 3-D candidates of those three pixels, by integer SSD of projected neighborhoods; step 1's ties
 /// go to the smaller packed coordinate, step 2's to the earliest candidate (direction x, y, z;
 /// then rank). Reads triples `in` and their colours `inColors`; writes only those voxels of `out`
-/// and `outColors`. `tables.pairs2d/pairs3d` must be set. Uses AVX2 where the CPU has it (same
+/// and `outColors`. `tables.projection2d/projection3d` must be set. Uses AVX2 where the CPU has it (same
 /// integers, same result); searches its voxels in batches, phase by phase, so that their table
 /// reads overlap (voxels are independent: a port may search them one by one).
 void solidCorrectKernel(const uint32_t* in, const int16_t* inColors, uint32_t* out, int16_t* outColors,
