@@ -243,7 +243,7 @@ struct Engine {
         std::copy_n(c + (z * kChunk + y) * kChunk, kChunk, g + ((z + kHalo) * kGathered + y + kHalo) * kGathered + kHalo);
     const VolumeGrid grid{key[0] * kChunk - kHalo, key[1] * kChunk - kHalo, key[2] * kChunk - kHalo,
                           kGathered, kGathered, kGathered};
-    cpu::solidDilateKernel(g, grid, o.interleave, t, 0, grid.rows());
+    cpu::solidDilateKernel(g, grid, o.interleave, t);
   }
 
   // The spread grid of the chunk at `key` into it and its neighbours (created where it reaches).

@@ -14,7 +14,9 @@
 #include <atomic>
 #include <bit>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
+#include <vector>
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
@@ -689,22 +691,37 @@ Variant variantFor(const SolidTables& t) {
 
 } // namespace
 
-void solidDilateKernel(int8_t* last, const VolumeGrid& g, int interleave, int step, int rowBegin, int rowEnd) {
-  const CrossLayout l = layoutFor(g);
+void solidDilateKernel(int8_t* last, const VolumeGrid& g, int interleave, int step) {
+  // The 61-voxel cross is three 5x5 planes through the voxel: (x, y), (z, x) and (y, z). Per row
+  // of active voxels, its activity widened by 2 along x raises the 5 rows of the (x, y) plane and
+  // the 4 other rows of the (z, x) plane; the activity itself raises the 16 rows of the (y, z)
+  // plane off the axes. Raising to step-1 < step never changes which voxels are active.
   const auto target = int8_t(step - 1);
-  for (int r = rowBegin; r < rowEnd; ++r) {
+  const int nx = g.nx;
+  std::vector<uint8_t> active(static_cast<size_t>(nx)), widened(static_cast<size_t>(nx));
+  auto raise = [&](int y, int z, const uint8_t* mask) {
+    int8_t* row = last + (size_t(z) * size_t(g.ny) + size_t(y)) * size_t(nx);
+    for (int x = 0; x < nx; ++x) row[x] = std::max(row[x], mask[x] ? target : std::numeric_limits<int8_t>::min());
+  };
+  for (int r = 0; r < g.rows(); ++r) {
     int y, z, x0;
     if (!classRow(g, interleave, step, r, y, z, x0)) continue;
     if (y < 2 || z < 2 || y >= g.ny - 2 || z >= g.nz - 2) continue;
-    for (int x = x0; x < g.nx; x += interleave) {
-      const size_t v = size_t(r) * size_t(g.nx) + size_t(x);
-      if (std::atomic_ref<int8_t>(last[v]).load(std::memory_order_relaxed) < step) continue;
-      if (x < 2 || x >= g.nx - 2) continue;
-      for (int i = 0; i < kSolidCrossVoxels; ++i) {
-        std::atomic_ref<int8_t> w(last[int64_t(v) + l.linear[i]]);
-        if (w.load(std::memory_order_relaxed) < target) w.store(target, std::memory_order_relaxed);
-      }
+    const int8_t* row = last + size_t(r) * size_t(nx);
+    std::fill(active.begin(), active.end(), uint8_t(0));
+    bool any = false;
+    for (int x = x0; x < nx - 2; x += interleave)
+      if (x >= 2 && row[x] >= step) active[size_t(x)] = 1, any = true;
+    if (!any) continue;
+    for (int x = 0; x < nx; ++x) {
+      uint8_t w = 0;
+      for (int d = std::max(0, x - 2); d <= std::min(nx - 1, x + 2); ++d) w |= active[size_t(d)];
+      widened[size_t(x)] = w;
     }
+    for (int d = -2; d <= 2; ++d) raise(y + d, z, widened.data());
+    for (int d : {-2, -1, 1, 2}) raise(y, z + d, widened.data());
+    for (int dz : {-2, -1, 1, 2})
+      for (int dy : {-2, -1, 1, 2}) raise(y + dy, z + dz, active.data());
   }
 }
 

@@ -69,10 +69,9 @@ struct SolidTables {
 ///
 /// Backward dependency step t (sub-pass class (t-1) mod 8): every voxel of that class with
 /// last >= t needs its 3-neighborhood (the 61-voxel cross, which contains the 3x3 plane
-/// neighbors candidates come from) after step t-1: last = max(last, t-1) there. Scatter with
-/// relaxed atomic byte stores: all writers of a step store the same value, and they never change
-/// which voxels of the step are active. Voxels within 2 of the buffer border must be inactive.
-void solidDilateKernel(int8_t* last, const VolumeGrid& grid, int interleave, int step, int rowBegin, int rowEnd);
+/// neighbors candidates come from) after step t-1: last = max(last, t-1) there. Over the whole
+/// grid (it writes rows around each row it reads); voxels within 2 of the border are not spread.
+void solidDilateKernel(int8_t* last, const VolumeGrid& grid, int interleave, int step);
 
 /// Initialization (§5.1): the candidate slab of E_z (best triple of each pixel, thickened by
 /// +-2 voxels along z, §4.3) tiled over the volume, read through the random warp ("jitter once"):
