@@ -99,8 +99,9 @@ float bilinearToroidal(const Image& image, float u, float v, int channel) {
   return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
-// Solid mode: the triple of each texel's voxel (its 3-D position times the scale), each distinct
-// voxel synthesized once, in one request (values do not depend on how voxels are requested).
+// Solid mode: the triple of each texel's voxel (its 3-D position times the scale), in one
+// request (texels sharing a voxel share its value: values do not depend on how voxels are
+// requested, and the engine computes each voxel once).
 std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& sites, const AtlasFields& fields,
                                                  const synthesis::SolidAnalysis& analysis,
                                                  const synthesis::SolidSynthesisOptions& options, double scale,
@@ -115,24 +116,11 @@ std::vector<synthesis::Triple> solidTexelTriples(const synthesis::SurfaceLevel& 
       if (std::abs(c) > synthesis::kMaxSolidPosition)
         throw Error("the scale puts the model outside the solid texture's range (|position × scale| <= 2^30)");
   }
-  std::vector<uint32_t> order(voxels.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    return std::tie(voxels[a].z, voxels[a].y, voxels[a].x, a) < std::tie(voxels[b].z, voxels[b].y, voxels[b].x, b);
-  });
-  std::vector<synthesis::Voxel> unique;
-  std::vector<uint32_t> voxelOf(voxels.size());
-  for (uint32_t i : order) {
-    if (unique.empty() || !(unique.back() == voxels[i])) unique.push_back(voxels[i]);
-    voxelOf[i] = uint32_t(unique.size() - 1);
-  }
   // One request: a coarse-level cache could not serve it (it only serves later requests).
-  const synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, unique, options, nullptr, threads, onLevel);
-  requested = int64_t(unique.size());
+  synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, voxels, options, nullptr, threads, onLevel);
+  requested = result.distinctVoxels;
   synthesized = result.voxelsSynthesized();
-  std::vector<synthesis::Triple> triples(sites.size());
-  for (size_t s = 0; s < sites.size(); ++s) triples[s] = result.triples[voxelOf[s]];
-  return triples;
+  return std::move(result.triples);
 }
 
 // The input mesh with the atlas's UVs and one PBR material carrying the synthesized maps.

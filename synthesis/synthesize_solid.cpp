@@ -691,7 +691,9 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
     const ChunkKey key{v.x >> kChunkShift, v.y >> kChunkShift, v.z >> kChunkShift};
     if (i == 0 || key != lastKey) slot = mask.get(key);  // neighbouring requests share chunks
     lastKey = key;
-    mask.at(slot)[localIndex(v.x, v.y, v.z)] = T;
+    int8_t& last = mask.at(slot)[localIndex(v.x, v.y, v.z)];
+    result.distinctVoxels += last != T;
+    last = T;
     slotOf[i] = slot;
   }
   std::vector<size_t> first(mask.size() + 1, 0);
@@ -747,6 +749,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
         for (int64_t z = b[2]; z < e[2]; ++z)
           for (int64_t y = b[1]; y < e[1]; ++y) std::fill_n(last + localIndex(b[0], y, z), e[0] - b[0], T);
       }
+  result.distinctVoxels = box.count();
   const size_t seeded = mask.size();
   engine.run([&](uint32_t slot, const uint32_t* values) {
     if (slot >= seeded) return;

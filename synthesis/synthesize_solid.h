@@ -106,6 +106,7 @@ struct SolidLevelStats {
 
 struct SolidSynthesisResult {
   std::vector<Triple> triples;           ///< one per requested voxel, in request order
+  int64_t distinctVoxels = 0;            ///< distinct voxels among those requested
   std::vector<SolidLevelStats> levels;   ///< coarsest first
   int64_t voxelsSynthesized() const;     ///< sum over levels
 };

@@ -400,11 +400,15 @@ TEST(SolidSynthesis, EachLevelIsSynthesizedOnceOverTheUnionOfTheChains) {
   const SolidSynthesisOptions o;
   const std::vector<Voxel> seeds{{15, -1, 31}, {16, 0, 32}, {16, -1, 31}, {-17, 40, 3}, {20, 2, 30}, {900, -33, 64}};
   std::vector<int> reported;  // the progress callback: each level once, coarsest first
-  const SolidSynthesisResult r = synthesizeSolid(a, seeds, o, nullptr, 2, [&](const SolidLevelStats& l, int number, int levels) {
+  std::vector<Voxel> request = seeds;  // a duplicate is computed once and counted once
+  request.push_back(seeds[1]);
+  const SolidSynthesisResult r = synthesizeSolid(a, request, o, nullptr, 2, [&](const SolidLevelStats& l, int number, int levels) {
     EXPECT_EQ(levels, int(a.levels.size()));
     EXPECT_EQ(l.stackLevel, a.levels[size_t(number) - 1].stackLevel);
     reported.push_back(number);
   });
+  EXPECT_EQ(r.distinctVoxels, int64_t(seeds.size()));
+  EXPECT_EQ(r.triples[seeds.size()], r.triples[1]);
   std::vector<int> expectedOrder(a.levels.size());
   std::iota(expectedOrder.begin(), expectedOrder.end(), 1);
   EXPECT_EQ(reported, expectedOrder);
