@@ -44,6 +44,20 @@ void PackChartsOptions::validate() const {
 
 namespace {
 
+// The first texel at or after x of a bit row (one bit per texel, 64 a word) that is occupied
+// (`occupied`) or free (!occupied); W if none before W.
+int nextTexel(const uint64_t* row, int x, int W, bool occupied) {
+  while (x < W) {
+    const uint64_t word = row[size_t(x) >> 6];
+    const uint64_t v = (occupied ? word : ~word) >> (x & 63);  // wanted bits from x
+    const int left = std::min(64 - (x & 63), W - x);
+    const int skip = v ? std::countr_zero(v) : 64;
+    if (skip < left) return x + skip;
+    x += left;
+  }
+  return W;
+}
+
 struct PreparedChart {
   std::vector<Eigen::Vector2d> corners; ///< 3 per face, rotated, min at (0,0), v up
   Eigen::Vector2d extent{0, 0};
@@ -277,28 +291,10 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
     int x = 0;
     while (x < W) {
       // Skip occupied texels, then measure the free run.
-      while (x < W) {
-        const uint64_t v = ~row[size_t(x) >> 6] >> (x & 63); // free bits from x
-        const int left = std::min(64 - (x & 63), W - x);
-        const int ones = v ? std::countr_zero(v) : 64;
-        if (ones < left) {
-          x += ones;
-          break;
-        }
-        x += left;
-      }
+      x = nextTexel(row, x, W, false);
       if (x >= W) break;
       const int start = x;
-      while (x < W) {
-        const uint64_t v = row[size_t(x) >> 6] >> (x & 63);
-        const int left = std::min(64 - (x & 63), W - x);
-        const int zeros = v ? std::countr_zero(v) : 64;
-        if (zeros < left) {
-          x += zeros;
-          break;
-        }
-        x += left;
-      }
+      x = nextTexel(row, x, W, true);
       for (size_t k = 0; k < kRunClass.size(); ++k)
         if (x - start >= kRunClass[k]) lists[k].push_back({start, x});
       longest = std::max(longest, x - start);
