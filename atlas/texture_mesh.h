@@ -65,7 +65,9 @@ struct TextureMeshResult {
   std::shared_ptr<const Image> baseColor;   ///< atlas-sized maps (also referenced by mesh.materials[0])
   std::shared_ptr<const Image> normal, metallicRoughness, height; ///< null unless requested
   GenerateAtlasResult atlas;
-  synthesis::SurfaceLevel sites;            ///< the finest level of the surface domain (one site per chart texel)
+  /// The finest level of the surface domain (one site per chart texel; in solid mode its
+  /// neighbors are linked only when measures are asked for).
+  synthesis::SurfaceLevel sites;
   std::vector<uint32_t> coords;             ///< surface mode: exemplar coordinate per site
   std::vector<synthesis::Triple> triples;   ///< solid mode: exemplar triple per site
   double textureScale = 0;                  ///< exemplar pixels per model unit used

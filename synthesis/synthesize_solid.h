@@ -21,8 +21,9 @@
 // Deviations from the paper, on purpose:
 //   * Jacobi passes by default (SolidSynthesisOptions::interleave = 1), not 8 sub-passes: the
 //     dependency chain of §5.2 (dilated once per pass) is then exact, 5,037 voxels for one voxel
-//     with 3 levels (paper: 6,778); with sub-passes (interleave 2) the exact chain is ~10^5
-//     voxels, since every sub-pass dilates; dependencyChainSize() reports both;
+//     with 3 levels and two passes each (paper: 6,778; 3,356 with the default one finest pass);
+//     with sub-passes (interleave 2) the exact chain is ~10^5 voxels, since every sub-pass
+//     dilates; dependencyChainSize() reports both;
 //   * the jitter warp is a sum of compactly supported polynomial bumps on two hashed grids (4 and
 //     8 voxels at the start level) instead of ~200 Gaussians in a unit volume: the volume is
 //     infinite, and integer arithmetic keeps backends identical;
@@ -80,7 +81,7 @@ struct SolidSynthesisOptions {
   int finestPasses = 1;
   /// 2: each pass is 8 sub-passes over the 2x2x2 parity classes (§5.1, the paper's choice);
   /// 1 (default): each pass corrects every voxel at once (Jacobi), a dependency chain ~25x shorter
-  /// (one voxel: 5,037 voxels instead of 125,187 with 3 levels; a thin shell: ~5x fewer voxels per
+  /// (one voxel, two passes per level: 5,037 voxels instead of 125,187 with 3 levels; a thin shell: ~5x fewer voxels per
   /// requested voxel). Measured on the 64^3 marble volume of the tests, slice fidelity (2-D
   /// neighborhood measure, lower is better) is 0.0160/0.0158/0.0162 (x/y/z slices) with Jacobi
   /// against 0.0159/0.0154/0.0156 with sub-passes (extruded exemplar 0.0208/0.0193, random 0.029):
