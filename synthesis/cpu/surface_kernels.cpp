@@ -25,8 +25,9 @@ struct Offset {
   int x, y;
 };
 
-// round(J * (vx, vy)) in subpixel units; products and sums kept separate so that no compiler
-// fuses them into a multiply-add.
+// round(J * (vx, vy)) in subpixel units: two products, then their sum, each rounded to float.
+// Naming the products does not stop a compiler from fusing them into a multiply-add; the build's
+// -ffp-contract=off does (and `precise` in the GLSL twin).
 inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
   const float ax = j[0] * vx, bx = j[1] * vy;
   const float ay = j[2] * vx, by = j[3] * vy;

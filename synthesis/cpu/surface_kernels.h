@@ -5,7 +5,8 @@
 // output buffer for the sites [begin, end) it is given, so sites can be split across threads (or
 // GPU invocations) freely. Coordinates are subpixel (kSubpixelBits); appearance, neighborhoods and
 // candidates are looked up at the nearest exemplar pixel. Jacobians are floats; each product J·v
-// is rounded to subpixels by floor(x + 1/2) in single precision, without fused multiply-add.
+// is rounded to subpixels by floor(x + 1/2) in single precision, without fused multiply-add (the
+// build compiles every target with -ffp-contract=off; the GLSL twins mark these products precise).
 
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/synthesize_surface.h"

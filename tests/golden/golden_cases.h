@@ -1,0 +1,166 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The fixed cases whose output bytes the golden tests hash. Each returns the FNV-1a 64 hash of
+// what texfab computes: exemplar coordinates, triples, texel UVs, image bytes, file bytes.
+// Inputs are small bundled data so that the whole suite runs in seconds.
+
+#include "render/image_io.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/synthesize_2d.h"
+#include "synthesis/synthesize_solid.h"
+#ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
+#include "atlas/generate_atlas.h"
+#include "atlas/texture_mesh.h"
+#include "geometry/mesh_io.h"
+#include "tests/test_support.h"
+#endif
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace texfab::golden {
+
+/// FNV-1a over bytes, continued from `h`.
+inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
+  return h;
+}
+template <class T>
+uint64_t hashOf(const std::vector<T>& values, uint64_t h = 0xcbf29ce484222325ull) {
+  return fnv1a(values.data(), values.size() * sizeof(T), h);
+}
+/// An image as the 8-bit values a PNG of it holds.
+inline uint64_t hashOf8Bit(const Image& image) {
+  std::vector<uint8_t> bytes(image.pixels.size());
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    const float v = image.pixels[i] < 0 ? 0.0f : image.pixels[i] > 1 ? 1.0f : image.pixels[i];
+    bytes[i] = uint8_t(v * 255.0f + 0.5f);
+  }
+  return hashOf(bytes);
+}
+inline std::string hex(uint64_t h) {
+  char s[17];
+  std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
+  return s;
+}
+
+inline std::filesystem::path bundled(const std::string& relative) {
+  return std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / relative;
+}
+
+/// A 32x32 crop of the bundled marble: a solid analysis in a second or two.
+inline const Image& marble32() {
+  static const Image crop = [] {
+    const Image full = readImage(bundled("exemplars/marble.png"));
+    Image out(32, 32, full.channels, full.format);
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x)
+        for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(40 + x, 24 + y, c);
+    return out;
+  }();
+  return crop;
+}
+
+inline const synthesis::SolidAnalysis& solidAnalysis32() {
+  static const synthesis::SolidAnalysis a = synthesis::analyzeSolid(marble32(), marble32(), marble32(), {}, 2);
+  return a;
+}
+
+/// A 2-D window away from the origin, bundled brick, seed 7.
+inline uint64_t window2d() {
+  const Image exemplar = readImage(bundled("exemplars/brick.png"));
+  const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(exemplar, {}, 2);
+  synthesis::SynthesisOptions options;
+  options.seed = 7;
+  const synthesis::SynthesisResult r = synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, 2);
+  return hashOf(r.coords.coords);
+}
+
+/// A 12^3 box of the solid texture of marble32 with its colours.
+inline uint64_t solidVolume() {
+  synthesis::SolidSynthesisOptions options;
+  options.seed = 3;
+  const synthesis::SolidSynthesisResult r =
+      synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, 2);
+  std::vector<uint32_t> flat;
+  for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
+  std::vector<float> colours;
+  synthesis::solidColors(r.triples, marble32(), marble32(), marble32(), colours);
+  return hashOf(colours, hashOf(flat));
+}
+
+/// The voxels of an oblique 40x40 plane through the solid texture of marble32.
+inline uint64_t solidPlane() {
+  std::vector<synthesis::Voxel> voxels;
+  for (int j = 0; j < 40; ++j)
+    for (int i = 0; i < 40; ++i) {
+      const double x = 3 + 0.8 * i - 0.3 * j, y = -5 + 0.5 * i + 0.7 * j, z = 11 + 0.3 * i + 0.6 * j;
+      voxels.push_back({int64_t(std::floor(x)), int64_t(std::floor(y)), int64_t(std::floor(z))});
+    }
+  const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, 2);
+  std::vector<uint32_t> flat;
+  for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
+  return hashOf(flat);
+}
+
+#ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
+
+/// The bundled knot's atlas at 512^2: every corner's texel position.
+inline uint64_t atlasTexelUvs() {
+  const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/knot1.off"));
+  atlas::GenerateAtlasOptions options;
+  options.pack.width = options.pack.height = 512;
+  const atlas::GenerateAtlasResult r = atlas::generateAtlas(mesh, options);
+  return hashOf(r.atlas.texelUvs);
+}
+
+inline atlas::TextureMeshResult textureElephant(atlas::TextureMode mode) {
+  static const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
+  static const Image brick = readImage(bundled("exemplars/brick.png"));
+  static const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(brick, {}, 2);
+  atlas::TextureExemplar ex;
+  ex.color = mode == atlas::TextureMode::Solid ? &marble32() : &brick;
+  ex.analysis = &analysis;
+  ex.solidAnalysis = &solidAnalysis32();
+  atlas::TextureMeshOptions options;
+  options.mode = mode;
+  options.atlas.pack.width = options.atlas.pack.height = 256;
+  options.measure = false;
+  options.surface.seed = options.solid.seed = 5;
+  return atlas::textureMesh(mesh, ex, options);
+}
+
+/// The bundled elephant textured at 256^2 with the bundled brick: coordinates and base colour.
+inline uint64_t surfaceTexture() {
+  const atlas::TextureMeshResult r = textureElephant(atlas::TextureMode::Surface);
+  return hashOf8Bit(*r.baseColor) ^ hashOf(r.coords);
+}
+
+/// The same in solid mode with marble32.
+inline uint64_t solidTexture() {
+  const atlas::TextureMeshResult r = textureElephant(atlas::TextureMode::Solid);
+  return hashOf8Bit(*r.baseColor);
+}
+
+/// The bytes of the GLB of the surface-mode elephant.
+inline uint64_t glbBytes() {
+  const test::TempDir dir("texfab-golden");
+  const std::filesystem::path path = dir / "elephant.glb";
+  geometry::writeMesh(textureElephant(atlas::TextureMode::Surface).mesh, path);
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return hashOf(bytes);
+}
+
+#endif
+
+} // namespace texfab::golden
