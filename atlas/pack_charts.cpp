@@ -18,8 +18,8 @@
 #include "atlas/pack_charts.h"
 
 #include "atlas/convex_hull.h"
-#include "render/error.h"
-#include "render/parallel.h"
+#include "render/image/error.h"
+#include "render/image/parallel.h"
 
 #include <algorithm>
 #include <array>

@@ -2,7 +2,7 @@
 #pragma once
 // Pieces the benchmark programs share.
 
-#include "render/image_io.h"
+#include "render/image/image_io.h"
 
 #include <sys/resource.h>
 

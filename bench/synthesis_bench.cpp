@@ -4,7 +4,7 @@
 // 4096^2 <= 8 s with peak memory <= 1 GiB.
 //   build/bench/synthesis_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
-#include "render/image_io.h"
+#include "render/image/image_io.h"
 #include "synthesis/synthesize_2d.h"
 
 #include <benchmark/benchmark.h>

@@ -4,10 +4,10 @@
 // resolve, write) and peak memory. The exemplar analyses are computed before timing (cached in
 // real use). Targets (issue 6): surface ≤ 20 s, solid ≤ 10 s. Run:
 //   build/bench/texture_bench --benchmark_counters_tabular=true
-#include "atlas/texture_mesh.h"
+#include "render/texture_mesh.h"
 #include "bench/bench_support.h"
 #include "geometry/mesh_io.h"
-#include "render/image_io.h"
+#include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 
@@ -21,18 +21,18 @@ namespace {
 using namespace texfab;
 namespace fs = std::filesystem;
 
-void runTexture(benchmark::State& state, atlas::TextureMode mode) {
+void runTexture(benchmark::State& state, render::TextureMode mode) {
   const fs::path model = fs::path(TEXFAB_SOURCE_DIR) / "models" / "cgal" / "refined_elephant.off";
   if (!fs::exists(model)) {
     state.SkipWithError("model absent: run models/fetch");
     return;
   }
   const Image exemplar = readImage(fs::path(TEXFAB_SOURCE_DIR) / "models" / "exemplars" / "marble.png");
-  atlas::TextureExemplar ex;
+  render::TextureExemplar ex;
   ex.color = &exemplar;
   synthesis::ExemplarAnalysis analysis;
   synthesis::SolidAnalysis solid;
-  if (mode == atlas::TextureMode::Surface) {
+  if (mode == render::TextureMode::Surface) {
     analysis = synthesis::analyzeExemplar(exemplar, {});
     ex.analysis = &analysis;
   } else {
@@ -45,20 +45,21 @@ void runTexture(benchmark::State& state, atlas::TextureMode mode) {
     const auto t0 = std::chrono::steady_clock::now();
     const geometry::Mesh mesh = geometry::readMesh(model);
     seconds["load"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    atlas::TextureMeshOptions options;
+    render::TextureMeshOptions options;
     options.mode = mode;
     options.measure = false;
-    const atlas::TextureMeshResult r =
-        atlas::textureMesh(mesh, ex, options, [&](const std::string& stage, double s, const std::string&) {
-          seconds[stage] = s;
-        });
+    Context ctx;
+    ctx.progress = [&](const ProgressEvent& e) {
+      if (e.kind == ProgressEvent::Kind::End) seconds[std::string(e.stage)] = e.seconds;
+    };
+    const render::TextureMeshResult r = render::textureMesh(mesh, ex, options, ctx);
     const auto t1 = std::chrono::steady_clock::now();
     geometry::writeMesh(r.mesh, out);
     seconds["write"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     seconds["total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const auto& [stage, s] : seconds) state.counters[stage + "_s"] = s;
     state.counters["texels"] = double(r.sites.size());
-    if (mode == atlas::TextureMode::Solid) state.counters["voxels"] = double(r.voxelsRequested);
+    if (mode == render::TextureMode::Solid) state.counters["voxels"] = double(r.voxelsRequested);
   }
   state.counters["peak_MiB"] = bench::peakMemoryMiB();
   fs::remove(out);
@@ -66,8 +67,8 @@ void runTexture(benchmark::State& state, atlas::TextureMode mode) {
 
 } // namespace
 
-BENCHMARK_CAPTURE(runTexture, surface_refined_elephant_2048, atlas::TextureMode::Surface)
+BENCHMARK_CAPTURE(runTexture, surface_refined_elephant_2048, render::TextureMode::Surface)
     ->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK_CAPTURE(runTexture, solid_refined_elephant_2048, atlas::TextureMode::Solid)
+BENCHMARK_CAPTURE(runTexture, solid_refined_elephant_2048, render::TextureMode::Solid)
     ->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_MAIN();

@@ -2,8 +2,8 @@
 #include "geometry/embree_scene.h"
 
 #include "geometry/mesh_topology.h"
-#include "render/error.h"
-#include "render/parallel.h"
+#include "render/image/error.h"
+#include "render/image/parallel.h"
 
 #include <embree3/rtcore.h>
 

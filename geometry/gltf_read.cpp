@@ -5,7 +5,8 @@
 // image list, so it never touches image bytes).
 #include "geometry/mesh_formats.h"
 #include "geometry/model_path.h"
-#include "render/error.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
 
 #include <tiny_gltf.h>
 
@@ -256,7 +257,7 @@ std::shared_ptr<const Image> GltfReader::image(int index) {
   } else {
     throw Error(where + " has neither a uri nor a bufferView");
   }
-  slot = std::make_shared<const Image>(decodeImage(data, size, where));
+  slot = std::make_shared<const Image>(decodeImage({data, size}, where));
   return slot;
 }
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "geometry/mesh.h"
 
-#include "render/error.h"
+#include "render/image/error.h"
 
 #include <Eigen/Geometry>
 

@@ -9,7 +9,7 @@
 // metallic-roughness model. Halfedge structures (OpenMesh, CGAL) are built from this type inside
 // the algorithms that need them and converted back at their boundary.
 
-#include "render/image.h"
+#include "render/image/image.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -35,9 +35,6 @@ std::vector<uint8_t> readFileBytes(const std::filesystem::path& path, uint64_t m
 /// Writes bytes to `path` (no rename), throwing texfab::Error naming `shownAs` on failure.
 void writeFileBytes(const std::filesystem::path& path, std::string_view bytes, const std::filesystem::path& shownAs);
 
-/// Decodes PNG/JPEG bytes (glTF embedded images); `name` names errors.
-Image decodeImage(const uint8_t* data, size_t size, const std::string& name);
-
 /// Line-oriented text cursor shared by the ASCII readers (OBJ, MTL, PLY, OFF, STL).
 class TextCursor {
 public:

@@ -2,10 +2,10 @@
 #include "geometry/mesh_io.h"
 
 #include "geometry/mesh_formats.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/files.h"
+#include "render/image/image_io.h"
 
-#include <stb/stb_image.h>
 
 #include <algorithm>
 #include <charconv>
@@ -107,25 +107,6 @@ void writeFileBytes(const fs::path& path, std::string_view bytes, const fs::path
   if (!out) throw Error(shownAs.string() + ": cannot create file");
   out.write(bytes.data(), std::streamsize(bytes.size()));
   if (!out.flush()) throw Error(shownAs.string() + ": write error");
-}
-
-Image decodeImage(const uint8_t* data, size_t size, const std::string& name) {
-  if (size == 0 || size > size_t(INT32_MAX)) throw Error(name + ": empty or oversized image data");
-  int w = 0, h = 0, c = 0;
-  if (!stbi_info_from_memory(data, int(size), &w, &h, &c)) throw Error(name + ": not a decodable PNG or JPEG image");
-  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide) throw Error(name + ": image size out of range");
-  const bool sixteen = stbi_is_16_bit_from_memory(data, int(size));
-  Image image(w, h, c, sixteen ? PixelFormat::UInt16 : PixelFormat::UInt8);
-  if (sixteen) {
-    std::unique_ptr<stbi_us, void (*)(void*)> px(stbi_load_16_from_memory(data, int(size), &w, &h, &c, 0), &stbi_image_free);
-    if (!px) throw Error(name + ": " + stbi_failure_reason());
-    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = float(px.get()[i]) / 65535.0f;
-  } else {
-    std::unique_ptr<stbi_uc, void (*)(void*)> px(stbi_load_from_memory(data, int(size), &w, &h, &c, 0), &stbi_image_free);
-    if (!px) throw Error(name + ": " + stbi_failure_reason());
-    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = float(px.get()[i]) / 255.0f;
-  }
-  return image;
 }
 
 std::string_view TextCursor::nextLine() {

@@ -2,8 +2,9 @@
 // Wavefront OBJ + MTL reading and writing.
 #include "geometry/mesh_formats.h"
 #include "geometry/model_path.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/files.h"
+#include "render/image/image_io.h"
 
 #include <cmath>
 #include <fstream>

@@ -9,7 +9,7 @@
 
 #include "geometry/embree_scene.h"
 #include "geometry/mesh.h"
-#include "render/image.h"
+#include "render/image/image.h"
 #include "render/mip_pyramid.h"
 
 #include <Eigen/Core>

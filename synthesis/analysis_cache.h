@@ -5,7 +5,7 @@
 // stored. A damaged file is recomputed, never trusted; a cache folder that cannot be written costs
 // time on the next run, not correctness.
 
-#include "render/error.h"
+#include "render/image/error.h"
 
 #include <cstdint>
 #include <cstdio>

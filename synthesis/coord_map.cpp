@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/coord_map.h"
 
-#include "render/error.h"
-#include "render/image_io.h"
-#include "render/parallel.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
+#include "render/image/parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 // The coordinate map: what parallel synthesis produces. Each output texel stores the exemplar
 // pixel it shows, so colours (and companion maps: normals, roughness, height) are a lookup.
 
-#include "render/image.h"
+#include "render/image/image.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -19,7 +19,7 @@
 //   * k-nearest neighbors are searched among the 8-D appearance vectors (a k-d tree, exact),
 //     not among the 32-D runtime neighborhoods (the 8-D vector already encodes a 5x5 neighborhood).
 
-#include "render/image.h"
+#include "render/image/image.h"
 
 #include <cstdint>
 #include <filesystem>

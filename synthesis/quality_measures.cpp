@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/quality_measures.h"
 
-#include "render/error.h"
-#include "render/parallel.h"
+#include "render/image/error.h"
+#include "render/image/parallel.h"
 
 #include <algorithm>
 #include <cmath>

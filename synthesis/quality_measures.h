@@ -5,7 +5,7 @@
 // synthesis (noise, verbatim tiling, one region copied everywhere) lacks. Colour measures use the
 // first three channels (or the grey channel); alpha is ignored. All values are deterministic.
 
-#include "render/image.h"
+#include "render/image/image.h"
 #include "synthesis/coord_map.h"
 
 #include <optional>

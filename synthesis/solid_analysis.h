@@ -29,7 +29,7 @@
 //   * 2-D neighborhoods for the first search step are PCA-projected 5x5 neighborhoods (8 dims);
 //     2-D candidate sets are the k-coherence sets of synthesis/exemplar_analysis.
 
-#include "render/image.h"
+#include "render/image/image.h"
 
 #include <array>
 #include <cstdint>

@@ -2,9 +2,9 @@
 // Based on: S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3.
 #include "synthesis/synthesize_2d.h"
 
-#include "render/error.h"
-#include "render/image_io.h"
-#include "render/parallel.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
+#include "render/image/parallel.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 
 #include <algorithm>

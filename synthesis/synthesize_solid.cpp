@@ -3,8 +3,8 @@
 //           §5 (parallel solid synthesis, lazy subset synthesis) and §6.2 (coarse-level cache).
 #include "synthesis/synthesize_solid.h"
 
-#include "render/error.h"
-#include "render/parallel.h"
+#include "render/image/error.h"
+#include "render/image/parallel.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/cpu/synthesis_kernels.h"

@@ -32,7 +32,7 @@
 //     small measured loss, documented at the option;
 //   * the volume has no size and nothing wraps: only exemplar coordinates wrap.
 
-#include "render/image.h"
+#include "render/image/image.h"
 #include "synthesis/solid_analysis.h"
 
 #include <array>

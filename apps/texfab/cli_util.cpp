@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "apps/texfab/cli_util.h"
 
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/files.h"
+#include "render/image/image_io.h"
 
 #include <sys/resource.h>
 

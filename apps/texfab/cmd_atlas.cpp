@@ -8,8 +8,9 @@
 #include "atlas/generate_atlas.h"
 #include "geometry/mesh_io.h"
 #include "geometry/tangent_field.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/memory.h"
+#include "render/image/image_io.h"
 
 #include <algorithm>
 #include <cmath>

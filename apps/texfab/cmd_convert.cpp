@@ -3,7 +3,7 @@
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
-#include "render/error.h"
+#include "render/image/error.h"
 
 #include <memory>
 

@@ -3,8 +3,8 @@
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
 #include "render/preview_renderer.h"
 
 #include <cstdio>

@@ -3,8 +3,10 @@
 // 2008): a whole volume as slices, an arbitrary plane as an image, or colours at listed points.
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/memory.h"
+#include "render/image/files.h"
+#include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"

@@ -2,8 +2,8 @@
 // texfab stats: the quality measures of DESIGN.md for an image synthesized from an exemplar.
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
 #include "synthesis/quality_measures.h"
 
 #include <cmath>

@@ -2,8 +2,9 @@
 // texfab synth: 2-D texture synthesis from an exemplar (Lefebvre & Hoppe 2005/2006).
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/memory.h"
+#include "render/image/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 

@@ -3,10 +3,11 @@
 // Lefebvre & Hoppe 2006, or lazy solid synthesis, Dong et al. 2008) and write the textured model.
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
-#include "atlas/texture_mesh.h"
+#include "render/texture_mesh.h"
 #include "geometry/mesh_io.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/memory.h"
+#include "render/image/image_io.h"
 #include "render/preview_renderer.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
@@ -78,9 +79,9 @@ void runTexture(const TextureArgs& args) {
   Progress progress("texfab texture", args.quiet);
   // Everything checkable is checked before any work.
   geometry::meshFormatOf(args.output);
-  atlas::TextureMeshOptions options;
-  if (args.mode == "surface") options.mode = atlas::TextureMode::Surface;
-  else if (args.mode == "solid") options.mode = atlas::TextureMode::Solid;
+  render::TextureMeshOptions options;
+  if (args.mode == "surface") options.mode = render::TextureMode::Surface;
+  else if (args.mode == "solid") options.mode = render::TextureMode::Solid;
   else throw Error("--mode: expected surface or solid, got '" + args.mode + "'");
   if (args.scale != 0 && args.featureSize != 0) throw Error("give --scale or --feature-size, not both");
   if (!(args.scale >= 0 && std::isfinite(args.scale)))
@@ -101,7 +102,7 @@ void runTexture(const TextureArgs& args) {
   }
   // Peak memory per atlas texel, measured at 2048² on an 89K-triangle mesh (texture_bench): 218 bytes
   // in surface mode, 440 in solid mode (lazy synthesis of ~1 voxel per texel).
-  const double bytesPerTexel = options.mode == atlas::TextureMode::Solid ? 440.0 : 220.0;
+  const double bytesPerTexel = options.mode == render::TextureMode::Solid ? 440.0 : 220.0;
   const double needed = double(width) * height * bytesPerTexel;
   if (needed > 0.8 * double(physicalMemoryBytes()))
     throw Error("a " + std::to_string(width) + "x" + std::to_string(height) + " atlas needs about " +
@@ -117,8 +118,6 @@ void runTexture(const TextureArgs& args) {
   else throw Error("--field: expected direction or curvature, got '" + args.field + "'");
   options.surface.seed = args.seed;
   options.solid.seed = args.seed;
-  options.threads = args.threads;
-  options.atlas.threads = args.threads;
   options.measure = !args.report.empty();  // the measures (seconds on a 2048² atlas) go to the report
   render::RenderOptions previewOptions;
   if (!args.preview.empty()) {
@@ -131,12 +130,12 @@ void runTexture(const TextureArgs& args) {
   const Image exemplar = readImage(args.exemplar);
   synthesis::validateExemplarSize(exemplar);
   const CompanionMaps maps = readCompanionMaps(args.maps);
-  atlas::TextureExemplar ex;
+  render::TextureExemplar ex;
   ex.color = &exemplar;
   ex.normal = maps.normal ? &*maps.normal : nullptr;
   ex.roughness = maps.roughness ? &*maps.roughness : nullptr;
   ex.height = maps.height ? &*maps.height : nullptr;
-  atlas::checkCompanionMaps(ex, options.mode);  // before the (possibly long) analysis
+  render::checkCompanionMaps(ex, options.mode);  // before the (possibly long) analysis
   const geometry::Mesh mesh = geometry::readMesh(args.model);
   if (mesh.triangleCount() == 0) throw Error(args.model + ": the model has no triangles");
   progress.finish(args.model + ": " + std::to_string(mesh.triangleCount()) + " triangles; " + args.exemplar + " " +
@@ -147,7 +146,7 @@ void runTexture(const TextureArgs& args) {
   bool cached = false;
   std::optional<synthesis::ExemplarAnalysis> analysis;
   std::optional<synthesis::SolidAnalysis> solidAnalysis;
-  if (options.mode == atlas::TextureMode::Surface) {
+  if (options.mode == render::TextureMode::Surface) {
     const synthesis::AnalysisOptions analysisOptions;
     analysis = args.noCache ? synthesis::analyzeExemplar(exemplar, analysisOptions, args.threads)
                             : synthesis::analyzeExemplarCached(exemplar, analysisOptions, cacheDir, args.threads, &cached);
@@ -166,10 +165,11 @@ void runTexture(const TextureArgs& args) {
 
   ex.analysis = analysis ? &*analysis : nullptr;
   ex.solidAnalysis = solidAnalysis ? &*solidAnalysis : nullptr;
-  const atlas::TextureMeshResult result =
-      atlas::textureMesh(mesh, ex, options, [&](const std::string& stage, double seconds, const std::string& detail) {
-        progress.record(stage, seconds, detail);
-      });
+  Context ctx{.threads = args.threads};
+  ctx.progress = [&](const ProgressEvent& e) {
+    if (e.kind == ProgressEvent::Kind::End) progress.record(std::string(e.stage), e.seconds, std::string(e.detail));
+  };
+  const render::TextureMeshResult result = render::textureMesh(mesh, ex, options, ctx);
   for (const std::string& repair : result.atlas.report.repairs) progress.note(repair);
   for (const std::string& warning : result.warnings) progress.note("warning: " + warning);
 
@@ -194,7 +194,7 @@ void runTexture(const TextureArgs& args) {
 
   if (!args.report.empty()) {
     const atlas::AtlasReport& ar = result.atlas.report;
-    const atlas::TextureMeasures& m = result.measures;
+    const render::TextureMeasures& m = result.measures;
     nlohmann::json report;
     report["command"] = "texture";
     report["model"] = {{"path", args.model}, {"vertices", mesh.vertexCount()}, {"triangles", mesh.triangleCount()}};
@@ -218,7 +218,7 @@ void runTexture(const TextureArgs& args) {
                            {"fraction_measured", m.scale->fractionMeasured}, {"tolerance", m.scale->tolerance}};
     if (m.fidelity) measures["fidelity"] = {{"exemplar_space", m.fidelity->fidelity}, {"samples", m.fidelity->samples}};
     report["measures"] = measures;
-    if (options.mode == atlas::TextureMode::Solid)
+    if (options.mode == render::TextureMode::Solid)
       report["solid"] = {{"voxels_requested", result.voxelsRequested}, {"voxels_synthesized", result.voxelsSynthesized}};
     nlohmann::json levels = nlohmann::json::array();
     for (const synthesis::LevelStats& l : result.synthesisLevels)

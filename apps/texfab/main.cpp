@@ -5,7 +5,7 @@
 // (the message names the file), 3 internal error (a bug: please report it).
 
 #include "apps/texfab/command.h"
-#include "render/error.h"
+#include "render/image/error.h"
 
 #include <cstdio>
 #include <exception>

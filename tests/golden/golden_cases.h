@@ -4,14 +4,14 @@
 // what texfab computes: exemplar coordinates, triples, texel UVs, image bytes, file bytes.
 // Inputs are small bundled data so that the whole suite runs in seconds.
 
-#include "render/image_io.h"
+#include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_2d.h"
 #include "synthesis/synthesize_solid.h"
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 #include "atlas/generate_atlas.h"
-#include "atlas/texture_mesh.h"
+#include "render/texture_mesh.h"
 #include "geometry/mesh_io.h"
 #include "tests/test_support.h"
 #endif
@@ -123,31 +123,31 @@ inline uint64_t atlasTexelUvs() {
   return hashOf(r.atlas.texelUvs);
 }
 
-inline atlas::TextureMeshResult textureElephant(atlas::TextureMode mode) {
+inline render::TextureMeshResult textureElephant(render::TextureMode mode) {
   static const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
   static const Image brick = readImage(bundled("exemplars/brick.png"));
   static const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(brick, {}, 2);
-  atlas::TextureExemplar ex;
-  ex.color = mode == atlas::TextureMode::Solid ? &marble32() : &brick;
+  render::TextureExemplar ex;
+  ex.color = mode == render::TextureMode::Solid ? &marble32() : &brick;
   ex.analysis = &analysis;
   ex.solidAnalysis = &solidAnalysis32();
-  atlas::TextureMeshOptions options;
+  render::TextureMeshOptions options;
   options.mode = mode;
   options.atlas.pack.width = options.atlas.pack.height = 256;
   options.measure = false;
   options.surface.seed = options.solid.seed = 5;
-  return atlas::textureMesh(mesh, ex, options);
+  return render::textureMesh(mesh, ex, options);
 }
 
 /// The bundled elephant textured at 256^2 with the bundled brick: coordinates and base colour.
 inline uint64_t surfaceTexture() {
-  const atlas::TextureMeshResult r = textureElephant(atlas::TextureMode::Surface);
+  const render::TextureMeshResult r = textureElephant(render::TextureMode::Surface);
   return hashOf8Bit(*r.baseColor) ^ hashOf(r.coords);
 }
 
 /// The same in solid mode with marble32.
 inline uint64_t solidTexture() {
-  const atlas::TextureMeshResult r = textureElephant(atlas::TextureMode::Solid);
+  const render::TextureMeshResult r = textureElephant(render::TextureMode::Solid);
   return hashOf8Bit(*r.baseColor);
 }
 
@@ -155,7 +155,7 @@ inline uint64_t solidTexture() {
 inline uint64_t glbBytes() {
   const test::TempDir dir("texfab-golden");
   const std::filesystem::path path = dir / "elephant.glb";
-  geometry::writeMesh(textureElephant(atlas::TextureMode::Surface).mesh, path);
+  geometry::writeMesh(textureElephant(render::TextureMode::Surface).mesh, path);
   std::ifstream in(path, std::ios::binary);
   const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return hashOf(bytes);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

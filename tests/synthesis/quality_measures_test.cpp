@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/error.h"
+#include "render/image/error.h"
 #include "synthesis/quality_measures.h"
 #include "test_support.h"
 

@@ -2,7 +2,7 @@
 #pragma once
 // Small helpers shared by the synthesis tests (plus tests/test_support.h).
 
-#include "render/image.h"
+#include "render/image/image.h"
 #include "synthesis/hash.h"
 #include "tests/test_support.h"
 

@@ -12,10 +12,11 @@
 // unsynthesized texels.
 
 #include "atlas/generate_atlas.h"
-#include "atlas/surface_measures.h"
+#include "render/surface_measures.h"
 #include "geometry/mesh.h"
 #include "geometry/tangent_field.h"
-#include "render/image.h"
+#include "render/image/context.h"
+#include "render/image/image.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
@@ -27,7 +28,7 @@
 #include <string>
 #include <vector>
 
-namespace texfab::atlas {
+namespace texfab::render {
 
 enum class TextureMode { Surface, Solid };
 
@@ -36,12 +37,11 @@ struct TextureMeshOptions {
   /// Exemplar pixels per model unit (solid mode: voxels per model unit); 0 = the atlas density,
   /// one exemplar pixel per texel.
   double textureScale = 0;
-  GenerateAtlasOptions atlas;
+  atlas::GenerateAtlasOptions atlas;
   geometry::TangentFieldOptions field;        ///< orientation of the texture (surface mode)
   synthesis::SurfaceSynthesisOptions surface;
   synthesis::SolidSynthesisOptions solid;
   bool measure = true;  ///< compute TextureMeasures (seams always; scale and fidelity in surface mode)
-  int threads = 0;      ///< 0 = all cores; the result does not depend on it
 };
 
 /// The exemplar and what synthesis knows about it. Companion maps must have the exemplar's size.
@@ -64,7 +64,7 @@ struct TextureMeshResult {
   geometry::Mesh mesh;                      ///< the input with atlas UVs and one material with the maps
   std::shared_ptr<const Image> baseColor;   ///< atlas-sized maps (also referenced by mesh.materials[0])
   std::shared_ptr<const Image> normal, metallicRoughness, height; ///< null unless requested
-  GenerateAtlasResult atlas;
+  atlas::GenerateAtlasResult atlas;
   /// The finest level of the surface domain (one site per chart texel; in solid mode its
   /// neighbors are linked only when measures are asked for).
   synthesis::SurfaceLevel sites;
@@ -82,16 +82,10 @@ struct TextureMeshResult {
 /// have the exemplar's size. textureMesh() checks this too; callers may check before the analysis.
 void checkCompanionMaps(const TextureExemplar& exemplar, TextureMode mode);
 
-/// Called as each stage ends: its name, seconds, and a one-line detail.
-using StageCallback = std::function<void(const std::string& stage, double seconds, const std::string& detail)>;
-
-/// Throws texfab::Error on bad input (no triangles, a missing analysis, maps of the wrong size, a
-/// scale that puts a whole exemplar inside one texel).
+/// Stages reported through ctx: atlas, tangent field (surface mode), fields, synthesis (solid mode:
+/// each level inside it), resolve, measures. Throws texfab::Error on bad input (no triangles, a
+/// missing analysis, maps of the wrong size, a scale that puts a whole exemplar inside one texel).
 TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& exemplar,
-                              const TextureMeshOptions& options, const StageCallback& onStage = {});
+                              const TextureMeshOptions& options, const Context& ctx = {});
 
-/// Fills the texels of `image` where `filled` is 0 from their filled neighbors, `rounds` rings
-/// deep (each ring the mean of the filled 8-neighbors), then the rest with the mean colour.
-void fillGutters(Image& image, std::vector<uint8_t> filled, int rounds, int threads = 0);
-
-} // namespace texfab::atlas
+} // namespace texfab::render

@@ -6,14 +6,14 @@
 // domain (atlas/surface_domain.h) and are deterministic.
 
 #include "atlas/rasterize_atlas.h"
-#include "render/image.h"
+#include "render/image/image.h"
 #include "synthesis/synthesize_surface.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-namespace texfab::atlas {
+namespace texfab::render {
 
 /// Mean colour difference (mean absolute over the colour channels) between surface-adjacent
 /// texels (the 4 axis steps of the domain's neighbor table) across chart seams, divided by the
@@ -39,7 +39,7 @@ struct ScaleMeasure {
   double tolerance = 0.15;
 };
 ScaleMeasure measureScale(const synthesis::SurfaceLevel& finest, const std::vector<uint32_t>& coords,
-                          const AtlasFields& fields, int exemplarWidth, int exemplarHeight,
+                          const atlas::AtlasFields& fields, int exemplarWidth, int exemplarHeight,
                           double requestedPixelsPerUnit, double tolerance = 0.15);
 
 /// Neighborhood fidelity in exemplar space (synthesis/quality_measures.h): at up to `samples`
@@ -50,7 +50,7 @@ struct SurfaceFidelity {
   size_t samples = 0;
 };
 SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& atlasImage,
-                                       const Image& exemplar, const AtlasFields& fields, int samples = 1024,
+                                       const Image& exemplar, const atlas::AtlasFields& fields, int samples = 1024,
                                        int threads = 0);
 
-} // namespace texfab::atlas
+} // namespace texfab::render

@@ -5,11 +5,9 @@
 // Writing: PNG (8 or 16 bit), EXR (half or float), and any other format OIIO writes by extension.
 // Every function throws texfab::Error with a one-line message naming the file on failure.
 
-#include "render/image.h"
+#include "render/image/image.h"
 
 #include <filesystem>
-#include <functional>
-#include <ostream>
 #include <span>
 #include <cstdint>
 #include <string>
@@ -20,12 +18,13 @@ namespace texfab {
 /// Largest accepted width or height of any image texfab reads or writes.
 inline constexpr int kMaxImageSide = 65536;
 
-/// Physical memory of this machine in bytes (for refusing work that cannot fit, up front).
-uint64_t physicalMemoryBytes();
-
 /// Reads an image. Grey, grey+alpha, RGB and RGBA are kept as 1, 2, 3, 4 channels; more channels
 /// are kept as they are. `format` is set from the file's precision.
 Image readImage(const std::filesystem::path& path);
+
+/// Decodes a PNG, JPEG or WebP image held in memory (e.g. embedded in a model file); `name` is
+/// used in errors.
+Image decodeImage(std::span<const uint8_t> bytes, const std::string& name);
 
 /// Decodes a GIMP pattern (.pat, format version 1) held in memory; `name` is used in errors.
 Image decodePat(std::span<const uint8_t> bytes, const std::string& name);
@@ -38,18 +37,6 @@ void writeImage(const Image& image, const std::filesystem::path& path);
 /// Throws texfab::Error unless an image can be written to `path`: a known image extension and an
 /// existing folder. Commands call it before long work so a bad output path fails at once.
 void checkImageWritable(const std::filesystem::path& path);
-
-/// Writes a file through `write(stream)` with the same discipline as writeImage: to a temporary
-/// name in the same folder, then renamed onto `path`. On any failure the temporary file is
-/// removed and texfab::Error names `path`.
-void writeFileAtomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
-
-/// Renames `tmp` onto `path`, removing `tmp` and throwing texfab::Error on failure. For writers
-/// that produce files other than images with the same write-then-rename discipline.
-void commitFile(const std::filesystem::path& tmp, const std::filesystem::path& path);
-
-/// A temporary name next to `path` (same folder, so the final rename is atomic).
-std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
 
 /// The image as 8-bit PNG file bytes (zlib level 6), for files that embed images (GLB).
 std::vector<uint8_t> encodePng(const Image& image);

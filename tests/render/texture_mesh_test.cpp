@@ -2,9 +2,9 @@
 // texfab texture's job (atlas/texture_mesh.h) on analytic surfaces: seams, scale, fidelity in
 // exemplar space, orientation by the tangent field, solid mode against the solid synthesizer,
 // determinism, and bad input.
-#include "atlas/texture_mesh.h"
-#include "render/error.h"
-#include "render/image_io.h"
+#include "render/texture_mesh.h"
+#include "render/image/error.h"
+#include "render/image/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 #include "tests/atlas/test_meshes.h"
@@ -19,6 +19,7 @@
 
 using namespace texfab;
 using namespace texfab::atlas;
+using namespace texfab::render;
 
 namespace {
 
@@ -239,11 +240,8 @@ TEST(TextureMesh, ThreadCountDoesNotChangeTheTexture) {
   const Exemplar ex(bundledExemplar("brick.png"));
   TextureMeshOptions o = surfaceOptions(256);
   o.measure = false;
-  o.threads = 1;
-  const TextureMeshResult one = textureMesh(test::makeSphere(32, 16), ex.view(), o);
-  o.threads = 2;
-  o.atlas.threads = 2;
-  const TextureMeshResult two = textureMesh(test::makeSphere(32, 16), ex.view(), o);
+  const TextureMeshResult one = textureMesh(test::makeSphere(32, 16), ex.view(), o, Context{.threads = 1});
+  const TextureMeshResult two = textureMesh(test::makeSphere(32, 16), ex.view(), o, Context{.threads = 2});
   EXPECT_EQ(one.coords, two.coords);
   EXPECT_EQ(one.baseColor->pixels, two.baseColor->pixels);
   o.surface.seed = 2;

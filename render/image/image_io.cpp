@@ -1,18 +1,17 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image_io.h"
+#include "render/image/image_io.h"
 
-#include "render/error.h"
+#include "render/image/error.h"
+#include "render/image/files.h"
+#include "render/image/memory.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstring>
-#include <fstream>
 #include <iterator>
 #include <system_error>
-#include <unistd.h>
 
 namespace texfab {
 namespace fs = std::filesystem;
@@ -93,24 +92,17 @@ Image decodePat(std::span<const uint8_t> bytes, const std::string& name) {
   return image;
 }
 
-uint64_t physicalMemoryBytes() {
-  const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && pageSize > 0 ? uint64_t(pages) * uint64_t(pageSize) : uint64_t(8) << 30;
-}
+namespace {
 
-Image readImage(const fs::path& path) {
-  const std::string name = path.string();
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(name + ": no such file");
-  if (fs::is_directory(path, ec)) throw Error(name + ": is a directory, not an image");
-  if (lower(path.extension().string()) == ".pat") return readPatFile(path);
-
-  // Texture data: keep alpha unassociated (as stored), never premultiplied.
+// Texture data: alpha kept unassociated (as stored), never premultiplied.
+OIIO::ImageSpec readConfig() {
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(name, &config);
-  if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
+  return config;
+}
+
+Image decode(OIIO::ImageInput& in, const std::string& name) {
+  const OIIO::ImageSpec& spec = in.spec();
   checkSize(spec.width, spec.height, name);
   if (spec.depth > 1) throw Error(name + ": volume images are not supported");
   if (spec.nchannels < 1) throw Error(name + ": image has no channels");
@@ -119,53 +111,48 @@ Image readImage(const fs::path& path) {
     throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                 ", too large to load in this machine's memory");
   Image image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
-    throw Error(name + ": cannot decode image: " + oneLine(in->geterror()));
+  if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+    throw Error(name + ": cannot decode image: " + oneLine(in.geterror()));
   return image;
 }
 
-fs::path temporaryPathFor(const fs::path& path) {
-  static std::atomic<unsigned> counter{0};
-  // Built by appending: GCC 12 warns falsely (-Wrestrict, PR 105329) on "literal" + string here.
-  std::string tmpName(".");
-  tmpName.append(path.filename().string()).append(".tmp-").append(std::to_string(::getpid()));
-  tmpName.append("-").append(std::to_string(counter++));
-  return path.parent_path() / tmpName;
-}
-
-void commitFile(const fs::path& tmp, const fs::path& path) {
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error(path.string() + ": cannot write file: " + ec.message());
-  }
-}
-
-void writeFileAtomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
-  const fs::path tmp = temporaryPathFor(path);
-  auto discard = [&] {
-    std::error_code ec;
-    fs::remove(tmp, ec);
+// The extension OIIO chooses its reader by, from the file's first bytes.
+const char* extensionOf(std::span<const uint8_t> b) {
+  auto starts = [&](std::initializer_list<uint8_t> magic) {
+    return b.size() >= magic.size() && std::equal(magic.begin(), magic.end(), b.begin());
   };
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw Error(path.string() + ": cannot create file");
-    try {
-      write(out);
-    } catch (...) {
-      out.close();
-      discard();
-      throw;
-    }
-    out.flush();
-    if (!out) {
-      out.close();
-      discard();
-      throw Error(path.string() + ": cannot write file (disk full?)");
-    }
-  }
-  commitFile(tmp, path);
+  if (starts({0x89, 'P', 'N', 'G'})) return ".png";
+  if (starts({0xff, 0xd8, 0xff})) return ".jpg";
+  if (b.size() >= 12 && starts({'R', 'I', 'F', 'F'}) && std::equal(b.begin() + 8, b.begin() + 12, "WEBP")) return ".webp";
+  return nullptr;
+}
+
+} // namespace
+
+Image readImage(const fs::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(name + ": no such file");
+  if (fs::is_directory(path, ec)) throw Error(name + ": is a directory, not an image");
+  if (lower(path.extension().string()) == ".pat") return readPatFile(path);
+  const OIIO::ImageSpec config = readConfig();
+  auto in = OIIO::ImageInput::open(name, &config);
+  if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
+  return decode(*in, name);
+}
+
+Image decodeImage(std::span<const uint8_t> bytes, const std::string& name) {
+  const char* extension = extensionOf(bytes);
+  if (!extension) throw Error(name + ": not a PNG, JPEG or WebP image");
+  OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+  const std::string pseudoName = "memory" + std::string(extension);
+  OIIO::ImageSpec config = readConfig();
+  // OIIO 2.4 ignores open()'s proxy argument when a configuration is given; the hint carries it.
+  void* proxyPointer = &proxy;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
+  auto in = OIIO::ImageInput::open(pseudoName, &config, &proxy);
+  if (!in) throw Error(name + ": cannot decode image: " + oneLine(OIIO::geterror()));
+  return decode(*in, name);
 }
 
 void checkImageWritable(const fs::path& path) {

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The one place texfab decides how work is spread over threads (TBB underneath).
-// Callers pass an explicit thread count (0 = all cores); work items must write disjoint outputs,
-// so results never depend on the thread count or on scheduling.
+// Work items must write disjoint outputs, so results never depend on the thread count or on
+// scheduling.
+
+#include "render/image/context.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -24,6 +26,16 @@ void parallelFor(int begin, int end, int threads, Fn&& fn, int grain = 1) {
     tbb::parallel_for(tbb::blocked_range<int>(begin, end, grain),
                       [&](const tbb::blocked_range<int>& r) { fn(r.begin(), r.end()); });
   });
+}
+
+/// The same on ctx.threads threads; each sub-range first checks for cancellation (Cancelled
+/// propagates out of parallelFor).
+template <class Fn>
+void parallelFor(int begin, int end, const Context& ctx, Fn&& fn, int grain = 1) {
+  parallelFor(begin, end, ctx.threads, [&](int b, int e) {
+    ctx.checkCancelled();
+    fn(b, e);
+  }, grain);
 }
 
 } // namespace texfab

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "atlas/surface_measures.h"
+#include "render/surface_measures.h"
 
-#include "render/error.h"
+#include "render/image/error.h"
 #include "synthesis/quality_measures.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace texfab::atlas {
+namespace texfab::render {
+using namespace atlas;
 
 namespace {
 
@@ -148,4 +149,4 @@ SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, co
   return out;
 }
 
-} // namespace texfab::atlas
+} // namespace texfab::render

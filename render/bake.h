@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Baking: values computed per atlas texel (a site of the surface domain) into atlas-sized images,
+// with the gutters around the charts filled so that bilinear lookups and mip maps never read an
+// unsynthesized texel; and the solid texture at the texels' 3-D positions, for every job that
+// shows the solid texture on a surface (the texture job's solid mode, cut faces).
+
+#include "atlas/rasterize_atlas.h"
+#include "render/image/context.h"
+#include "render/image/image.h"
+#include "render/image/parallel.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/synthesize_solid.h"
+#include "synthesis/synthesize_surface.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace texfab::render {
+
+/// Fills the texels of `image` where `filled` is 0 from their filled neighbors, `rounds` rings
+/// deep (each ring the mean of the filled 8-neighbors), then the rest with the mean colour.
+void fillGutters(Image& image, std::vector<uint8_t> filled, int rounds, const Context& ctx = {});
+
+/// A width x height image of `channels` with one value per site (`value(site, out)` writes
+/// `channels` floats at out), the gutters filled `gutter + 4` rings deep around the charts.
+template <class Fn>
+Image bakeSites(int width, int height, const synthesis::SurfaceLevel& sites, int channels, int gutter,
+                const Context& ctx, Fn&& value) {
+  Image image(width, height, channels);
+  std::vector<uint8_t> filled(size_t(width) * size_t(height), 0);
+  parallelFor(0, int(sites.size()), ctx, [&](int b, int e) {
+    for (int s = b; s < e; ++s) {
+      value(size_t(s), image.pixel(sites.x[size_t(s)], sites.y[size_t(s)]));
+      filled[size_t(sites.y[size_t(s)]) * size_t(width) + size_t(sites.x[size_t(s)])] = 1;
+    }
+  }, 4096);
+  fillGutters(image, std::move(filled), gutter + 4, ctx);
+  return image;
+}
+
+/// A tangent-space normal `in` of the exemplar (RGB in [0, 1], OpenGL convention: x right, y up
+/// in the image) expressed in the atlas image's frame at a site whose Jacobian is `j` (atlas
+/// offsets to exemplar offsets): the tangential part maps back by J⁻¹ with its scale removed.
+void rotateNormal(const std::array<float, 4>& j, const float* in, float* out);
+
+/// The solid texture at the sites' 3-D positions.
+struct SolidSites {
+  std::vector<synthesis::Triple> triples;  ///< one per site
+  int64_t voxelsRequested = 0;             ///< distinct voxels among the sites'
+  int64_t voxelsSynthesized = 0;           ///< over all levels (the dependency chains)
+};
+
+/// The voxel of each site (its surface position times `scale` voxels per model unit, floored),
+/// synthesized in one request: texels sharing a voxel share its value. Throws texfab::Error when
+/// a position times the scale leaves the solid texture's range.
+SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
+                               const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
+                               double scale, const Context& ctx = {}, const synthesis::SolidLevelCallback& onLevel = {});
+
+} // namespace texfab::render
