@@ -4,6 +4,7 @@
 #include "atlas/generate_atlas.h"
 
 #include "atlas/chart_mesh.h"
+#include "atlas/compute_jacobians.h"
 #include "atlas/measure_stretch.h"
 
 #include <chrono>
@@ -34,6 +35,11 @@ void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const At
       if (g > int32_t(t) && atlas.faceChart[size_t(g)] != atlas.faceChart[t])
         report.seamLength += double((mesh.corner(t, k) - mesh.corner(t, (k + 1) % 3)).norm());
     }
+}
+
+double atlasMemoryBytes(int width, int height) {
+  const double perTexel = sizeof(SurfaceSample) + 2 * sizeof(Float3) + sizeof(TexelJacobian) + sizeof(int32_t) + 16.0;
+  return double(width) * double(height) * perTexel;
 }
 
 GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options, const Context& ctx) {

@@ -58,6 +58,10 @@ struct GenerateAtlasResult {
 GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options = {},
                                   const Context& ctx = {});
 
+/// Peak memory of a width x height atlas with its fields, in bytes: generateAtlas's texel fields
+/// plus a Jacobian (computeJacobians) and an indirection entry (buildIndirectionMap) per texel.
+double atlasMemoryBytes(int width, int height);
+
 /// Global figures of a packed atlas (stretch over all charts in atlas space, flips, seams).
 void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas, AtlasReport& report);
 

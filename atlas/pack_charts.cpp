@@ -32,12 +32,13 @@ namespace texfab::atlas {
 
 void PackChartsOptions::validate() const {
   auto pow2 = [](int v) { return v > 0 && (v & (v - 1)) == 0; };
-  if (width < 16 || width > 16384 || height < 16 || height > 16384)
-    throw Error("atlas size must be 16 to 16384 texels per side, got " + std::to_string(width) + "x" +
+  if (width < kMinSide || width > kMaxSide || height < kMinSide || height > kMaxSide)
+    throw Error("atlas size must be " + std::to_string(kMinSide) + " to " + std::to_string(kMaxSide) + " texels per side, got " + std::to_string(width) + "x" +
                 std::to_string(height));
   if (powerOfTwo && (!pow2(width) || !pow2(height)))
     throw Error("atlas size must be a power of two, got " + std::to_string(width) + "x" + std::to_string(height));
-  if (gutter < 0 || gutter > 64) throw Error("gutter must be 0 to 64 texels, got " + std::to_string(gutter));
+  if (gutter < 0 || gutter > kMaxGutter)
+    throw Error("gutter must be 0 to " + std::to_string(kMaxGutter) + " texels, got " + std::to_string(gutter));
   if (!(texelsPerUnit >= 0) || !std::isfinite(texelsPerUnit)) throw Error("texelsPerUnit must be >= 0");
   if (maxPasses < 1) throw Error("maxPasses must be >= 1");
 }

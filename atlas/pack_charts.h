@@ -18,9 +18,10 @@
 namespace texfab::atlas {
 
 struct PackChartsOptions {
-  int width = 2048;          ///< atlas width in texels (16 .. 16384)
-  int height = 2048;         ///< atlas height in texels (16 .. 16384)
-  int gutter = 4;            ///< minimum empty texels between two charts (0 .. 64)
+  static constexpr int kMinSide = 16, kMaxSide = 16384, kMaxGutter = 64;
+  int width = 2048;          ///< atlas width in texels (kMinSide .. kMaxSide)
+  int height = 2048;         ///< atlas height in texels (kMinSide .. kMaxSide)
+  int gutter = 4;            ///< minimum empty texels between two charts (0 .. kMaxGutter)
   bool powerOfTwo = true;    ///< require power-of-two width and height
   double texelsPerUnit = 0;  ///< fixed density; 0 = the largest that fits
   int maxPasses = 8;         ///< packing passes of the density search (>= 1; run in pairs)

@@ -130,7 +130,8 @@ private:
                      const std::string& where);
   void visitNode(int node, const Eigen::Matrix4d& parent, int depth);
   Texture texture(const json* textureInfo);
-  std::shared_ptr<const Image> image(int index);
+  // The decoded image and its file bytes.
+  const std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>& image(int index);
   Material material(size_t index);
 
   const fs::path& path_;
@@ -143,7 +144,7 @@ private:
   std::vector<bool> uvPresent_, normalPresent_; // per primitive instance, for filling gaps
   std::vector<size_t> cornerStart_;
   std::vector<uint8_t> onPath_;
-  std::map<int, std::shared_ptr<const Image>> imageCache_;
+  std::map<int, std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>> imageCache_;
   bool needDefaultMaterial_ = false;
 };
 
@@ -236,11 +237,11 @@ std::vector<uint32_t> GltfReader::readIndices(int index) const {
   return out;
 }
 
-std::shared_ptr<const Image> GltfReader::image(int index) {
+const std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>& GltfReader::image(int index) {
   if (!images_.is_array() || index < 0 || size_t(index) >= images_.size())
     throw Error(name_ + ": texture refers to image " + std::to_string(index) + " which does not exist");
   auto& slot = imageCache_[index];
-  if (slot) return slot;
+  if (slot.first) return slot;
   const json& entry = images_[size_t(index)];
   const std::string where = name_ + ": image " + std::to_string(index);
   std::vector<uint8_t> owned;
@@ -257,7 +258,9 @@ std::shared_ptr<const Image> GltfReader::image(int index) {
   } else {
     throw Error(where + " has neither a uri nor a bufferView");
   }
-  slot = std::make_shared<const Image>(decodeImage({data, size}, where));
+  slot.first = std::make_shared<const Image>(decodeImage({data, size}, where));
+  if (const std::optional<ImageCodec> codec = imageCodecOf({data, size}))
+    slot.second = std::make_shared<const EncodedImage>(EncodedImage{{data, data + size}, *codec});
   return slot;
 }
 
@@ -269,9 +272,15 @@ Texture GltfReader::texture(const json* info) {
   const int ti = index->get<int>();
   if (ti < 0 || size_t(ti) >= model_.textures.size())
     throw Error(name_ + ": material refers to texture " + std::to_string(ti) + " which does not exist");
-  const int source = model_.textures[size_t(ti)].source;
+  int source = model_.textures[size_t(ti)].source;
+  // EXT_texture_webp names its WebP image in the texture's extension (the core source, if any, is
+  // a fallback for readers without it).
+  if (const json* ts = member(doc_, "textures"); ts && ts->is_array() && size_t(ti) < ts->size())
+    if (const json* ext = member((*ts)[size_t(ti)], "extensions"))
+      if (const json* webp = member(*ext, "EXT_texture_webp"))
+        if (const json* src = member(*webp, "source"); src && src->is_number_integer()) source = src->get<int>();
   if (source < 0) return t;
-  t.image = image(source);
+  std::tie(t.image, t.encoded) = image(source);
   if (images_.is_array() && size_t(source) < images_.size()) {
     const json* uri = member(images_[size_t(source)], "uri");
     if (uri && uri->is_string() && !isDataUri(uri->get<std::string>())) t.name = fs::path(uri->get<std::string>()).filename().string();
@@ -498,7 +507,8 @@ Mesh GltfReader::read() {
 
 // Extensions texfab reads; a file that requires any other is refused.
 bool supportedExtension(const std::string& name) {
-  return name == "KHR_draco_mesh_compression" || name == "KHR_texture_transform" || name == "KHR_mesh_quantization";
+  return name == "KHR_draco_mesh_compression" || name == "KHR_texture_transform" || name == "KHR_mesh_quantization" ||
+         name == "EXT_texture_webp";
 }
 
 } // namespace

@@ -4,6 +4,7 @@
 #include "geometry/mesh_formats.h"
 #include "render/image/image_io.h"
 #include "render/image/error.h"
+#include "render/image/files.h"
 
 #include <nlohmann/json.hpp>
 
@@ -102,9 +103,21 @@ struct CornerKey {
   bool operator<(const CornerKey& o) const { return std::tie(position, attributes) < std::tie(o.position, o.attributes); }
 };
 
+// A file name as a URI reference: unreserved characters kept, the rest %-escaped.
+std::string uriOf(const std::string& name) {
+  static const char* hex = "0123456789ABCDEF";
+  std::string uri;
+  for (unsigned char c : name) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') uri += char(c);
+    else uri.append({'%', hex[c >> 4], hex[c & 15]});
+  }
+  return uri;
+}
+
 } // namespace
 
-void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options) {
+void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options,
+               std::vector<std::pair<fs::path, fs::path>>& sideFiles) {
   Mesh mesh = input;
   if (!mesh.hasNormals()) computeSmoothNormals(mesh);
   bool anyNormalMap = false;
@@ -123,29 +136,50 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
   json doc;
   doc["asset"] = {{"version", "2.0"}, {"generator", "texfab"}};
   json extensionsUsed = json::array();
-  bool usesTransform = false;
+  bool usesTransform = false, usesWebp = false;
+  const bool external = !binary && !options.embed;  // .gltf with its buffer and images beside it
+  const std::string stem = path.stem().string();
+  auto sideFile = [&](const std::string& name, std::string_view bytes) {
+    const fs::path final = path.parent_path() / name;
+    const fs::path side = temporaryPathFor(final);
+    sideFiles.emplace_back(side, final);
+    writeFileBytes(side, bytes, final);
+  };
 
   // Materials and textures (one image per distinct Image object).
   json materials = json::array(), textures = json::array(), images = json::array();
   std::map<const Image*, int> imageIndex;
+  std::vector<ImageCodec> codecs;  // per image
   auto textureInfo = [&](const Texture& t) -> json {
     int image;
     const auto it = imageIndex.find(t.image.get());
     if (it != imageIndex.end()) {
       image = it->second;
     } else {
-      const std::vector<uint8_t> png = encodePng(*t.image);
+      const EncodedImage file = storedImage(t, options);
+      const char* mime = mimeTypeOf(file.codec);
       json entry;
       if (binary) {
-        entry = {{"bufferView", b.bufferView(png.data(), png.size(), 0)}, {"mimeType", "image/png"}};
+        entry = {{"bufferView", b.bufferView(file.bytes.data(), file.bytes.size(), 0)}, {"mimeType", mime}};
+      } else if (external) {
+        const std::string name = stem + "_" + std::to_string(images.size()) + extensionOf(file.codec);
+        sideFile(name, {reinterpret_cast<const char*>(file.bytes.data()), file.bytes.size()});
+        entry = {{"uri", uriOf(name)}};
       } else {
-        entry = {{"uri", "data:image/png;base64," + encodeBase64(png)}};
+        entry = {{"uri", std::string("data:") + mime + ";base64," + encodeBase64(file.bytes)}};
       }
       images.push_back(entry);
+      codecs.push_back(file.codec);
       image = int(images.size() - 1);
       imageIndex[t.image.get()] = image;
     }
-    textures.push_back({{"sampler", 0}, {"source", image}});
+    // A WebP image is the source of EXT_texture_webp (required: there is no fallback image).
+    if (codecs[size_t(image)] == ImageCodec::Webp) {
+      textures.push_back({{"sampler", 0}, {"extensions", {{"EXT_texture_webp", {{"source", image}}}}}});
+      usesWebp = true;
+    } else {
+      textures.push_back({{"sampler", 0}, {"source", image}});
+    }
     json info = {{"index", int(textures.size() - 1)}};
     if (t.hasTransform()) {
       info["extensions"]["KHR_texture_transform"] = {
@@ -155,7 +189,13 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
     return info;
   };
   std::vector<Material> materialList = mesh.materials;
-  if (materialList.empty()) materialList.push_back(Material{});
+  if (materialList.empty()) {
+    // A plain dielectric, not glTF's default (metallicFactor 1), which viewers show as dark metal.
+    Material plain;
+    plain.metallicFactor = 0.0f;
+    plain.roughnessFactor = 0.5f;
+    materialList.push_back(plain);
+  }
   for (const Material& m : materialList) {
     json pbr = {{"baseColorFactor", {m.baseColorFactor.x(), m.baseColorFactor.y(), m.baseColorFactor.z(), m.baseColorFactor.w()}},
                 {"metallicFactor", m.metallicFactor},
@@ -251,6 +291,11 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
     doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
   }
   if (usesTransform) extensionsUsed.push_back("KHR_texture_transform");
+  if (usesWebp) {
+    extensionsUsed.push_back("EXT_texture_webp");
+    if (!doc.contains("extensionsRequired")) doc["extensionsRequired"] = json::array();
+    doc["extensionsRequired"].push_back("EXT_texture_webp");
+  }
   if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
 
   std::string out;
@@ -275,9 +320,16 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
       out.append(reinterpret_cast<const char*>(b.buffer().data()), b.buffer().size());
     }
   } else {
-    if (!b.buffer().empty())
-      doc["buffers"] = json::array(
-          {{{"byteLength", b.buffer().size()}, {"uri", "data:application/octet-stream;base64," + encodeBase64(b.buffer())}}});
+    if (!b.buffer().empty()) {
+      std::string uri;
+      if (external) {
+        sideFile(stem + ".bin", {reinterpret_cast<const char*>(b.buffer().data()), b.buffer().size()});
+        uri = uriOf(stem + ".bin");
+      } else {
+        uri = "data:application/octet-stream;base64," + encodeBase64(b.buffer());
+      }
+      doc["buffers"] = json::array({{{"byteLength", b.buffer().size()}, {"uri", uri}}});
+    }
     out = doc.dump(1) + "\n";
   }
   writeFileBytes(tmp, out, path);

@@ -10,6 +10,7 @@
 // the algorithms that need them and converted back at their boundary.
 
 #include "render/image/image.h"
+#include "render/image/image_io.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -31,6 +32,10 @@ struct Texture {
   Eigen::Vector2f offset{0.0f, 0.0f};
   Eigen::Vector2f scale{1.0f, 1.0f};
   float rotation = 0.0f; ///< radians, counter-clockwise in UV space as glTF defines it
+  /// The PNG, JPEG or WebP file `image` was decoded from, when it was read from one: writers keep
+  /// these bytes instead of re-encoding (MeshWriteOptions::textures). Describes `image`: code that
+  /// replaces `image` resets it.
+  std::shared_ptr<const EncodedImage> encoded;
 
   explicit operator bool() const { return image != nullptr; }
   bool hasTransform() const { return offset != Eigen::Vector2f(0, 0) || scale != Eigen::Vector2f(1, 1) || rotation != 0; }

@@ -14,7 +14,7 @@
 
 namespace texfab::geometry::detail {
 
-Mesh readObj(const std::filesystem::path& path);
+Mesh readObj(const std::filesystem::path& path, const Context& ctx);  ///< warns through ctx
 Mesh readPly(const std::filesystem::path& path);
 Mesh readOff(const std::filesystem::path& path);
 Mesh readStl(const std::filesystem::path& path);
@@ -23,12 +23,18 @@ Mesh readGltf(const std::filesystem::path& path); ///< .gltf and .glb
 /// Writers write to `tmp` (and commit any side files themselves, after the main file is complete
 /// in `tmp`); the caller renames `tmp` onto `path`.
 void writeObj(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp,
+              const MeshWriteOptions& options,
               std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& sideFiles);
 void writePly(const Mesh& mesh, const std::filesystem::path& tmp, bool binary);
 void writeOff(const Mesh& mesh, const std::filesystem::path& tmp);
 void writeStl(const Mesh& mesh, const std::filesystem::path& tmp, bool binary);
 void writeGltf(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp, bool binary,
-               const MeshWriteOptions& options);
+               const MeshWriteOptions& options,
+               std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& sideFiles);
+
+/// A texture's image as the writers store it: its file's bytes when options.textures is Keep and
+/// it has them, else encoded in the requested format (Keep: PNG).
+EncodedImage storedImage(const Texture& texture, const MeshWriteOptions& options);
 
 /// The whole file; throws texfab::Error naming it when it cannot be read or exceeds `maxBytes`.
 std::vector<uint8_t> readFileBytes(const std::filesystem::path& path, uint64_t maxBytes = uint64_t(4) << 30);

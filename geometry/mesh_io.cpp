@@ -8,6 +8,7 @@
 
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -41,13 +42,17 @@ const char* meshFormatName(MeshFormat format) {
   return "?";
 }
 
-Mesh readMesh(const fs::path& path) {
+bool meshFormatCarriesTextures(MeshFormat format) {
+  return format == MeshFormat::Obj || format == MeshFormat::Gltf || format == MeshFormat::Glb;
+}
+
+Mesh readMesh(const fs::path& path, const Context& ctx) {
   const MeshFormat format = meshFormatOf(path);
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": no such file");
   Mesh mesh;
   switch (format) {
-  case MeshFormat::Obj: mesh = detail::readObj(path); break;
+  case MeshFormat::Obj: mesh = detail::readObj(path, ctx); break;
   case MeshFormat::Ply: mesh = detail::readPly(path); break;
   case MeshFormat::Off: mesh = detail::readOff(path); break;
   case MeshFormat::Stl: mesh = detail::readStl(path); break;
@@ -63,23 +68,21 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
   validateMesh(mesh, path.string());
   if (options.draco && format != MeshFormat::Gltf && format != MeshFormat::Glb)
     throw Error(path.string() + ": Draco compression needs a .glb or .gltf output");
-  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-  std::error_code ec;
-  if (!fs::is_directory(folder, ec)) throw Error(path.string() + ": the output folder does not exist");
+  checkOutputLocation(path);
   const fs::path tmp = temporaryPathFor(path);
   std::vector<std::pair<fs::path, fs::path>> sideFiles; // (temporary, final)
   try {
     switch (format) {
-    case MeshFormat::Obj: detail::writeObj(mesh, path, tmp, sideFiles); break;
+    case MeshFormat::Obj: detail::writeObj(mesh, path, tmp, options, sideFiles); break;
     case MeshFormat::Ply: detail::writePly(mesh, tmp, options.binary); break;
     case MeshFormat::Off: detail::writeOff(mesh, tmp); break;
     case MeshFormat::Stl: detail::writeStl(mesh, tmp, options.binary); break;
-    case MeshFormat::Gltf: detail::writeGltf(mesh, path, tmp, false, options); break;
-    case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options); break;
+    case MeshFormat::Gltf: detail::writeGltf(mesh, path, tmp, false, options, sideFiles); break;
+    case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options, sideFiles); break;
     }
   } catch (...) {
-    fs::remove(tmp, ec);
-    for (const auto& side : sideFiles) fs::remove(side.first, ec);
+    discardTemporary(tmp);
+    for (const auto& side : sideFiles) discardTemporary(side.first);
     throw;
   }
   // Side files (textures, MTL) first, the model last: the model never points at missing files.
@@ -88,6 +91,14 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
 }
 
 namespace detail {
+
+EncodedImage storedImage(const Texture& texture, const MeshWriteOptions& options) {
+  if (options.textures == TextureEncoding::Keep && texture.encoded) return *texture.encoded;
+  const ImageCodec codec = options.textures == TextureEncoding::Jpeg   ? ImageCodec::Jpeg
+                           : options.textures == TextureEncoding::Webp ? ImageCodec::Webp
+                                                                       : ImageCodec::Png;
+  return {encodeImage(*texture.image, codec, options.textureQuality), codec};
+}
 
 std::vector<uint8_t> readFileBytes(const fs::path& path, uint64_t maxBytes) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
@@ -104,9 +115,9 @@ std::vector<uint8_t> readFileBytes(const fs::path& path, uint64_t maxBytes) {
 
 void writeFileBytes(const fs::path& path, std::string_view bytes, const fs::path& shownAs) {
   std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error(shownAs.string() + ": cannot create file");
+  if (!out) throw Error(systemError(shownAs, "cannot create file", errno));
   out.write(bytes.data(), std::streamsize(bytes.size()));
-  if (!out.flush()) throw Error(shownAs.string() + ": write error");
+  if (!out.flush()) throw Error(systemError(shownAs, "cannot write file", errno));
 }
 
 std::string_view TextCursor::nextLine() {

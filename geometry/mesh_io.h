@@ -11,6 +11,7 @@
 // no partial output.
 
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <filesystem>
 #include <string>
@@ -25,8 +26,21 @@ MeshFormat meshFormatOf(const std::filesystem::path& path);
 /// Human-readable names: "OBJ", "PLY", ...
 const char* meshFormatName(MeshFormat format);
 
-/// Reads a mesh. Texture images of OBJ and glTF materials are decoded.
-Mesh readMesh(const std::filesystem::path& path);
+/// Whether the format carries materials with textures (glTF, GLB, OBJ+MTL); PLY, OFF and STL do not.
+bool meshFormatCarriesTextures(MeshFormat format);
+
+/// Reads a mesh. Texture images of OBJ and glTF materials are decoded (and their file bytes kept:
+/// Texture::encoded). An OBJ whose .mtl or texture file is missing loads with plain materials and
+/// a warning through ctx, as other OBJ readers do.
+Mesh readMesh(const std::filesystem::path& path, const Context& ctx = {});
+
+/// How writers store texture images.
+enum class TextureEncoding {
+  Keep,  ///< an image read from a PNG, JPEG or WebP file keeps its bytes; any other image is PNG
+  Png,   ///< lossless (8-bit)
+  Jpeg,  ///< lossy, no alpha; `textureQuality`
+  Webp,  ///< lossy; glTF through EXT_texture_webp (required by the file); `textureQuality`
+};
 
 struct MeshWriteOptions {
   /// Binary PLY / STL (default); false writes ASCII.
@@ -41,13 +55,21 @@ struct MeshWriteOptions {
   int dracoLevel = 7;
   /// glTF/GLB: compute tangents when the mesh has UVs and a normal map but no tangents.
   bool computeMissingTangents = true;
+  /// Texture images (glTF, GLB, OBJ): see TextureEncoding.
+  TextureEncoding textures = TextureEncoding::Keep;
+  int textureQuality = 90;  ///< JPEG and WebP quality, 1 (small) .. 100 (best)
+  /// .gltf: buffers and images as data URIs inside the file; false (default) writes them beside
+  /// it (<stem>.bin, <stem>_<n>.png, ...).
+  bool embed = false;
 };
 
 /// Writes `mesh`. What each format keeps:
-///  - glTF/GLB: everything (per-corner attributes, PBR materials, textures embedded as PNG);
-///    one primitive per material; face tags are written as the primitive's `extras`.
-///  - OBJ: positions, per-corner UVs and normals, materials as MTL (Kd, d, Pr, Pm, map_Kd,
-///    norm, map_Pr via PNGs written next to the OBJ, named <stem>_<material>_<kind>.png).
+///  - glTF/GLB: everything (per-corner attributes, PBR materials, textures); one primitive per
+///    material; face tags are written as the primitive's `extras`. A mesh without materials gets
+///    a plain dielectric one (metallic 0, roughness 0.5), not glTF's default metal.
+///  - OBJ: positions, UVs and normals (each distinct value written once; normals computed when the
+///    mesh has none), materials as MTL (Kd, d, Pr, Pm, map_Kd; the normal map as map_Bump, bump
+///    and norm; map_Pr) with images next to the OBJ, named <stem>_<material>_<kind>.<ext>.
 ///  - PLY: positions, per-vertex normals (averaged), per-corner UVs as the face property
 ///    `texcoord` (MeshLab's convention), per-face material index as `material_index`.
 ///  - OFF, STL: positions and triangles only.

@@ -2,13 +2,16 @@
 // Wavefront OBJ + MTL reading and writing.
 #include "geometry/mesh_formats.h"
 #include "geometry/model_path.h"
+#include "render/image/context.h"
 #include "render/image/error.h"
 #include "render/image/files.h"
 #include "render/image/image_io.h"
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace texfab::geometry::detail {
@@ -45,14 +48,31 @@ std::string mapFileName(const std::vector<std::string_view>& words) {
   return name;
 }
 
+// Textures by file, each decoded once. A missing texture file is a warning: the material loads
+// without it, as in every OBJ reader.
 struct TextureCache {
-  std::map<fs::path, std::shared_ptr<const Image>> images;
+  const Context& ctx;
+  std::map<fs::path, std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>> images;
   Texture load(const fs::path& mtl, const std::string& reference) {
     const fs::path file = resolveModelReference(mtl, reference);
-    auto& slot = images[file];
-    if (!slot) slot = std::make_shared<const Image>(readImage(file));
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) {
+      ctx.warn(file.string() + ": texture not found; " + mtl.filename().string() + " is read without it");
+      return {};
+    }
+    auto& [image, encoded] = images[file];
+    if (!image) {
+      std::vector<uint8_t> bytes = readFileBytes(file, uint64_t(1) << 30);
+      if (const std::optional<ImageCodec> codec = imageCodecOf(bytes)) {
+        image = std::make_shared<const Image>(decodeImage(bytes, file.string()));
+        encoded = std::make_shared<const EncodedImage>(EncodedImage{std::move(bytes), *codec});
+      } else {
+        image = std::make_shared<const Image>(readImage(file));
+      }
+    }
     Texture texture;
-    texture.image = slot;
+    texture.image = image;
+    texture.encoded = encoded;
     texture.name = file.filename().string();
     return texture;
   }
@@ -61,6 +81,12 @@ struct TextureCache {
 void readMtl(const fs::path& obj, const std::string& reference, std::vector<Material>& materials,
              std::map<std::string, uint32_t>& byName, TextureCache& textures) {
   const fs::path path = resolveModelReference(obj, reference);
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    textures.ctx.warn(path.string() + ": material library not found; " + obj.filename().string() +
+                      " is read with plain materials");
+    return;
+  }
   const std::vector<uint8_t> bytes = readFileBytes(path, uint64_t(256) << 20);
   TextCursor cursor(reinterpret_cast<const char*>(bytes.data()), reinterpret_cast<const char*>(bytes.data() + bytes.size()));
   Material* current = nullptr;
@@ -104,11 +130,19 @@ void readMtl(const fs::path& obj, const std::string& reference, std::vector<Mate
                key == "bump") {
       const std::string file = mapFileName(words);
       if (file.empty()) throw Error(lineError(path, cursor.lineNumber(), "'" + std::string(key) + "' names no file"));
-      if (key == "map_Kd") current->baseColorTexture = textures.load(path, file);
-      else if (key == "norm") current->normalTexture = textures.load(path, file);
-      // map_Bump/bump are height maps in classic OBJ: not a normal map, so not used. map_Pr and
-      // map_Pm are single channels that glTF packs into one texture: not combined here.
-      else (void)resolveModelReference(path, file);
+      if (key == "map_Kd") {
+        current->baseColorTexture = textures.load(path, file);
+      } else if (key == "norm" || key == "map_Bump" || key == "bump") {
+        // norm is a normal map; map_Bump/bump are too when they have colour (Blender and most
+        // exporters write normal maps there), a height map when grey (not used). norm wins.
+        if (key == "norm" || !current->normalTexture) {
+          Texture t = textures.load(path, file);
+          if (key == "norm" || (t && t.image->channels >= 3)) current->normalTexture = std::move(t);
+        }
+      } else {
+        // map_Pr and map_Pm are single channels that glTF packs into one texture: not combined here.
+        (void)resolveModelReference(path, file);
+      }
     }
   }
   for (Material& m : materials) {
@@ -126,7 +160,7 @@ struct CornerRef {
 
 } // namespace
 
-Mesh readObj(const fs::path& path) {
+Mesh readObj(const fs::path& path, const Context& ctx) {
   const std::vector<uint8_t> bytes = readFileBytes(path);
   TextCursor cursor(reinterpret_cast<const char*>(bytes.data()), reinterpret_cast<const char*>(bytes.data() + bytes.size()));
   Mesh mesh;
@@ -134,7 +168,7 @@ Mesh readObj(const fs::path& path) {
   std::vector<Eigen::Vector3f> vns;
   std::vector<CornerRef> corners;            // 3 per triangle
   std::map<std::string, uint32_t> byName;
-  TextureCache textures;
+  TextureCache textures{ctx, {}};
   uint32_t currentMaterial = 0;
   bool anyMaterialUsed = false;
   std::vector<CornerRef> polygon;
@@ -267,8 +301,29 @@ std::string fmt(float v) {
 
 } // namespace
 
-void writeObj(const Mesh& mesh, const fs::path& path, const fs::path& tmp,
+namespace {
+
+// Distinct values of a per-corner attribute, in order of first use: the OBJ index of each corner.
+template <class V>
+std::vector<uint32_t> shareValues(const std::vector<V>& perCorner, std::vector<V>& values) {
+  std::map<std::array<float, V::RowsAtCompileTime>, uint32_t> index;
+  std::vector<uint32_t> of(perCorner.size());
+  for (size_t c = 0; c < perCorner.size(); ++c) {
+    std::array<float, V::RowsAtCompileTime> key;
+    for (int i = 0; i < V::RowsAtCompileTime; ++i) key[size_t(i)] = perCorner[c][i];
+    const auto [it, added] = index.emplace(key, uint32_t(values.size()));
+    if (added) values.push_back(perCorner[c]);
+    of[c] = it->second;
+  }
+  return of;
+}
+
+} // namespace
+
+void writeObj(const Mesh& input, const fs::path& path, const fs::path& tmp, const MeshWriteOptions& options,
               std::vector<std::pair<fs::path, fs::path>>& sideFiles) {
+  Mesh mesh = input;
+  if (!mesh.hasNormals()) computeSmoothNormals(mesh);
   const std::string stem = path.stem().string();
   const fs::path folder = path.parent_path();
   std::ostringstream mtl;
@@ -276,12 +331,12 @@ void writeObj(const Mesh& mesh, const fs::path& path, const fs::path& tmp,
   auto textureFile = [&](const Texture& texture, const std::string& material, const char* kind) {
     const auto it = written.find(texture.image.get());
     if (it != written.end()) return it->second;
-    const std::string name = stem + "_" + material + "_" + kind + ".png";
+    const EncodedImage file = storedImage(texture, options);
+    const std::string name = stem + "_" + material + "_" + kind + extensionOf(file.codec);
     const fs::path final = folder / name;
     const fs::path side = temporaryPathFor(final);
     sideFiles.emplace_back(side, final);
-    const std::vector<uint8_t> png = encodePng(*texture.image);
-    writeFileBytes(side, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()), final);
+    writeFileBytes(side, std::string_view(reinterpret_cast<const char*>(file.bytes.data()), file.bytes.size()), final);
     written[texture.image.get()] = name;
     return name;
   };
@@ -299,7 +354,12 @@ void writeObj(const Mesh& mesh, const fs::path& path, const fs::path& tmp,
       mtl << "d " << fmt(m.baseColorFactor.w()) << "\n";
       mtl << "Pr " << fmt(m.roughnessFactor) << "\nPm " << fmt(m.metallicFactor) << "\n";
       if (m.baseColorTexture) mtl << "map_Kd " << textureFile(m.baseColorTexture, names[i], "basecolor") << "\n";
-      if (m.normalTexture) mtl << "norm " << textureFile(m.normalTexture, names[i], "normal") << "\n";
+      if (m.normalTexture) {
+        // map_Bump is where Blender and most readers look for a normal map; norm is the PBR
+        // extension's name for it.
+        const std::string file = textureFile(m.normalTexture, names[i], "normal");
+        mtl << "map_Bump " << file << "\nbump " << file << "\nnorm " << file << "\n";
+      }
       if (m.metallicRoughnessTexture)
         mtl << "map_Pr " << textureFile(m.metallicRoughnessTexture, names[i], "metallicroughness") << "\n";
     }
@@ -308,16 +368,17 @@ void writeObj(const Mesh& mesh, const fs::path& path, const fs::path& tmp,
     sideFiles.emplace_back(side, final);
     writeFileBytes(side, mtl.str(), final);
   }
+  std::vector<Eigen::Vector2f> vts;
+  std::vector<Eigen::Vector3f> vns;
+  const std::vector<uint32_t> vtOf = shareValues(mesh.uvs, vts);
+  const std::vector<uint32_t> vnOf = shareValues(mesh.normals, vns);
   std::string out;
-  out.reserve(mesh.positions.size() * 40 + mesh.triangles.size() * 60);
+  out.reserve(mesh.positions.size() * 40 + vts.size() * 30 + vns.size() * 40 + mesh.triangles.size() * 40);
   out += "# texfab\n";
   if (!mesh.materials.empty()) out += "mtllib " + stem + ".mtl\n";
   for (const auto& p : mesh.positions) out += "v " + fmt(p.x()) + ' ' + fmt(p.y()) + ' ' + fmt(p.z()) + '\n';
-  for (const auto& uv : mesh.uvs) {
-    const Eigen::Vector2f u = uv;
-    out += "vt " + fmt(u.x()) + ' ' + fmt(u.y()) + '\n';
-  }
-  for (const auto& n : mesh.normals) out += "vn " + fmt(n.x()) + ' ' + fmt(n.y()) + ' ' + fmt(n.z()) + '\n';
+  for (const auto& uv : vts) out += "vt " + fmt(uv.x()) + ' ' + fmt(uv.y()) + '\n';
+  for (const auto& n : vns) out += "vn " + fmt(n.x()) + ' ' + fmt(n.y()) + ' ' + fmt(n.z()) + '\n';
   uint32_t current = UINT32_MAX;
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     if (!mesh.materials.empty() && mesh.materialOf(t) != current) {
@@ -327,12 +388,9 @@ void writeObj(const Mesh& mesh, const fs::path& path, const fs::path& tmp,
     out += 'f';
     for (int k = 0; k < 3; ++k) {
       const size_t c = 3 * t + size_t(k);
-      out += ' ' + std::to_string(mesh.triangles[t][size_t(k)] + 1);
-      if (mesh.hasUvs() || mesh.hasNormals()) {
-        out += '/';
-        if (mesh.hasUvs()) out += std::to_string(c + 1);
-        if (mesh.hasNormals()) out += '/' + std::to_string(c + 1);
-      }
+      out += ' ' + std::to_string(mesh.triangles[t][size_t(k)] + 1) + '/';
+      if (mesh.hasUvs()) out += std::to_string(vtOf[c] + 1);
+      out += '/' + std::to_string(vnOf[c] + 1);
     }
     out += '\n';
   }

@@ -8,25 +8,18 @@
 #include "render/bake.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
+#include "render/image/text.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/synthesize_surface.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <sstream>
 
 namespace texfab::render {
 using namespace atlas;
 
 namespace {
-
-std::string format(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
 
 void requireSize(const Image* map, const Image& exemplar, const char* what) {
   if (map && (map->width != exemplar.width || map->height != exemplar.height))
@@ -75,6 +68,11 @@ void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
   requireSize(ex.height, *ex.color, "height");
 }
 
+double textureMeshMemoryBytes(const TextureMeshOptions& o) {
+  const double bytesPerTexel = o.mode == TextureMode::Solid ? 440.0 : 220.0;
+  return double(o.atlas.pack.width) * double(o.atlas.pack.height) * bytesPerTexel;
+}
+
 TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o,
                               const Context& ctx) {
   checkCompanionMaps(ex, o.mode);  // and that there is an exemplar
@@ -94,24 +92,31 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
   const AtlasReport& ar = r.atlas.report;
   if (ar.flippedTriangles || ar.overlappingTexels)
     throw Error("internal: the atlas has flipped triangles or overlaps; please report this mesh");
-  atlasStage.finish(std::to_string(ar.charts) + " charts, utilization " + format(ar.utilization) +
-                             ", L2 stretch " + format(ar.l2Stretch));
+  atlasStage.finish(counted(int64_t(ar.charts), "chart") + ", utilization " + figure(ar.utilization) +
+                             ", L2 stretch " + figure(ar.l2Stretch));
+  for (const std::string& repair : ar.repairs) ctx.warn(repair);
+
+  // Warnings go to the report and, at once, to ctx (before the long synthesis).
+  auto warn = [&](std::string message) {
+    ctx.warn(message);
+    r.warnings.push_back(std::move(message));
+  };
 
   // Scale: exemplar pixels per model unit, and per texel.
   r.textureScale = o.textureScale > 0 ? o.textureScale : atlas.texelsPerUnit;
   const double pixelsPerTexel = r.textureScale / atlas.texelsPerUnit;
   const int exemplarSide = std::min(exemplar.width, exemplar.height);
   if (pixelsPerTexel > exemplarSide / 2.0)
-    throw Error("the scale puts " + format(pixelsPerTexel) + " exemplar pixels in one texel (the exemplar is " +
+    throw Error("the scale puts " + figure(pixelsPerTexel) + " exemplar pixels in one texel (the exemplar is " +
                 std::to_string(exemplarSide) + " pixels): features would be smaller than a texel; lower the scale "
                 "or raise the resolution");
   if (pixelsPerTexel > 2.0)
-    r.warnings.push_back("the exemplar is minified " + format(pixelsPerTexel) +
+    warn("the exemplar is minified " + figure(pixelsPerTexel) +
                          "x (exemplar pixels per texel): its finest detail is lost; raise --resolution to keep it");
   const double diagonal = geometry::boundingBox(mesh).diagonal();
   if (exemplarSide / r.textureScale > diagonal)
-    r.warnings.push_back("one exemplar spans " + format(exemplarSide / r.textureScale) +
-                         " model units, more than the model's diagonal (" + format(diagonal) + ")");
+    warn("one exemplar spans " + figure(exemplarSide / r.textureScale) +
+                         " model units, more than the model's diagonal (" + figure(diagonal) + ")");
 
   // Fields: Jacobians and the surface domain.
   TexelField<TexelJacobian> jacobians;
@@ -143,7 +148,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     r.coords = std::move(s.coords);
     r.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
     r.synthesisLevels = s.levels;
-    synthesisStage.finish(std::to_string(s.levels.size()) + " levels, " + format(s.exemplarPixelsPerTexel) +
+    synthesisStage.finish(std::to_string(s.levels.size()) + " levels, " + figure(s.exemplarPixelsPerTexel) +
                                    " exemplar pixels per texel");
   } else {
     r.exemplarPixelsPerTexel = pixelsPerTexel;
@@ -199,13 +204,13 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
   if (o.measure) {
     Stage measureStage(ctx, "measures");
     r.measures.seams = measureSeams(sites, *r.baseColor);
-    std::string detail = "seam ratio " + format(r.measures.seams.ratio);
+    std::string detail = "seam ratio " + figure(r.measures.seams.ratio);
     if (surface) {
       r.measures.scale = measureScale(sites, r.coords, r.atlas.fields, ex.analysis->width, ex.analysis->height,
                                       r.textureScale);
       r.measures.fidelity = measureSurfaceFidelity(sites, *r.baseColor, exemplar, r.atlas.fields, 1024, ctx);
-      detail += ", scale within 15 % on " + format(100 * r.measures.scale->fractionWithin) + " % of the surface, fidelity " +
-                format(r.measures.fidelity->fidelity);
+      detail += ", scale within 15 % on " + figure(100 * r.measures.scale->fractionWithin) + " % of the surface, fidelity " +
+                figure(r.measures.fidelity->fidelity);
     }
     measureStage.finish(detail);
   }

@@ -11,8 +11,9 @@ packages=(
   libnanoflann-dev
   # meshes: glTF, Draco, Embree, halfedge structures, CGAL (and its data set)
   libtinygltf-dev libdraco-dev draco libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
-  # tests and benchmarks; real clients that check our outputs
-  libgtest-dev libbenchmark-dev assimp-utils nodejs npm
+  # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
+  # which Debian's blender package does not pull in)
+  libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy
   # test data: GIMP's patterns (marble, granite, brick, wood, ...)
   gimp-data
 )

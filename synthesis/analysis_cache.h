@@ -3,8 +3,10 @@
 // The on-disk cache discipline shared by the 2-D exemplar analysis and the solid analysis: a file
 // named by the content + parameter key, read when present and valid, otherwise computed and
 // stored. A damaged file is recomputed, never trusted; a cache folder that cannot be written costs
-// time on the next run, not correctness.
+// time on the next run, not correctness (a warning says so). Reading a file marks it as recently
+// used (its modification time), for pruneCache.
 
+#include "render/image/context.h"
 #include "render/image/error.h"
 
 #include <cstdint>
@@ -15,15 +17,23 @@
 
 namespace texfab::synthesis {
 
+/// Removes the least recently used analyses (*.analysis, *.solid) of `cacheDir` until the rest
+/// take at most `maxBytes`. Other files are left alone; errors are ignored (a cache is optional).
+void pruneCache(const std::filesystem::path& cacheDir, uint64_t maxBytes);
+
+/// Marks a cache file as just used.
+void touchCacheFile(const std::filesystem::path& path);
+
 /// `read(path, key)` -> std::optional<T>; `compute()` -> T; `write(value, path)` may throw Error.
 template <class Read, class Compute, class Write>
 auto loadOrCompute(const std::filesystem::path& cacheDir, uint64_t key, const std::string& extension, Read read,
-                   Compute compute, Write write, bool* fromCache) {
+                   Compute compute, Write write, bool* fromCache, const Context& ctx) {
   char name[40];
   std::snprintf(name, sizeof name, "%016llx", static_cast<unsigned long long>(key));
   const std::filesystem::path path = cacheDir / (name + extension);
   if (auto cached = read(path, key)) {
     if (fromCache) *fromCache = true;
+    touchCacheFile(path);
     return std::move(*cached);
   }
   auto value = compute();
@@ -31,9 +41,10 @@ auto loadOrCompute(const std::filesystem::path& cacheDir, uint64_t key, const st
   try {
     std::error_code ec;
     std::filesystem::create_directories(cacheDir, ec);
+    if (ec) throw Error(cacheDir.string() + ": cannot create folder: " + ec.message());
     write(value, path);
-  } catch (const Error&) {
-    // Unwritable cache folder: keep the computed value (see above).
+  } catch (const Error& e) {
+    ctx.warn("the analysis cache cannot be written (" + std::string(e.what()) + "); the analysis will be computed again");
   }
   return value;
 }

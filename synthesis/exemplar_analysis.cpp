@@ -448,7 +448,7 @@ ExemplarAnalysis analyzeExemplarCached(const Image& exemplar, const AnalysisOpti
   options.validate();
   return loadOrCompute(
       cacheDir, analysisKey(exemplar, options), ".analysis", readAnalysis,
-      [&] { return analyzeExemplar(exemplar, options, ctx); }, writeAnalysis, fromCache);
+      [&] { return analyzeExemplar(exemplar, options, ctx); }, writeAnalysis, fromCache, ctx);
 }
 
 } // namespace texfab::synthesis

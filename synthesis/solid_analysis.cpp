@@ -711,7 +711,7 @@ SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& 
   validateSolidExemplars(ex, ey, ez);
   return loadOrCompute(
       cacheDir, solidAnalysisKey(ex, ey, ez, options), ".solid", readSolidAnalysis,
-      [&] { return analyzeSolid(ex, ey, ez, options, ctx); }, writeSolidAnalysis, fromCache);
+      [&] { return analyzeSolid(ex, ey, ez, options, ctx); }, writeSolidAnalysis, fromCache, ctx);
 }
 
 } // namespace texfab::synthesis

@@ -61,6 +61,10 @@ void SynthesisOptions::validate() const {
     throw Error("tiling period must be in [0, " + std::to_string(kMaxImageSide) + "]");
 }
 
+double synthesize2dMemoryBytes(const Window& window, int resolvedChannels) {
+  return double(window.width) * double(window.height) * (12.0 + 4.0 * resolvedChannels);
+}
+
 int firstSynthesisLevel(int levelCount, const SynthesisOptions& options) {
   // A tiling period must stay whole, and a multiple of the interleave (so the sub-pass classes
   // repeat with it), at every synthesized level; coarser levels are skipped.

@@ -69,6 +69,11 @@ struct SynthesisResult {
   std::vector<LevelStats> levels;
 };
 
+/// Peak memory of synthesize2d on `window`, in bytes: two coordinate buffers while synthesizing,
+/// plus `resolvedChannels` float channels of images resolved through the coordinates afterwards
+/// (applyCoords: colours and companion maps).
+double synthesize2dMemoryBytes(const Window& window, int resolvedChannels);
+
 /// Synthesizes the exemplar coordinates of `window` (at most kMaxImageSide per side).
 SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& window,
                              const SynthesisOptions& options, const Context& ctx = {});

@@ -617,6 +617,8 @@ void SolidSynthesisOptions::validate() const {
     throw Error("interleave must be 1 (one sub-pass per pass) or 2 (8 sub-passes), got " + std::to_string(interleave));
 }
 
+double synthesizeSolidMemoryBytes(int64_t voxels) { return double(voxels) * 40.0; }
+
 int64_t SolidSynthesisResult::voxelsSynthesized() const {
   int64_t n = 0;
   for (const auto& l : levels) n += l.voxels;

@@ -153,6 +153,10 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<co
                                      const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
                                      const Context& ctx = {});
 
+/// Peak memory of synthesizeSolid for `voxels` requested voxels (a plane, points), in bytes: the
+/// request, its triples and colours, and the finest level's masks.
+double synthesizeSolidMemoryBytes(int64_t voxels);
+
 /// Triples of every voxel of `box`, x fastest, then y, then z.
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& analysis, const VoxelBox& box,
                                         const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,

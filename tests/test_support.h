@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdio>
@@ -42,6 +43,49 @@ private:
 inline int run(const std::string& command) {
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+/// What a command printed and how it ended.
+struct CliResult {
+  int status = -1;     ///< exit status; 128 + signal when killed
+  std::string out, err;
+  /// stderr's lines.
+  size_t errLines() const { return size_t(std::count(err.begin(), err.end(), '\n')); }
+};
+
+inline std::string readFile(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  std::string text;
+  if (!f) return text;
+  std::array<char, 4096> buffer{};
+  for (size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), f)) > 0;) text.append(buffer.data(), n);
+  std::fclose(f);
+  return text;
+}
+
+/// Runs the texfab CLI with `args` (already quoted for the shell), capturing stdout and stderr.
+inline CliResult runCli(const std::string& args) {
+  static std::atomic<int> counter{0};
+  const std::filesystem::path base = std::filesystem::temp_directory_path() /
+                                     ("texfab-cli-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  const std::string command = std::string(TEXFAB_CLI) + " " + args + " >'" + base.string() + ".out' 2>'" +
+                              base.string() + ".err' </dev/null";
+  const int status = std::system(command.c_str());
+  CliResult r;
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  r.out = readFile(base.string() + ".out");
+  r.err = readFile(base.string() + ".err");
+  std::error_code ec;
+  std::filesystem::remove(base.string() + ".out", ec);
+  std::filesystem::remove(base.string() + ".err", ec);
+  return r;
+}
+
+/// A path quoted for the shell.
+inline std::string quote(const std::filesystem::path& path) {
+  std::string q = "'";
+  for (char c : path.string()) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
 }
 
 /// The Khronos glTF validator (npm gltf-validator) installed by scripts/install-deps.sh into

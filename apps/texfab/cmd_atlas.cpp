@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab atlas: charts, parameterization (CGAL LSCM / ARAP), packing, texel fields, tangent
 // field, Jacobians and indirection maps for synthesis in the atlas (Lefebvre & Hoppe 2006).
-#include "apps/texfab/cli_util.h"
+#include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
+#include "apps/texfab/report_json.h"
 #include "atlas/build_indirection_map.h"
 #include "atlas/compute_jacobians.h"
 #include "atlas/generate_atlas.h"
@@ -11,6 +12,7 @@
 #include "render/image/error.h"
 #include "render/image/memory.h"
 #include "render/image/image_io.h"
+#include "render/image/text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,21 +23,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct AtlasArgs {
-  std::string model;
-  std::string output;
-  std::string resolution = "2048";
-  int gutter = 4;
-  std::string parameterizer = "lscm";
-  std::string direction = "0,1,0";
-  std::string field = "direction";
+struct AtlasJob {
+  std::string model, output, debugImages;
+  atlas::GenerateAtlasOptions options;
+  geometry::TangentFieldOptions field;
+  atlas::IndirectionOptions indirection;
   double textureScale = 0;
-  int radius = 4;
-  double maxAngle = atlas::SegmentChartsOptions{}.maxNormalDeviationDegrees;
-  int threads = 0;
-  std::string report;
-  std::string debugImages;
-  bool quiet = false;
+  geometry::MeshWriteOptions write;
+  CommonFlags common;
 };
 
 float hashColor(uint32_t id, int channel) {
@@ -94,169 +89,103 @@ void writeDebugImages(const fs::path& dir, const geometry::Mesh& mesh, const atl
   geometry::writeMesh(textured, dir / "checker.glb");
 }
 
-void runAtlas(const AtlasArgs& args) {
-  Progress progress("texfab atlas", args.quiet);
-  Context ctx{.threads = args.threads};
-  // Everything checkable is checked before reading the model.
-  geometry::meshFormatOf(args.output);
-  const auto [width, height] = parseSize(args.resolution, "--resolution");
-  atlas::GenerateAtlasOptions options;
-  options.pack.width = width;
-  options.pack.height = height;
-  options.pack.gutter = args.gutter;
-  options.segment.maxNormalDeviationDegrees = args.maxAngle;
-  if (args.parameterizer == "lscm") options.parameterize.parameterizer = atlas::Parameterizer::Lscm;
-  else if (args.parameterizer == "arap") options.parameterize.parameterizer = atlas::Parameterizer::Arap;
-  else throw Error("--parameterizer: expected lscm or arap, got '" + args.parameterizer + "'");
-  try {
-    options.pack.validate();
-    options.segment.validate();
-  } catch (const Error& e) {
-    throw Error(std::string("--resolution/--gutter/--max-angle: ") + e.what());
-  }
-  geometry::TangentFieldOptions fieldOptions;
-  const std::vector<double> dir = parseNumberList(args.direction, "--direction");
-  if (dir.size() != 3) throw Error("--direction: expected X,Y,Z, got '" + args.direction + "'");
-  fieldOptions.direction = Eigen::Vector3f(float(dir[0]), float(dir[1]), float(dir[2]));
-  if (!(fieldOptions.direction.norm() > 0) || !fieldOptions.direction.allFinite())
-    throw Error("--direction: must be a finite non-zero vector, got '" + args.direction + "'");
-  if (args.field == "direction") fieldOptions.kind = geometry::TangentFieldKind::Direction;
-  else if (args.field == "curvature") fieldOptions.kind = geometry::TangentFieldKind::Curvature;
-  else throw Error("--field: expected direction or curvature, got '" + args.field + "'");
-  if (!(args.textureScale >= 0) || !std::isfinite(args.textureScale))
-    throw Error("--texture-scale: must be >= 0 (0 = one exemplar pixel per texel)");
-  atlas::IndirectionOptions indirectionOptions;
-  indirectionOptions.radius = args.radius;
-  indirectionOptions.validate();
-  const double needed = double(width) * height * (sizeof(atlas::SurfaceSample) + 2 * sizeof(atlas::Float3) +
-                                                 sizeof(atlas::TexelJacobian) + sizeof(int32_t) + 16.0);
-  if (needed > 0.8 * double(physicalMemoryBytes()))
-    throw Error("a " + std::to_string(width) + "x" + std::to_string(height) + " atlas needs about " +
-                std::to_string(int(needed / double(1 << 30)) + 1) + " GiB of texel fields, more than this machine's memory");
-  if (!args.debugImages.empty()) {
-    std::error_code ec;
-    fs::create_directories(args.debugImages, ec);
-    if (ec || !fs::is_directory(args.debugImages))
-      throw Error("--debug-images: cannot create folder " + args.debugImages);
-  }
+// The input with the atlas UVs; its textures are dropped (they belong to its old UVs).
+geometry::Mesh withAtlasUvs(const geometry::Mesh& mesh, const atlas::Atlas& a, const Context& ctx) {
+  geometry::Mesh out = mesh;
+  out.uvs.resize(3 * mesh.triangleCount());
+  for (size_t c = 0; c < out.uvs.size(); ++c) out.uvs[c] = a.normalizedUv(a.texelUvs[c]);
+  out.tangents.clear();
+  bool dropped = false;
+  for (geometry::Material& m : out.materials)
+    for (geometry::Texture* t : {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture})
+      if (*t) *t = geometry::Texture{}, dropped = true;
+  if (dropped) ctx.warn("the input's textures were dropped: they belong to its old UVs");
+  return out;
+}
 
-  progress.start("read");
-  geometry::Mesh mesh = geometry::readMesh(args.model);
-  progress.finish(args.model + ": " + std::to_string(mesh.vertexCount()) + " vertices, " +
-                  std::to_string(mesh.triangleCount()) + " triangles");
+void runAtlas(AtlasJob& job) {
+  Run run("atlas", job.common);
+  const atlas::PackChartsOptions& pack = job.options.pack;
+  checkMemory(atlas::atlasMemoryBytes(pack.width, pack.height),
+              "a " + std::to_string(pack.width) + "x" + std::to_string(pack.height) + " atlas");
+  const fs::path out = run.output(job.output);
+  const fs::path debug = job.debugImages.empty() ? fs::path() : run.outputs().addFolder(job.debugImages);
 
-  progress.start("atlas");
-  atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, options, ctx);
+  Stage read(run.ctx(), "read");
+  const geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
+  read.finish(job.model + ": " + counted(int64_t(mesh.vertexCount()), "vertex", "vertices") + ", " +
+              counted(int64_t(mesh.triangleCount()), "triangle"));
+
+  Stage stage(run.ctx(), "atlas");
+  const atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, job.options, stage.inner());
   const atlas::AtlasReport& r = result.report;
-  progress.finish(std::to_string(r.charts) + " charts, utilization " + std::to_string(r.utilization) + ", L2 stretch " +
-                  std::to_string(r.l2Stretch) + ", max " + std::to_string(r.maxStretch));
-  for (const std::string& repair : r.repairs) progress.note(repair);
+  stage.finish(counted(int64_t(r.charts), "chart") + ", utilization " + figure(r.utilization) + ", L2 stretch " +
+               figure(r.l2Stretch) + ", max " + figure(r.maxStretch));
+  for (const std::string& repair : r.repairs) run.ctx().warn(repair);
   if (r.flippedTriangles || r.overlappingTexels)
     throw Error("internal: the atlas has flipped triangles or overlaps; please report this mesh");
 
-  progress.start("tangent field");
-  const geometry::TangentField field = geometry::computeTangentField(mesh, fieldOptions);
-  progress.finish(std::to_string(field.singularTriangles.size()) + " singularities");
+  Stage fieldStage(run.ctx(), "tangent field");
+  const geometry::TangentField field = geometry::computeTangentField(mesh, job.field);
+  fieldStage.finish(counted(int64_t(field.singularTriangles.size()), "singularity", "singularities"));
+  Stage jacobianStage(run.ctx(), "jacobians");
+  const double textureScale = job.textureScale > 0 ? job.textureScale : result.atlas.texelsPerUnit;
+  const auto jacobians = atlas::computeJacobians(mesh, result.atlas, result.fields, field, textureScale, run.ctx());
+  jacobianStage.finish();
+  Stage indirectionStage(run.ctx(), "indirection");
+  const atlas::IndirectionMap indirection =
+      atlas::buildIndirectionMap(mesh, result.adjacency, result.atlas, result.fields, job.indirection, run.ctx());
+  indirectionStage.finish(counted(int64_t(indirection.targets.size()), "border texel") + ", " +
+                          counted(int64_t(indirection.seamCrossings), "seam crossing"));
 
-  progress.start("jacobians");
-  const double textureScale = args.textureScale > 0 ? args.textureScale : result.atlas.texelsPerUnit;
-  const auto jacobians = atlas::computeJacobians(mesh, result.atlas, result.fields, field, textureScale, ctx);
-  progress.finish();
+  Stage write(run.ctx(), "write");
+  const geometry::Mesh textured = withAtlasUvs(mesh, result.atlas, run.ctx());
+  geometry::writeMesh(textured, out, job.write);
+  if (!debug.empty()) writeDebugImages(debug, textured, result.atlas, result.fields, jacobians);
+  write.finish(job.output);
 
-  progress.start("indirection");
-  const atlas::IndirectionMap indirection = atlas::buildIndirectionMap(mesh, result.adjacency, result.atlas, result.fields,
-                                                                       indirectionOptions, ctx);
-  progress.finish(std::to_string(indirection.targets.size()) + " border texels, " +
-                  std::to_string(indirection.seamCrossings) + " seam crossings");
-
-  progress.start("write");
-  geometry::Mesh out = mesh;
-  out.uvs.resize(3 * mesh.triangleCount());
-  for (size_t c = 0; c < out.uvs.size(); ++c) out.uvs[c] = result.atlas.normalizedUv(result.atlas.texelUvs[c]);
-  out.tangents.clear();
-  bool droppedTextures = false;
-  for (geometry::Material& m : out.materials)
-    for (geometry::Texture* t : {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture})
-      if (*t) *t = geometry::Texture{}, droppedTextures = true;
-  if (droppedTextures) progress.note("the input's textures were dropped: they belong to its old UVs");
-  geometry::writeMesh(out, args.output);
-  if (!args.debugImages.empty()) writeDebugImages(args.debugImages, out, result.atlas, result.fields, jacobians);
-  progress.finish(args.output);
-
-  if (!args.report.empty()) {
-    nlohmann::json report;
-    report["command"] = "atlas";
-    report["model"] = {{"path", args.model}, {"vertices", mesh.vertexCount()}, {"triangles", mesh.triangleCount()}};
-    report["parameters"] = {{"width", width}, {"height", height}, {"gutter", args.gutter},
-                            {"parameterizer", args.parameterizer}, {"field", args.field},
-                            {"direction", dir}, {"texture_scale", textureScale}, {"indirection_radius", args.radius},
-                            {"max_angle", args.maxAngle}};
-    report["atlas"] = {{"charts", r.charts},
-                       {"utilization", r.utilization},
-                       {"l2_stretch", r.l2Stretch},
-                       {"max_stretch", r.maxStretch},
-                       {"flipped_triangles", r.flippedTriangles},
-                       {"overlapping_texels", r.overlappingTexels},
-                       {"non_disk_charts", r.nonDiskCharts},
-                       {"seam_length", r.seamLength},
-                       {"texels_per_unit", r.texelsPerUnit},
-                       {"chart_texels", result.fields.chartTexels},
-                       {"packing_passes", r.pack.passes},
-                       {"packed_mask_fill", double(r.pack.maskTexels) / (double(width) * height)},
-                       {"used_height", r.pack.usedHeight},
-                       {"splits", {{"disks", r.segment.splitsForDisks},
-                                   {"flips", r.parameterize.splitsForFlips},
-                                   {"overlaps", r.parameterize.splitsForOverlaps},
-                                   {"stretch", r.parameterize.splitsForStretch},
-                                   {"solver", r.parameterize.splitsForSolver},
-                                   {"cut_to_triangles", r.parameterize.chartsCutToTriangles}}}};
-    report["input"] = {{"degenerate_triangles", r.segment.degenerateTriangles},
-                       {"non_manifold_edges", r.segment.nonManifoldEdges},
-                       {"inconsistent_edges", r.segment.inconsistentEdges},
-                       {"repairs", r.repairs}};
-    report["tangent_field"] = {{"kind", args.field}, {"singularities", field.singularTriangles.size()},
-                               {"total_index", field.totalIndex()}};
-    report["indirection"] = {{"border_texels", indirection.targets.size()},
-                             {"seam_crossings", indirection.seamCrossings},
-                             {"boundary_stops", indirection.boundaryStops}};
-    nlohmann::json stages = nlohmann::json::object();
-    for (const auto& [stage, seconds] : r.seconds) stages[stage] = seconds;
-    report["atlas_stage_seconds"] = stages;
-    report["timings"] = progress.timings();
-    report["peak_memory_mib"] = peakMemoryMiB();
-    writeReport(report, args.report);
-  }
+  nlohmann::json& report = run.report();
+  report["model"] = modelJson(job.model, mesh);
+  report["atlas"] = toJson(result);
+  report["parameters"] = {{"texture_scale", textureScale}};
+  report["tangent_field"] = {{"singularities", field.singularTriangles.size()}, {"total_index", field.totalIndex()}};
+  report["indirection"] = {{"border_texels", indirection.targets.size()},
+                           {"seam_crossings", indirection.seamCrossings},
+                           {"boundary_stops", indirection.boundaryStops}};
+  run.finish();
 }
 
 } // namespace
 
 Command addAtlasCommand(CLI::App& root) {
-  auto args = std::make_shared<AtlasArgs>();
-  CLI::App* app = root.add_subcommand("atlas", "Build a texture atlas (charts, LSCM/ARAP parameterization, packing) "
-                                               "and the surface fields for synthesis in it");
-  app->add_option("model", args->model, "Input mesh (.obj .ply .off .stl .gltf .glb)")->required();
-  app->add_option("-o,--output", args->output, "Output mesh with the atlas UVs (.glb .gltf .obj .ply)")->required();
-  app->add_option("--resolution", args->resolution, "Atlas size N (NxN) or WxH, powers of two")->capture_default_str();
-  app->add_option("--gutter", args->gutter, "Minimum empty texels between charts (0-64)")->capture_default_str();
-  app->add_option("--parameterizer", args->parameterizer, "lscm (Lévy et al. 2002) or arap (Liu et al. 2008, slower)")
-      ->capture_default_str();
-  app->add_option("--direction", args->direction, "Tangent field direction X,Y,Z (projected to the surface)")
-      ->capture_default_str();
-  app->add_option("--field", args->field, "Tangent field: direction or curvature (minimum principal direction)")
-      ->capture_default_str();
-  app->add_option("--texture-scale", args->textureScale,
-                  "Exemplar pixels per model unit for the Jacobians (0 = the atlas density: one pixel per texel)")
-      ->capture_default_str();
-  app->add_option("--indirection-radius", args->radius, "Texels from chart borders with indirection entries (1-64)")
-      ->capture_default_str();
-  app->add_option("--max-angle", args->maxAngle, "Largest normal deviation within a chart, degrees")->capture_default_str();
-  app->add_option("--threads", args->threads, "Worker threads (0 = all cores); the atlas does not depend on it")
-      ->capture_default_str();
-  app->add_option("--report", args->report, "Write charts, utilization, stretch, flips, overlaps, seams and timings as JSON");
-  app->add_option("--debug-images", args->debugImages,
-                  "Write chart ids, normals, Jacobian magnitude/anisotropy, a checkerboard and checker.glb to this folder");
-  app->add_flag("-q,--quiet", args->quiet, "No progress output");
-  return {app, [args] { runAtlas(*args); }};
+  auto job = std::make_shared<AtlasJob>();
+  atlas::GenerateAtlasOptions& o = job->options;
+  Flags f(root.add_subcommand("atlas", "Build a texture atlas (charts, LSCM/ARAP parameterization, packing) "
+                                      "and the surface fields for synthesis in it"));
+  f.input("model", job->model, "Input mesh (.obj .ply .off .stl .gltf .glb)");
+  f.text("-o,--output", job->output, "Output mesh with the atlas UVs (.glb .gltf .obj .ply)")->required();
+  f.size("--resolution", o.pack.width, o.pack.height, "Atlas size",
+         {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true);
+  f.option("--gutter", o.pack.gutter, "Minimum empty texels between charts", {0, atlas::PackChartsOptions::kMaxGutter});
+  f.choice("--parameterizer", o.parameterize.parameterizer,
+           {{"lscm", atlas::Parameterizer::Lscm}, {"arap", atlas::Parameterizer::Arap}},
+           "lscm (Lévy et al. 2002) or arap (Liu et al. 2008, slower)");
+  f.option("--max-angle", o.segment.maxNormalDeviationDegrees, "Largest normal deviation within a chart, degrees",
+           {0, 90, true});
+  f.option("--direction", job->field.direction, "Tangent field direction (projected to the surface)");
+  f.choice("--field", job->field.kind,
+           {{"direction", geometry::TangentFieldKind::Direction}, {"curvature", geometry::TangentFieldKind::Curvature}},
+           "Tangent field: direction, or curvature (minimum principal direction)");
+  f.option("--texture-scale", job->textureScale,
+           "Exemplar pixels per model unit for the Jacobians (default: the atlas density, one per texel)", positive())
+      ->default_str("auto");
+  f.option("--indirection-radius", job->indirection.radius, "Texels from chart borders with indirection entries",
+           {1, 64});
+  f.text("--debug-images", job->debugImages,
+         "Write chart ids, normals, Jacobian magnitude/anisotropy, a checkerboard and checker.glb into this new folder");
+  f.modelOutput(job->write);
+  f.common(job->common, Common::Threads | Common::Report | Common::Quiet);
+  return {f.app(), [job] { runAtlas(*job); }};
 }
 
 } // namespace texfab::cli

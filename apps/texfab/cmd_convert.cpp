@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab convert: between mesh formats, keeping UVs and materials where both formats can.
-#include "apps/texfab/cli_util.h"
+#include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
 #include "render/image/error.h"
+#include "render/image/text.h"
 
 #include <memory>
 
@@ -11,48 +12,44 @@ namespace texfab::cli {
 
 namespace {
 
-struct ConvertArgs {
-  std::string input;
-  std::string output;
-  bool draco = false;
-  int dracoLevel = 7;
+struct ConvertJob {
+  std::string input, output;
+  geometry::MeshWriteOptions options;
   bool ascii = false;
-  bool quiet = false;
+  CommonFlags common;
 };
 
-void runConvert(const ConvertArgs& args) {
+void runConvert(ConvertJob& job) {
   using namespace geometry;
-  Progress progress("texfab convert", args.quiet);
-  const MeshFormat out = meshFormatOf(args.output);  // a bad output name fails before reading
-  MeshWriteOptions options;
-  options.draco = args.draco;
-  options.dracoLevel = args.dracoLevel;
-  options.binary = !args.ascii;
-  if (args.draco && out != MeshFormat::Glb && out != MeshFormat::Gltf)
-    throw Error("--draco needs a .glb or .gltf output, not " + args.output);
-  if (args.dracoLevel < 0 || args.dracoLevel > 10) throw Error("--draco-level must be 0..10");
-  progress.start("read");
-  const Mesh mesh = readMesh(args.input);
-  progress.finish(args.input + ": " + std::to_string(mesh.vertexCount()) + " vertices, " +
-                  std::to_string(mesh.triangleCount()) + " triangles");
-  progress.start("write");
-  writeMesh(mesh, args.output, options);
-  progress.finish(args.output);
+  Run run("convert", job.common);
+  const MeshFormat out = meshFormatOf(job.output);  // a bad output name fails before reading
+  if (job.options.draco && out != MeshFormat::Glb && out != MeshFormat::Gltf)
+    throw UsageError("--draco needs a .glb or .gltf output, not " + job.output);
+  job.options.binary = !job.ascii;
+  const std::filesystem::path staged = run.output(job.output);
+  Stage read(run.ctx(), "read");
+  const Mesh mesh = readMesh(job.input, run.ctx());
+  read.finish(job.input + ": " + counted(int64_t(mesh.vertexCount()), "vertex", "vertices") + ", " +
+              counted(int64_t(mesh.triangleCount()), "triangle"));
+  Stage write(run.ctx(), "write");
+  writeMesh(mesh, staged, job.options);
+  write.finish(job.output);
+  run.finish();
 }
 
 } // namespace
 
 Command addConvertCommand(CLI::App& root) {
-  auto args = std::make_shared<ConvertArgs>();
-  CLI::App* app = root.add_subcommand("convert", "Convert a model between OBJ(+MTL), PLY, OFF, STL, glTF and GLB "
-                                                 "(keeps UVs, normals and materials where both formats can)");
-  app->add_option("input", args->input, "Input model (.obj, .ply, .off, .stl, .gltf, .glb)")->required();
-  app->add_option("output", args->output, "Output model; the format follows the extension")->required();
-  app->add_flag("--draco", args->draco, "Compress the geometry with Draco (KHR_draco_mesh_compression; .glb/.gltf)");
-  app->add_option("--draco-level", args->dracoLevel, "Draco compression level 0 (fast) .. 10 (small)")->capture_default_str();
-  app->add_flag("--ascii", args->ascii, "Write ASCII PLY/STL instead of binary");
-  app->add_flag("-q,--quiet", args->quiet, "No progress output");
-  return {app, [args] { runConvert(*args); }};
+  auto job = std::make_shared<ConvertJob>();
+  Flags f(root.add_subcommand("convert", "Convert a model between OBJ(+MTL), PLY, OFF, STL, glTF and GLB "
+                                         "(keeps UVs, normals and materials where both formats can)"));
+  f.input("input", job->input, "Input model (.obj, .ply, .off, .stl, .gltf, .glb)");
+  f.input("output", job->output, "Output model; the format follows the extension");
+  f.modelOutput(job->options);
+  f.option("--draco-level", job->options.dracoLevel, "Draco compression level, 0 fast to 10 small", {0, 10});
+  f.flag("--ascii", job->ascii, "Write ASCII PLY/STL instead of binary");
+  f.common(job->common, Common::Quiet);
+  return {f.app(), [job] { runConvert(*job); }};
 }
 
 } // namespace texfab::cli

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab info: what a model contains (size, topology, UVs, materials, textures).
+#include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
 #include "geometry/mesh_topology.h"
@@ -29,7 +30,8 @@ nlohmann::json describeTexture(const geometry::Texture& t) {
 
 void runInfo(const InfoArgs& args) {
   using namespace geometry;
-  const Mesh mesh = readMesh(args.model);
+  const Run run("info", {});  // warnings of the reader go to stderr
+  const Mesh mesh = readMesh(args.model, run.ctx());
   const MeshTopology topo = computeTopology(mesh);
   const BoundingBox box = boundingBox(mesh);
   nlohmann::json j;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab stats: the quality measures of DESIGN.md for an image synthesized from an exemplar.
-#include "apps/texfab/cli_util.h"
+#include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
+#include "apps/texfab/report_json.h"
 #include "render/image/error.h"
 #include "render/image/image_io.h"
 #include "synthesis/quality_measures.h"
@@ -14,17 +15,15 @@ namespace texfab::cli {
 
 namespace {
 
-struct StatsArgs {
-  std::string image;
-  std::string exemplar;
-  std::string coords;
-  std::string report;
-  int samples = synthesis::FidelityOptions{}.samples;
-  int threads = 0;
+struct StatsJob {
+  std::string image, exemplar, coords;
+  synthesis::FidelityOptions fidelity;
+  CommonFlags common;
 };
 
-void runStats(const StatsArgs& args) {
+void runStats(const StatsJob& args) {
   using namespace synthesis;
+  Run run("stats", args.common);
   const Image image = readImage(args.image);
   const Image exemplar = readImage(args.exemplar);
   std::optional<CoordMap> coords;
@@ -35,9 +34,7 @@ void runStats(const StatsArgs& args) {
                   std::to_string(coords->height) + " but the image is " + std::to_string(image.width) + "x" +
                   std::to_string(image.height));
   }
-  FidelityOptions fidelity;
-  fidelity.samples = args.samples;
-  const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, fidelity, Context{.threads = args.threads});
+  const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, args.fidelity, run.ctx());
 
   std::printf("fidelity             %.4f   (7x7 RMS distance to the nearest exemplar neighborhood; lower is better)\n",
               q.fidelity);
@@ -49,32 +46,25 @@ void runStats(const StatsArgs& args) {
   if (q.coherence) std::printf("coherence            %.4f   (1 = verbatim tiling, 0 = noise)\n", *q.coherence);
   if (q.coverage) std::printf("coverage             %.4f   (fraction of the exemplar used)\n", *q.coverage);
 
-  if (!args.report.empty()) {
-    nlohmann::json report = {{"image", args.image},
-                             {"exemplar", args.exemplar},
-                             {"fidelity", q.fidelity},
-                             {"histogram_distance", q.histogramDistance},
-                             {"shifted_correlation", q.shiftedCorrelation}};
-    if (q.coherence) report["coherence"] = *q.coherence;
-    if (q.coverage) report["coverage"] = *q.coverage;
-    writeReport(report, args.report);
-  }
+  run.report() = toJson(q);
+  run.report()["image"] = args.image;
+  run.report()["exemplar"] = args.exemplar;
+  run.finish();
 }
 
 } // namespace
 
 Command addStatsCommand(CLI::App& root) {
-  auto args = std::make_shared<StatsArgs>();
-  CLI::App* app = root.add_subcommand("stats", "Measure a synthesized image against its exemplar: neighborhood "
-                                               "fidelity, histogram distance, coherence, coverage, repetition");
-  app->add_option("image", args->image, "Synthesized image")->required();
-  app->add_option("--exemplar", args->exemplar, "The exemplar it was synthesized from")->required();
-  app->add_option("--coords", args->coords, "Its coordinate map (from 'texfab synth --coords'): adds coherence and coverage");
-  app->add_option("--report", args->report, "Also write the measures to this JSON file");
-  app->add_option("--samples", args->samples, "Neighborhoods measured for fidelity (0 = all; exact search each)")
-      ->capture_default_str();
-  app->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
-  return {app, [args] { runStats(*args); }};
+  auto job = std::make_shared<StatsJob>();
+  Flags f(root.add_subcommand("stats", "Measure a synthesized image against its exemplar: neighborhood "
+                                       "fidelity, histogram distance, coherence, coverage, repetition"));
+  f.input("image", job->image, "Synthesized image");
+  f.text("--exemplar", job->exemplar, "The exemplar it was synthesized from")->required();
+  f.text("--coords", job->coords, "Its coordinate map (from 'texfab synth --coords'): adds coherence and coverage");
+  f.option("--samples", job->fidelity.samples, "Neighborhoods measured for fidelity (0 = all; exact search each)",
+           {0, 1e9});
+  f.common(job->common, Common::Threads | Common::Report | Common::Quiet);
+  return {f.app(), [job] { runStats(*job); }};
 }
 
 } // namespace texfab::cli

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab synth: 2-D texture synthesis from an exemplar (Lefebvre & Hoppe 2005/2006).
-#include "apps/texfab/cli_util.h"
+#include "apps/texfab/analysis.h"
+#include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
-#include "render/image/error.h"
-#include "render/image/memory.h"
+#include "apps/texfab/report_json.h"
 #include "render/image/image_io.h"
+#include "render/image/memory.h"
+#include "synthesis/coord_map.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 
@@ -15,203 +17,153 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct SynthArgs {
-  std::string exemplar;
-  std::string output;
-  std::string size = "512x512";
-  std::string window;
-  uint32_t seed = 1;
-  std::string jitter;
-  int passes = 2;
-  int interleave = 2;
-  int k = 2;
-  float featureWeight = synthesis::AnalysisOptions{}.featureWeight;
-  bool tileable = false;
-  std::string coords;
+struct SynthJob {
+  std::string exemplar, output, coords;
   std::vector<std::string> apply;
-  int threads = 0;
-  std::string report;
-  std::string cacheDir;
-  bool noCache = false;
-  bool quiet = false;
+  synthesis::Window window{0, 0, 512, 512};
+  bool windowGiven = false, tileable = false;
+  synthesis::SynthesisOptions options;
+  synthesis::AnalysisOptions analysis;
+  CommonFlags common;
 };
 
+// --apply MAP:OUT: a companion map of the exemplar, resolved through the same coordinates.
 struct Companion {
-  fs::path output;
+  std::string input;
+  fs::path output;  // staged
   Image map;
 };
 
-void runSynth(const SynthArgs& args) {
-  using namespace synthesis;
-  Progress progress("texfab synth", args.quiet);
-  Context ctx{.threads = args.threads};
-
-  // Everything that can be checked before the work is checked first: a bad argument never costs
-  // a synthesis, and a failure never leaves some outputs written and others not.
-  Window window;
-  if (!args.window.empty()) {
-    const std::vector<double> v = parseNumberList(args.window, "--window");
-    if (v.size() != 4) throw Error("--window: expected X,Y,W,H, got '" + args.window + "'");
-    for (double d : v)
-      if (d != std::floor(d)) throw Error("--window: values must be integers, got '" + args.window + "'");
-    if (v[2] < 1 || v[3] < 1 || v[2] > kMaxImageSide || v[3] > kMaxImageSide)
-      throw Error("--window: size is out of range (1 to " + std::to_string(kMaxImageSide) + " per side)");
-    window = {int64_t(v[0]), int64_t(v[1]), int(v[2]), int(v[3])};
-  } else {
-    const auto [w, h] = parseSize(args.size, "--size");
-    window = {0, 0, w, h};
-  }
-  SynthesisOptions options;
-  options.seed = args.seed;
-  options.passes = args.passes;
-  options.interleave = args.interleave;
-  if (!args.jitter.empty())
-    for (double j : parseNumberList(args.jitter, "--jitter")) options.jitter.push_back(float(j));
-  if (args.tileable) {
-    if (!args.window.empty()) throw Error("--tileable and --window cannot be combined (the tile is the output size)");
-    options.periodX = window.width;
-    options.periodY = window.height;
-  }
-  options.validate();
-  AnalysisOptions analysisOptions;
-  analysisOptions.k = args.k;
-  analysisOptions.featureWeight = args.featureWeight;
-  analysisOptions.validate();
-
-  checkImageWritable(args.output);
-  if (!args.coords.empty()) checkImageWritable(args.coords);
-
-  progress.start("load");
-  const Image exemplar = readImage(args.exemplar);
-  try {
-    validateExemplarSize(exemplar);
-  } catch (const Error& e) {
-    throw Error(args.exemplar + ": " + e.what());
-  }
+std::vector<Companion> reserveCompanions(const SynthJob& job, Run& run) {
   std::vector<Companion> companions;
-  for (const std::string& spec : args.apply) {
+  for (const std::string& spec : job.apply) {
     const size_t colon = spec.rfind(':');
     if (colon == std::string::npos || colon == 0 || colon + 1 == spec.size())
-      throw Error("--apply: expected MAP:OUT, got '" + spec + "'");
-    Companion companion{spec.substr(colon + 1), readImage(spec.substr(0, colon))};
-    if (companion.map.width != exemplar.width || companion.map.height != exemplar.height)
-      throw Error(spec.substr(0, colon) + ": companion map is " + std::to_string(companion.map.width) + "x" +
-                  std::to_string(companion.map.height) + " but the exemplar is " + std::to_string(exemplar.width) +
-                  "x" + std::to_string(exemplar.height));
-    checkImageWritable(companion.output);
-    companions.push_back(std::move(companion));
+      throw UsageError("--apply: expected MAP:OUT, got '" + spec + "'");
+    checkImageWritable(spec.substr(colon + 1));
+    companions.push_back({spec.substr(0, colon), run.output(spec.substr(colon + 1)), {}});
   }
-  progress.finish(args.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
+  return companions;
+}
 
-  // Coordinates (two buffers while synthesizing) plus the colour and companion images, as floats.
+Image load(const SynthJob& job, std::vector<Companion>& companions, const Context& ctx) {
+  Stage stage(ctx, "load");
+  Image exemplar = readImage(job.exemplar);
+  try {
+    synthesis::validateExemplarSize(exemplar);
+  } catch (const Error& e) {
+    throw Error(job.exemplar + ": " + e.what());
+  }
   int channels = exemplar.channels;
-  for (const Companion& c : companions) channels += c.map.channels;
-  const double needed = double(window.width) * window.height * (12.0 + 4.0 * channels);
-  if (needed > 0.8 * double(physicalMemoryBytes()))
-    throw Error("a " + std::to_string(window.width) + "x" + std::to_string(window.height) + " output needs about " +
-                std::to_string(int(needed / double(1 << 30)) + 1) + " GiB, more than this machine's memory; " +
-                "synthesize it in windows (--window) instead");
+  for (Companion& c : companions) {
+    c.map = readImage(c.input);
+    if (c.map.width != exemplar.width || c.map.height != exemplar.height)
+      throw Error(c.input + ": companion map is " + std::to_string(c.map.width) + "x" + std::to_string(c.map.height) +
+                  " but the exemplar is " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
+    channels += c.map.channels;
+  }
+  checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels),
+              "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) +
+                  " output (synthesize it in windows, --window)");
+  stage.finish(job.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
+  return exemplar;
+}
 
-  progress.start("analysis");
+void runSynth(SynthJob& job) {
+  using namespace synthesis;
+  Run run("synth", job.common);
+  // Everything checkable is checked, and every output reserved, before any work.
+  if (job.tileable) {
+    if (job.windowGiven) throw UsageError("--tileable and --window cannot be combined (the tile is the output size)");
+    job.options.periodX = job.window.width;
+    job.options.periodY = job.window.height;
+  }
+  job.options.validate();
+  checkImageWritable(job.output);
+  const fs::path out = run.output(job.output);
+  if (!job.coords.empty()) checkImageWritable(job.coords);
+  const fs::path coordsOut = job.coords.empty() ? fs::path() : run.output(job.coords);
+  std::vector<Companion> companions = reserveCompanions(job, run);
+
+  const Image exemplar = load(job, companions, run.ctx());
   bool cached = false;
-  const ExemplarAnalysis analysis =
-      args.noCache ? analyzeExemplar(exemplar, analysisOptions, ctx)
-                   : analyzeExemplarCached(exemplar, analysisOptions,
-                                           args.cacheDir.empty() ? defaultCacheDir() : fs::path(args.cacheDir),
-                                           ctx, &cached);
-  progress.finish(cached ? "(cached)" : std::to_string(analysis.levels.size()) + " levels");
+  const ExemplarAnalysis analysis = analyzeExemplar(run, exemplar, job.analysis, cached);
+  const int levels = int(analysis.levels.size());
+  if (const int first = firstSynthesisLevel(levels, job.options); first > 0)
+    run.ctx().warn("a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) +
+                   " tile allows " + std::to_string(levels - first) + " of " + std::to_string(levels) +
+                   " levels; sizes that are multiples of " + std::to_string(job.options.interleave << (levels - 1)) +
+                   " keep the whole multiresolution synthesis");
 
-  if (const int first = firstSynthesisLevel(int(analysis.levels.size()), options); first > 0) {
-    const int full = options.interleave << (analysis.levels.size() - 1);
-    progress.note("tileable: a " + std::to_string(window.width) + "x" + std::to_string(window.height) +
-                  " tile allows " + std::to_string(analysis.levels.size() - size_t(first)) + " of " +
-                  std::to_string(analysis.levels.size()) + " levels; sizes that are multiples of " +
-                  std::to_string(full) + " keep the whole multiresolution synthesis");
-  }
-
-  progress.start("synthesis");
-  const SynthesisResult result = synthesize2d(analysis, window, options, ctx);
-  progress.finish(std::to_string(window.width) + "x" + std::to_string(window.height));
-
-  progress.start("resolve");
-  const Image colours = applyCoords(result.coords, exemplar, ctx);
+  Stage synth(run.ctx(), "synthesis");
+  const SynthesisResult result = synthesize2d(analysis, job.window, job.options, synth.inner());
+  synth.finish(std::to_string(job.window.width) + "x" + std::to_string(job.window.height));
+  Stage resolve(run.ctx(), "resolve");
+  const Image colours = applyCoords(result.coords, exemplar, run.ctx());
   std::vector<Image> applied;
-  for (const Companion& c : companions) applied.push_back(applyCoords(result.coords, c.map, ctx));
-  progress.finish();
-
-  nlohmann::json report;
-  if (!args.report.empty()) {
-    progress.start("measures");
-    const QualityReport q = measureQuality(colours, exemplar, &result.coords, {}, ctx);
-    report["measures"] = {{"fidelity", q.fidelity},
-                          {"histogram_distance", q.histogramDistance},
-                          {"shifted_correlation", q.shiftedCorrelation},
-                          {"coherence", *q.coherence},
-                          {"coverage", *q.coverage}};
-    progress.finish();
+  for (const Companion& c : companions) applied.push_back(applyCoords(result.coords, c.map, run.ctx()));
+  resolve.finish();
+  if (run.reporting()) {
+    Stage measures(run.ctx(), "measures");
+    run.report()["measures"] = toJson(measureQuality(colours, exemplar, &result.coords, {}, run.ctx()));
+    measures.finish();
   }
 
-  progress.start("write");
-  writeImage(colours, args.output);
-  if (!args.coords.empty()) writeCoordMap(result.coords, args.coords);
+  Stage write(run.ctx(), "write");
+  writeImage(colours, out);
+  if (!coordsOut.empty()) writeCoordMap(result.coords, coordsOut);
   for (size_t i = 0; i < companions.size(); ++i) writeImage(applied[i], companions[i].output);
-  progress.finish(args.output);
+  write.finish(job.output);
 
-  if (!args.report.empty()) {
-    report["command"] = "synth";
-    report["exemplar"] = {{"path", args.exemplar}, {"width", exemplar.width}, {"height", exemplar.height},
-                          {"channels", exemplar.channels}, {"levels", analysis.levels.size()},
-                          {"analysis_cached", cached}};
-    report["window"] = {{"x", window.x}, {"y", window.y}, {"width", window.width}, {"height", window.height}};
-    report["parameters"] = {{"seed", options.seed},    {"passes", options.passes},
-                            {"interleave", options.interleave}, {"k", analysisOptions.k},
-                            {"feature_weight", analysisOptions.featureWeight},
-                            {"tileable", args.tileable},
-                            {"jitter", options.jitter.empty() ? defaultJitter(int(analysis.levels.size())) : options.jitter}};
-    nlohmann::json levels = nlohmann::json::array();
-    for (const LevelStats& l : result.levels)
-      levels.push_back({{"level", l.level}, {"texels", l.texels}, {"seconds", l.seconds}});
-    report["levels"] = levels;
-    report["timings"] = progress.timings();
-    report["peak_memory_mib"] = peakMemoryMiB();
-    writeReport(report, args.report);
-  }
+  nlohmann::json& r = run.report();
+  r["exemplar"] = imageJson(job.exemplar, exemplar);
+  r["exemplar"]["levels"] = levels;
+  r["exemplar"]["analysis_cached"] = cached;
+  r["window"] = {{"x", job.window.x}, {"y", job.window.y}, {"width", job.window.width}, {"height", job.window.height}};
+  r["parameters"] = {{"seed", job.options.seed}, {"passes", job.options.passes},
+                     {"interleave", job.options.interleave}, {"k", job.analysis.k},
+                     {"feature_weight", job.analysis.featureWeight}, {"tileable", job.tileable},
+                     {"jitter", job.options.jitter.empty() ? defaultJitter(levels) : job.options.jitter}};
+  r["levels"] = toJson(result.levels);
+  run.finish();
 }
 
 } // namespace
 
 Command addSynthCommand(CLI::App& root) {
-  auto args = std::make_shared<SynthArgs>();
-  CLI::App* app = root.add_subcommand("synth", "Synthesize a texture of any size from a small exemplar image "
-                                               "(parallel appearance-space synthesis, Lefebvre & Hoppe 2005/2006)");
-  app->add_option("exemplar", args->exemplar, "Exemplar image (PNG, JPEG, TGA, TIFF, EXR, GIMP .pat)")->required();
-  app->add_option("-o,--output", args->output, "Output image (.png, .exr, .tif, ...)")->required();
-  app->add_option("--size", args->size, "Output size WxH (or N for NxN)")->capture_default_str();
-  app->add_option("--window", args->window,
-                  "Synthesize the window X,Y,W,H of the infinite texture plane instead of --size; "
-                  "overlapping windows agree texel for texel (X, Y may be negative)");
-  app->add_option("--seed", args->seed, "Random seed: the only source of variation")->capture_default_str();
-  app->add_option("--jitter", args->jitter,
-                  "Jitter strength in [0,1]: one value for every level, or one per level coarsest first "
-                  "(default 1,1,1,0.5,0...: randomize the large-scale layout only; 0 gives an exact tiling)");
-  app->add_option("--passes", args->passes, "Correction passes per level")->capture_default_str();
-  app->add_option("--interleave", args->interleave, "Sub-pass interleave: 1, 2 (4 sub-passes) or 3 (9)")
-      ->capture_default_str();
-  app->add_option("--k", args->k, "k-coherence candidates per exemplar pixel (1-8)")->capture_default_str();
-  app->add_option("--feature-weight", args->featureWeight,
-                  "Weight of the feature-distance channel in appearance space (0 = off)")
-      ->capture_default_str();
-  app->add_flag("--tileable", args->tileable, "Make the output wrap at its size (a tile)");
-  app->add_option("--coords", args->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
-  app->add_option("--apply", args->apply,
-                  "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, "
-                  "roughness, height; same size as the exemplar) and write OUT (repeatable)");
-  app->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
-  app->add_option("--report", args->report, "Write timings and quality measures to this JSON file");
-  app->add_option("--cache-dir", args->cacheDir, "Exemplar analysis cache folder (default: ~/.cache/texfab)");
-  app->add_flag("--no-cache", args->noCache, "Neither read nor write the analysis cache");
-  app->add_flag("-q,--quiet", args->quiet, "No progress output");
-  return {app, [args] { runSynth(*args); }};
+  auto job = std::make_shared<SynthJob>();
+  synthesis::SynthesisOptions& o = job->options;
+  Flags f(root.add_subcommand("synth", "Synthesize a texture of any size from a small exemplar image "
+                                       "(parallel appearance-space synthesis, Lefebvre & Hoppe 2005/2006)"));
+  f.input("exemplar", job->exemplar, "Exemplar image (PNG, JPEG, TGA, TIFF, EXR, GIMP .pat)");
+  f.text("-o,--output", job->output, "Output image (.png, .exr, .tif, ...)")->required();
+  f.size("--size", job->window.width, job->window.height, "Output size", {1, kMaxImageSide});
+  f.numbers("--window", 4, "X,Y,W,H",
+            "Synthesize the window X,Y,W,H of the infinite texture plane instead of --size; overlapping windows "
+            "agree texel for texel (X, Y may be negative; W, H 1 to " + std::to_string(kMaxImageSide) + ")",
+            {-1e15, 1e15}, true, [job](const std::vector<double>& v) {
+              if (v[2] < 1 || v[3] < 1 || v[2] > kMaxImageSide || v[3] > kMaxImageSide)
+                throw CLI::ValidationError("--window", "W and H must be 1 to " + std::to_string(kMaxImageSide));
+              job->window = {int64_t(v[0]), int64_t(v[1]), int(v[2]), int(v[3])};
+              job->windowGiven = true;
+            });
+  f.option("--seed", o.seed, "Random seed: the only source of variation");
+  f.option("--jitter", o.jitter,
+           "Jitter strength, one value for every level or one per level coarsest first (default 1,1,1,0.5,0...: "
+           "randomize the large-scale layout only; 0 gives an exact tiling)",
+           {0, 1});
+  f.option("--passes", o.passes, "Correction passes per level", {0, 8});
+  f.option("--interleave", o.interleave, "Sub-pass interleave: 1, 2 (4 sub-passes) or 3 (9)", {1, 3});
+  f.option("--k", job->analysis.k, "k-coherence candidates per exemplar pixel", {1, 8});
+  f.option("--feature-weight", job->analysis.featureWeight,
+           "Weight of the feature-distance channel in appearance space (0 = off)", {0, 100});
+  f.flag("--tileable", job->tileable, "Make the output wrap at its size (a tile)");
+  f.text("--coords", job->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
+  f.app()->add_option("--apply", job->apply,
+                      "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, roughness, "
+                      "height; same size as the exemplar) and write OUT (repeatable)");
+  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  return {f.app(), [job] { runSynth(*job); }};
 }
 
 } // namespace texfab::cli

@@ -22,15 +22,17 @@ namespace texfab {
 /// Where the synthesis kernels run. Auto: a Vulkan device when one is present, else the CPU.
 enum class Backend : uint8_t { Cpu, Vulkan, Auto };
 
-/// What a long computation reports as it goes.
+/// What a long computation reports as it goes: its stages, and warnings as soon as they are known
+/// (so that a user reads them before the long work, not after it).
 struct ProgressEvent {
-  enum class Kind : uint8_t { Begin, Advance, End };
+  enum class Kind : uint8_t { Begin, Advance, End, Warning };
   Kind kind = Kind::Begin;
   std::string_view stage;   ///< "atlas", "synthesis", "level 3/4", ...
   int depth = 0;            ///< 0 for a job's own stages, 1 for the stages of a step inside one, ...
   double fraction = 0;      ///< Advance: the part done, in [0, 1]
   double seconds = 0;       ///< End: the stage's duration
-  std::string_view detail;  ///< End: one line of figures, e.g. "175 charts, utilization 0.77"
+  std::string_view detail;  ///< End: one line of figures, e.g. "175 charts, utilization 0.77";
+                            ///< Warning: the message
 };
 
 /// Receives progress. It may be called from several threads at once: it must be thread-safe.
@@ -56,6 +58,10 @@ struct Context {
     Context inner = *this;
     ++inner.depth;
     return inner;
+  }
+  /// Reports a warning (one line, no "warning:" prefix) to the progress sink, if any.
+  void warn(std::string_view message) const {
+    if (progress) progress({ProgressEvent::Kind::Warning, {}, depth, 0.0, 0.0, message});
   }
   bool cancelled() const { return cancel && cancel->load(std::memory_order_relaxed); }
   /// Throws Cancelled when the cancel flag is set. Long loops call it between chunks of work.

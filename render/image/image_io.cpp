@@ -8,7 +8,12 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdio>
+#include <mutex>
 #include <cstring>
 #include <iterator>
 #include <system_error>
@@ -18,12 +23,58 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// OIIO error texts can span several lines; texfab errors are one line.
-std::string oneLine(std::string text) {
-  std::replace(text.begin(), text.end(), '\n', ' ');
-  while (!text.empty() && text.back() == ' ') text.pop_back();
-  return text.empty() ? std::string("unknown error") : text;
+// OIIO error texts can span several lines, often repeating one another ("Read error: hit end of
+// file", then "PNG read error: IDAT: Read error: hit end of file"); texfab errors are one line:
+// the lines no other line contains, joined by "; ".
+std::string oneLine(const std::string& text) {
+  std::vector<std::string> lines;
+  for (size_t begin = 0; begin < text.size();) {
+    const size_t end = std::min(text.find('\n', begin), text.size());
+    std::string line = text.substr(begin, end - begin);
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    if (!line.empty()) lines.push_back(std::move(line));
+    begin = end + 1;
+  }
+  std::string joined;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    bool repeated = false;
+    for (size_t j = 0; j < lines.size() && !repeated; ++j)
+      repeated = j != i && lines[j].find(lines[i]) != std::string::npos && (lines[j] != lines[i] || j < i);
+    if (!repeated) joined += (joined.empty() ? "" : "; ") + lines[i];
+  }
+  return joined.empty() ? std::string("unknown error") : joined;
 }
+
+// Image libraries under OIIO print their own diagnostics on stderr ("libpng error: ..."); texfab
+// says what went wrong in its one-line error. While an image is decoded, stderr goes to /dev/null
+// (one decode at a time: the redirection is process-wide).
+class QuietStderr {
+public:
+  QuietStderr() : lock_(mutex()) {
+    std::fflush(stderr);
+    saved_ = ::dup(STDERR_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
+    if (null >= 0) ::close(null);
+  }
+  ~QuietStderr() {
+    std::fflush(stderr);
+    if (saved_ >= 0) {
+      ::dup2(saved_, STDERR_FILENO);
+      ::close(saved_);
+    }
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  int saved_ = -1;
+};
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -116,18 +167,35 @@ Image decode(OIIO::ImageInput& in, const std::string& name) {
   return image;
 }
 
-// The extension OIIO chooses its reader by, from the file's first bytes.
-const char* extensionOf(std::span<const uint8_t> b) {
+} // namespace
+
+std::optional<ImageCodec> imageCodecOf(std::span<const uint8_t> b) {
   auto starts = [&](std::initializer_list<uint8_t> magic) {
     return b.size() >= magic.size() && std::equal(magic.begin(), magic.end(), b.begin());
   };
-  if (starts({0x89, 'P', 'N', 'G'})) return ".png";
-  if (starts({0xff, 0xd8, 0xff})) return ".jpg";
-  if (b.size() >= 12 && starts({'R', 'I', 'F', 'F'}) && std::equal(b.begin() + 8, b.begin() + 12, "WEBP")) return ".webp";
-  return nullptr;
+  if (starts({0x89, 'P', 'N', 'G'})) return ImageCodec::Png;
+  if (starts({0xff, 0xd8, 0xff})) return ImageCodec::Jpeg;
+  if (b.size() >= 12 && starts({'R', 'I', 'F', 'F'}) && std::equal(b.begin() + 8, b.begin() + 12, "WEBP")) return ImageCodec::Webp;
+  return std::nullopt;
 }
 
-} // namespace
+const char* mimeTypeOf(ImageCodec codec) {
+  switch (codec) {
+  case ImageCodec::Png: return "image/png";
+  case ImageCodec::Jpeg: return "image/jpeg";
+  case ImageCodec::Webp: return "image/webp";
+  }
+  return "";
+}
+
+const char* extensionOf(ImageCodec codec) {
+  switch (codec) {
+  case ImageCodec::Png: return ".png";
+  case ImageCodec::Jpeg: return ".jpg";
+  case ImageCodec::Webp: return ".webp";
+  }
+  return "";
+}
 
 Image readImage(const fs::path& path) {
   const std::string name = path.string();
@@ -136,20 +204,22 @@ Image readImage(const fs::path& path) {
   if (fs::is_directory(path, ec)) throw Error(name + ": is a directory, not an image");
   if (lower(path.extension().string()) == ".pat") return readPatFile(path);
   const OIIO::ImageSpec config = readConfig();
+  const QuietStderr quiet;
   auto in = OIIO::ImageInput::open(name, &config);
   if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
   return decode(*in, name);
 }
 
 Image decodeImage(std::span<const uint8_t> bytes, const std::string& name) {
-  const char* extension = extensionOf(bytes);
-  if (!extension) throw Error(name + ": not a PNG, JPEG or WebP image");
+  const std::optional<ImageCodec> codec = imageCodecOf(bytes);
+  if (!codec) throw Error(name + ": not a PNG, JPEG or WebP image");
   OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-  const std::string pseudoName = "memory" + std::string(extension);
+  const std::string pseudoName = std::string("memory") + extensionOf(*codec);
   OIIO::ImageSpec config = readConfig();
   // OIIO 2.4 ignores open()'s proxy argument when a configuration is given; the hint carries it.
   void* proxyPointer = &proxy;
   config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
+  const QuietStderr quiet;
   auto in = OIIO::ImageInput::open(pseudoName, &config, &proxy);
   if (!in) throw Error(name + ": cannot decode image: " + oneLine(OIIO::geterror()));
   return decode(*in, name);
@@ -160,9 +230,7 @@ void checkImageWritable(const fs::path& path) {
   if (path.filename().empty() || path.extension().empty())
     throw Error(name + ": output needs a file name with an image extension (.png, .exr, ...)");
   if (!OIIO::ImageOutput::create(name)) throw Error(name + ": no image writer for this file extension");
-  std::error_code ec;
-  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-  if (!fs::is_directory(folder, ec)) throw Error(name + ": folder " + folder.string() + " does not exist");
+  checkOutputLocation(path);
 }
 
 void writeImage(const Image& image, const fs::path& path) {
@@ -172,6 +240,7 @@ void writeImage(const Image& image, const fs::path& path) {
     throw Error(name + ": refusing to write an inconsistent image buffer");
   auto out = OIIO::ImageOutput::create(name);
   if (!out) throw Error(name + ": no image writer for this file extension");
+  checkOutputLocation(path);  // says why a folder cannot be written (OIIO does not)
 
   const std::string ext = lower(path.extension().string());
   OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
@@ -188,26 +257,46 @@ void writeImage(const Image& image, const fs::path& path) {
   const bool written = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
   const bool closed = out->close();
   if (!written || !closed) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
+    discardTemporary(tmp);
     throw Error(name + ": cannot write image: " + oneLine(out->geterror()));
   }
   commitFile(tmp, path);
 }
 
-std::vector<uint8_t> encodePng(const Image& image) {
+std::vector<uint8_t> encodeImage(const Image& image, ImageCodec codec, int quality) {
+  const char* format = codec == ImageCodec::Png ? "PNG" : codec == ImageCodec::Jpeg ? "JPEG" : "WebP";
   if (image.empty() || image.channels < 1 || image.channels > 4 || image.pixels.size() != image.index(0, image.height))
-    throw Error("cannot encode an image with " + std::to_string(image.channels) + " channels as PNG");
-  checkSize(image.width, image.height, "PNG");
+    throw Error("cannot encode an image with " + std::to_string(image.channels) + " channels as " + format);
+  checkSize(image.width, image.height, format);
+  if (codec == ImageCodec::Webp && image.channels < 3) {  // WebP is RGB(A) only: grey becomes RGB
+    Image colour(image.width, image.height, image.channels + 2, image.format);
+    for (size_t i = 0, n = size_t(image.width) * size_t(image.height); i < n; ++i) {
+      const float* from = image.pixels.data() + i * size_t(image.channels);
+      float* to = colour.pixels.data() + i * size_t(colour.channels);
+      to[0] = to[1] = to[2] = from[0];
+      if (image.channels == 2) to[3] = from[1];
+    }
+    return encodeImage(colour, codec, quality);
+  }
+  // JPEG: no alpha (grey+alpha -> grey, RGBA -> RGB).
+  const int channels = codec == ImageCodec::Jpeg && (image.channels == 2 || image.channels == 4) ? image.channels - 1
+                                                                                                   : image.channels;
   std::vector<unsigned char> bytes;
   OIIO::Filesystem::IOVecOutput proxy(bytes);
-  auto out = OIIO::ImageOutput::create("memory.png", &proxy);
-  if (!out) throw Error("PNG encoding is not available");
-  OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::UINT8);
-  spec.attribute("png:compressionLevel", 6);
+  const std::string pseudoName = std::string("memory") + extensionOf(codec);
+  auto out = OIIO::ImageOutput::create(pseudoName, &proxy);
+  if (!out) throw Error(std::string(format) + " encoding is not available");
+  OIIO::ImageSpec spec(image.width, image.height, channels, OIIO::TypeDesc::UINT8);
+  if (codec == ImageCodec::Png) spec.attribute("png:compressionLevel", 6);
+  else spec.attribute("CompressionQuality", std::clamp(quality, 1, 100));
   spec.attribute("oiio:UnassociatedAlpha", 1);
-  if (!out->open("memory.png", spec) || !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
-    throw Error("PNG encoding failed: " + oneLine(out->geterror()));
+  void* proxyPointer = &proxy;
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
+  const OIIO::stride_t pixelStride = OIIO::stride_t(image.channels * sizeof(float));
+  if (!out->open(pseudoName, spec) ||
+      !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data(), pixelStride) || !out->close())
+    throw Error(std::string(format) + " encoding failed: " + oneLine(out->geterror()));
+  if (bytes.empty()) throw Error(std::string(format) + " encoding produced no bytes");
   return {bytes.begin(), bytes.end()};
 }
 

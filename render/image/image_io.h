@@ -7,9 +7,10 @@
 
 #include "render/image/image.h"
 
-#include <filesystem>
-#include <span>
 #include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,24 @@ void writeImage(const Image& image, const std::filesystem::path& path);
 /// existing folder. Commands call it before long work so a bad output path fails at once.
 void checkImageWritable(const std::filesystem::path& path);
 
-/// The image as 8-bit PNG file bytes (zlib level 6), for files that embed images (GLB).
-std::vector<uint8_t> encodePng(const Image& image);
+/// The image file formats models embed or reference (glTF core: PNG and JPEG; WebP through
+/// EXT_texture_webp).
+enum class ImageCodec { Png, Jpeg, Webp };
+
+/// The codec of encoded bytes, from their signature; nothing when they are none of the three.
+std::optional<ImageCodec> imageCodecOf(std::span<const uint8_t> bytes);
+const char* mimeTypeOf(ImageCodec codec);  ///< "image/png", "image/jpeg", "image/webp"
+const char* extensionOf(ImageCodec codec); ///< ".png", ".jpg", ".webp"
+
+/// An image file held in memory, as read (so that it can be written again without re-encoding).
+struct EncodedImage {
+  std::vector<uint8_t> bytes;
+  ImageCodec codec = ImageCodec::Png;
+};
+
+/// The image as file bytes, 8 bits per channel: PNG (lossless, zlib level 6), JPEG or WebP at
+/// `quality` (1..100). JPEG has no alpha: a second or fourth channel is dropped.
+std::vector<uint8_t> encodeImage(const Image& image, ImageCodec codec, int quality = 90);
+inline std::vector<uint8_t> encodePng(const Image& image) { return encodeImage(image, ImageCodec::Png); }
 
 } // namespace texfab

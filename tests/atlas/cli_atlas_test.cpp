@@ -43,7 +43,8 @@ TEST(CliAtlas, WritesMeshReportAndDebugImages) {
   EXPECT_EQ(r["atlas"]["flipped_triangles"], 0);
   EXPECT_EQ(r["atlas"]["overlapping_texels"], 0);
   EXPECT_GT(r["atlas"]["utilization"].get<double>(), 0.3);
-  EXPECT_TRUE(r["atlas_stage_seconds"].contains("packing"));
+  EXPECT_TRUE(r["atlas"]["stage_seconds"].contains("packing"));
+  EXPECT_TRUE(r["timings"].contains("atlas"));
   for (const char* f : {"chart_ids.png", "normals.png", "jacobian_magnitude.png", "jacobian_anisotropy.png",
                         "checker.png", "checker.glb"})
     EXPECT_TRUE(fs::exists(d / "dbg" / f)) << f;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Every glTF/GLB texfab writes must pass the Khronos glTF validator with zero errors and zero
-// warnings. The validator is the npm package gltf-validator, installed by scripts/install-deps.sh
+// warnings: binary and text (buffers and images beside the file, or embedded), Draco, and textures
+// as PNG, JPEG or WebP (EXT_texture_webp). The validator is the npm package gltf-validator, installed by scripts/install-deps.sh
 // into .tools/ (or found through $TEXFAB_GLTF_VALIDATOR = a node_modules folder).
 #include "geometry/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
@@ -34,9 +35,11 @@ protected:
 TEST_P(GltfValidator, OutputHasNoErrorsOrWarnings) {
   TempDir dir("texfab-validator");
   const std::string name = GetParam();
-  const bool draco = name.find("draco") != std::string::npos;
   MeshWriteOptions options;
-  options.draco = draco;
+  options.draco = name.find("draco") != std::string::npos;
+  options.embed = name.find("embed") != std::string::npos;
+  if (name.find("jpeg") != std::string::npos) options.textures = TextureEncoding::Jpeg;
+  if (name.find("webp") != std::string::npos) options.textures = TextureEncoding::Webp;
   std::vector<std::pair<std::string, Mesh>> meshes = {{"cube", texfab::testing::texturedCube()},
                                                       {"normalmapped", normalMappedMesh()}};
   Mesh plain;  // no UVs, no normals, no materials
@@ -53,7 +56,8 @@ TEST_P(GltfValidator, OutputHasNoErrorsOrWarnings) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, GltfValidator, ::testing::Values("model.glb", "model.gltf", "draco.glb", "draco.gltf"),
+INSTANTIATE_TEST_SUITE_P(Formats, GltfValidator, ::testing::Values("model.glb", "model.gltf", "embed.gltf", "draco.glb", "draco.gltf",
+                                                                   "jpeg.glb", "jpeg.gltf", "webp.glb", "webp.gltf"),
                          [](const auto& info) {
                            std::string n = info.param;
                            std::replace(n.begin(), n.end(), '.', '_');

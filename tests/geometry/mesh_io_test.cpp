@@ -249,6 +249,18 @@ TEST(MeshIo, OutputsLoadInAssimp) {
     writeMesh(cube, dir / name);
     EXPECT_EQ(run("assimp info '" + (dir / name).string() + "'"), 0) << name;
   }
+  // Every texture encoding and glTF layout: embedded .gltf, JPEG, WebP (EXT_texture_webp), Draco.
+  const std::vector<std::pair<std::string, MeshWriteOptions>> variants = {
+      {"embedded.gltf", MeshWriteOptions{.embed = true}},
+      {"jpeg.glb", MeshWriteOptions{.textures = TextureEncoding::Jpeg}},
+      {"jpeg.obj", MeshWriteOptions{.textures = TextureEncoding::Jpeg}},
+      {"webp.glb", MeshWriteOptions{.textures = TextureEncoding::Webp}},
+      {"webp.gltf", MeshWriteOptions{.textures = TextureEncoding::Webp}},
+  };
+  for (const auto& [name, options] : variants) {
+    writeMesh(cube, dir / name, options);
+    EXPECT_EQ(run("assimp info '" + (dir / name).string() + "'"), 0) << name;
+  }
 }
 
 TEST(MeshIo, DracoOutputDecodesWithDracoDecoder) {

@@ -120,21 +120,22 @@ TEST(CliSolid, BadInputIsOneLineNonZeroAndNoOutput) {
     std::string args;
     std::string expect;  // in the message
     std::string output;
+    int status = 2;  // 1: a usage error (a flag's value, conflicting flags)
   };
   const std::vector<Case> cases = {
       {"solid " + ex + " --exemplar-y " + other + " --plane 0,0,0,1,0,0,0,1,0 --size 4x4 -o " + (dir / "a.png").string(),
        "same size", "a.png"},
-      {"solid " + ex + " --plane 0,0,0,0,0,0,0,1,0 --size 4x4 -o " + (dir / "b.png").string(), "zero", "b.png"},
-      {"solid " + ex + " --plane 0,0,0,1,1,0,2,2,0 --size 4x4 -o " + (dir / "c.png").string(), "parallel", "c.png"},
-      {"solid " + ex + " --plane 0,0,0,1,0,0,0,nan,0 --size 4x4 -o " + (dir / "d.png").string(), "not finite", "d.png"},
+      {"solid " + ex + " --plane 0,0,0,0,0,0,0,1,0 --size 4x4 -o " + (dir / "b.png").string(), "zero", "b.png", 1},
+      {"solid " + ex + " --plane 0,0,0,1,1,0,2,2,0 --size 4x4 -o " + (dir / "c.png").string(), "parallel", "c.png", 1},
+      {"solid " + ex + " --plane 0,0,0,1,0,0,0,nan,0 --size 4x4 -o " + (dir / "d.png").string(), "not a finite number", "d.png", 1},
       {"solid " + ex + " --points " + (dir / "nan.txt").string() + " -o " + (dir / "e.txt").string(), "nan.txt:2",
        "e.txt"},
       {"solid " + ex + " --volume 60000 -o " + (dir / "f").string(), "memory", "f"},
-      {"solid " + ex + " --volume 8 --plane 0,0,0,1,0,0,0,1,0 -o " + (dir / "g").string(), "exactly one", "g"},
+      {"solid " + ex + " --volume 8 --plane 0,0,0,1,0,0,0,1,0 -o " + (dir / "g").string(), "exactly one", "g", 1},
   };
   for (const Case& c : cases) {
     const Outcome o = texfab(c.args + common, dir);
-    EXPECT_EQ(o.status, 2) << c.args << "\n" << o.err;
+    EXPECT_EQ(o.status, c.status) << c.args << "\n" << o.err;
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
     EXPECT_NE(o.err.find(c.expect), std::string::npos) << o.err;
     EXPECT_FALSE(fs::exists(dir / c.output)) << c.output;

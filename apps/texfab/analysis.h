@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The exemplar analyses the synthesis commands share, as one "analysis" stage of a Run: through the
+// on-disk cache unless --no-cache, which is then kept within --cache-size.
+
+#include "apps/texfab/cli.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/solid_analysis.h"
+
+namespace texfab::cli {
+
+synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
+                                            bool& cached);
+
+synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
+                                      const synthesis::SolidAnalysisOptions& options, bool& cached);
+
+} // namespace texfab::cli

@@ -1,0 +1,249 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "apps/texfab/cli.h"
+
+#include "apps/texfab/progress.h"
+#include "synthesis/analysis_cache.h"
+#include "synthesis/exemplar_analysis.h"
+
+#include <sys/resource.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+namespace texfab::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string formatNumber(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", v);
+  return text;
+}
+
+double peakMemoryMiB() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+} // namespace
+
+std::string Range::text() const {
+  // Bounds beyond any float are the limits of a type, not worth stating.
+  const bool low = min > -1e38, high = max < 1e38;
+  if (low && high) return minExclusive ? "greater than " + formatNumber(min) + " and at most " + formatNumber(max)
+                                       : formatNumber(min) + " to " + formatNumber(max);
+  if (low) return (minExclusive ? "greater than " : "at least ") + formatNumber(min);
+  if (high) return "at most " + formatNumber(max);
+  return {};
+}
+
+double parseNumber(const std::string& flag, const std::string& text, const Range& range, bool integer) {
+  const char* begin = text.data() + (text.starts_with('+') ? 1 : 0);
+  double value = 0;
+  const auto [end, ec] = std::from_chars(begin, text.data() + text.size(), value);
+  if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+    throw CLI::ValidationError(flag, "'" + text + "' is not a number");
+  if (!std::isfinite(value)) throw CLI::ValidationError(flag, "'" + text + "' is not a finite number");
+  if (integer && value != std::floor(value)) throw CLI::ValidationError(flag, "'" + text + "' is not a whole number");
+  if (!range.contains(value)) throw CLI::ValidationError(flag, "must be " + range.text() + ", got " + text);
+  return value;
+}
+
+std::vector<double> parseNumbers(const std::string& flag, const std::string& text, size_t count, const Range& range,
+                                 bool integer) {
+  std::vector<double> values;
+  size_t begin = 0;
+  while (begin <= text.size()) {
+    const size_t end = std::min(text.find(',', begin), text.size());
+    values.push_back(parseNumber(flag, text.substr(begin, end - begin), range, integer));
+    begin = end + 1;
+  }
+  if (count && values.size() != count)
+    throw CLI::ValidationError(flag, "expected " + std::to_string(count) + " comma-separated numbers, got '" + text + "'");
+  return values;
+}
+
+std::pair<int, int> parseSize(const std::string& flag, const std::string& text, const Range& range, bool powerOfTwo) {
+  const size_t x = text.find_first_of("xX");
+  const std::string w = text.substr(0, x), h = x == std::string::npos ? w : text.substr(x + 1);
+  std::pair<int, int> size;
+  try {
+    size = {int(parseNumber(flag, w, range, true)), int(parseNumber(flag, h, range, true))};
+  } catch (const CLI::ValidationError&) {
+    throw CLI::ValidationError(flag, "expected N or WxH, each " + range.text() + (powerOfTwo ? " and a power of two" : "") +
+                                         ", got '" + text + "'");
+  }
+  auto pow2 = [](int v) { return (v & (v - 1)) == 0; };
+  if (powerOfTwo && !(pow2(size.first) && pow2(size.second)))
+    throw CLI::ValidationError(flag, "sides must be powers of two, got '" + text + "'");
+  return size;
+}
+
+uint64_t parseBytes(const std::string& flag, const std::string& text) {
+  std::string digits = text;
+  double unit = 1;
+  const std::string suffixes = "KMGT";
+  while (!digits.empty() && (digits.back() == 'B' || digits.back() == 'b' || digits.back() == 'i')) digits.pop_back();
+  if (!digits.empty()) {
+    const size_t s = suffixes.find(char(std::toupper(static_cast<unsigned char>(digits.back()))));
+    if (s != std::string::npos) {
+      unit = std::pow(1024.0, double(s + 1));
+      digits.pop_back();
+    }
+  }
+  try {
+    return uint64_t(parseNumber(flag, digits, {0, 1e18 / unit}) * unit);
+  } catch (const CLI::ValidationError&) {
+    throw CLI::ValidationError(flag, "expected a size such as 512M or 2G, got '" + text + "'");
+  }
+}
+
+// Flags --------------------------------------------------------------------------------------
+
+std::string Flags::longName(const std::string& flags) {
+  const size_t comma = flags.rfind(',');
+  return comma == std::string::npos ? flags : flags.substr(comma + 1);
+}
+
+std::string Flags::show(double v) { return formatNumber(v); }
+
+CLI::Option* Flags::input(const std::string& name, std::string& value, const std::string& help) {
+  return app_->add_option(name, value, help)->required();
+}
+
+CLI::Option* Flags::text(const std::string& flags, std::string& value, const std::string& help) {
+  return app_->add_option(flags, value, help);
+}
+
+CLI::Option* Flags::flag(const std::string& flags, bool& value, const std::string& help) {
+  return app_->add_flag(flags, value, help);
+}
+
+CLI::Option* Flags::number(const std::string& flags, const std::string& help, const Range& range, bool integer,
+                           std::function<void(double)> set) {
+  const std::string described = range.text().empty() ? help : help + " (" + range.text() + ")";
+  return app_->add_option_function<std::string>(
+      flags, [set, range, integer, f = longName(flags)](const std::string& text) { set(parseNumber(f, text, range, integer)); },
+      described);
+}
+
+CLI::Option* Flags::numbers(const std::string& flags, size_t count, const std::string& typeName,
+                            const std::string& help, const Range& range, bool integer,
+                            std::function<void(const std::vector<double>&)> set) {
+  const std::string described = range.text().empty() ? help : help + " (each " + range.text() + ")";
+  CLI::Option* o = app_->add_option_function<std::string>(
+      flags,
+      [set, count, range, integer, f = longName(flags)](const std::string& text) {
+        set(parseNumbers(f, text, count, range, integer));
+      },
+      described);
+  o->type_name(typeName);
+  return o;
+}
+
+CLI::Option* Flags::option(const std::string& flags, Eigen::Vector3f& field, const std::string& help) {
+  CLI::Option* o = numbers(flags, 3, "X,Y,Z", help, {}, false, [&field, f = longName(flags)](const std::vector<double>& v) {
+    field = Eigen::Vector3f(float(v[0]), float(v[1]), float(v[2]));
+    if (!(field.norm() > 0)) throw CLI::ValidationError(f, "must not be the zero vector");
+  });
+  o->default_str(show(field.x()) + "," + show(field.y()) + "," + show(field.z()));
+  return o;
+}
+
+CLI::Option* Flags::option(const std::string& flags, std::vector<float>& field, const std::string& help,
+                           const Range& range) {
+  return numbers(flags, 0, "X[,X...]", help, range, false,
+                 [&field](const std::vector<double>& v) { field.assign(v.begin(), v.end()); });
+}
+
+CLI::Option* Flags::size(const std::string& flags, int& width, int& height, const std::string& help, const Range& range,
+                         bool powerOfTwo) {
+  CLI::Option* o = app_->add_option_function<std::string>(
+      flags,
+      [&width, &height, range, powerOfTwo, f = longName(flags)](const std::string& text) {
+        std::tie(width, height) = parseSize(f, text, range, powerOfTwo);
+      },
+      help + " (N for NxN, or WxH; " + range.text() + (powerOfTwo ? ", powers of two" : "") + " per side)");
+  o->type_name("N|WxH");
+  o->default_str(width == height ? std::to_string(width) : std::to_string(width) + "x" + std::to_string(height));
+  return o;
+}
+
+void Flags::common(CommonFlags& c, unsigned which) {
+  if (which & Common::Threads)
+    option("--threads", c.threads, "Worker threads, 0 = all cores; results do not depend on it", Range{0, 4096});
+  if (which & Common::Report) text("--report", c.report, "Also write figures and stage timings to this JSON file");
+  if (which & Common::Cache) {
+    text("--cache-dir", c.cacheDir, "Exemplar analysis cache folder (default: $TEXFAB_CACHE_DIR, else ~/.cache/texfab)");
+    flag("--no-cache", c.noCache, "Neither read nor write the analysis cache");
+    CLI::Option* o = app_->add_option_function<std::string>(
+        "--cache-size", [&c](const std::string& text) { c.cacheBytes = parseBytes("--cache-size", text); },
+        "Largest size of the cache folder; the least recently used analyses are removed beyond it");
+    o->type_name("BYTES");
+    o->default_str("1G");
+  }
+  if (which & Common::Quiet) flag("-q,--quiet", c.quiet, "No progress output (warnings and errors are still printed)");
+}
+
+void Flags::modelOutput(geometry::MeshWriteOptions& o) {
+  using geometry::TextureEncoding;
+  flag("--draco", o.draco, "Compress the geometry with Draco (KHR_draco_mesh_compression; .glb and .gltf)");
+  const Names<TextureEncoding> formats{{"auto", TextureEncoding::Keep},
+                                       {"png", TextureEncoding::Png},
+                                       {"jpeg", TextureEncoding::Jpeg},
+                                       {"webp", TextureEncoding::Webp}};
+  CLI::Option* format = app_->add_option_function<std::string>(
+      "--texture-format",
+      [&o, formats](const std::string& text) {
+        if (text == "ktx2")
+          throw CLI::ValidationError("--texture-format", "ktx2 is not available: Debian 12 packages no KTX2/Basis "
+                                                         "Universal encoder library");
+        for (const auto& [name, v] : formats)
+          if (name == text || (text == "jpg" && v == TextureEncoding::Jpeg)) return void(o.textures = v);
+        throw CLI::ValidationError("--texture-format", "expected auto, png, jpeg or webp, got '" + text + "'");
+      },
+      "Texture images: png (lossless), jpeg, webp (glTF: EXT_texture_webp), or auto: images read from a PNG, "
+      "JPEG or WebP file keep their bytes, new maps are PNG");
+  format->type_name("auto|png|jpeg|webp");
+  format->default_str(nameOf(formats, o.textures));
+  option("--texture-quality", o.textureQuality, "JPEG and WebP quality", Range{1, 100});
+  flag("--embed", o.embed, ".gltf output: buffers and images inside the file as data URIs, not beside it");
+}
+
+// Run ----------------------------------------------------------------------------------------
+
+Run::Run(const std::string& command, const CommonFlags& common)
+    : command_(command), common_(common), printer_(std::make_unique<ProgressPrinter>("texfab " + command, common.quiet)) {
+  ctx_.threads = common.threads;
+  ctx_.progress = [p = printer_.get()](const ProgressEvent& e) { (*p)(e); };
+  ctx_.cancel = &cancelFlag();
+  if (!common.report.empty()) reportPath_ = outputs_.add(common.report);
+}
+
+Run::~Run() = default;
+
+void Run::note(const std::string& message) const { printer_->note(message); }
+
+std::optional<fs::path> Run::cacheDir() const {
+  if (common_.noCache) return std::nullopt;
+  return common_.cacheDir.empty() ? synthesis::defaultCacheDir() : fs::path(common_.cacheDir);
+}
+
+void Run::pruneCache() const {
+  if (const auto dir = cacheDir()) synthesis::pruneCache(*dir, common_.cacheBytes);
+}
+
+void Run::finish() {
+  if (reporting()) {
+    report_["command"] = command_;
+    report_["timings"] = printer_->timings();
+    report_["peak_memory_mib"] = peakMemoryMiB();
+    writeFileAtomically(reportPath_, [&](std::ostream& out) { out << report_.dump(2) << '\n'; });
+  }
+  outputs_.commit(ctx_);
+}
+
+} // namespace texfab::cli

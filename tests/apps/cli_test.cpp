@@ -1,0 +1,334 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The command line as a user meets it (issue 11's defects): every numeric flag of every command
+// refuses NaN and infinity naming the flag, ranges are stated one way, unknown commands are named,
+// outputs are checked before any work and committed together, a signal leaves no temporary, the
+// analysis cache is bounded and an unwritable one is said once.
+#include "tests/test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+namespace {
+namespace fs = std::filesystem;
+using texfab::test::CliResult;
+using texfab::test::quote;
+using texfab::test::runCli;
+using texfab::test::TempDir;
+
+const fs::path kSource(TEXFAB_SOURCE_DIR);
+const fs::path kModel = kSource / "models" / "meshes" / "elephant.off";
+const fs::path kExemplar = kSource / "models" / "exemplars" / "brick.png";
+
+// The commands `texfab --help` lists, in its order.
+std::vector<std::string> commands() {
+  const CliResult help = runCli("--help");
+  std::vector<std::string> names;
+  bool inList = false;
+  std::istringstream lines(help.out);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("Subcommands:", 0) == 0) inList = true;
+    else if (inList && line.size() > 2 && line[0] == ' ' && line[1] == ' ' && line[2] != ' ')
+      names.push_back(line.substr(2, line.find(' ', 2) - 2));
+  }
+  return names;
+}
+
+// The flags of a command whose values are numbers, from its --help ("--gutter INT=4 ...").
+std::vector<std::string> numericFlags(const std::string& command) {
+  static const std::regex option(R"(^\s+(?:-\w,)?(--[\w-]+) ([^\s=]+))");
+  static const std::set<std::string> numericTypes = {"INT", "UINT", "FLOAT", "N|WxH", "BYTES"};
+  std::vector<std::string> flags;
+  std::istringstream lines(runCli(command + " --help").out);
+  std::smatch m;
+  for (std::string line; std::getline(lines, line);)
+    if (std::regex_search(line, m, option) &&
+        (numericTypes.count(m[2].str()) || (m[2].str().find(',') != std::string::npos && m[2].str() != "COLOUR")))
+      flags.push_back(m[1].str());
+  return flags;
+}
+
+} // namespace
+
+TEST(Cli, HelpListsTheCommandsInPipelineOrder) {
+  const std::vector<std::string> names = commands();
+  ASSERT_GE(names.size(), 8u);
+  EXPECT_EQ(names.front(), "texture");
+  EXPECT_EQ(std::vector<std::string>(names.begin(), names.begin() + 4),
+            (std::vector<std::string>{"texture", "atlas", "synth", "solid"}));
+}
+
+TEST(Cli, UnknownCommandsAreNamed) {
+  for (const std::string& args : {"bogus", "cut --help", "fracture", "slice --help"}) {
+    const CliResult r = runCli(args);
+    EXPECT_EQ(r.status, 1) << args;
+    const std::string name = args.substr(0, args.find(' '));
+    EXPECT_NE(r.err.find("unknown command '" + name + "'"), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(r.errLines(), 1u) << r.err;
+    EXPECT_EQ(r.out.find("Subcommands"), std::string::npos) << "top-level help printed for " << args;
+  }
+}
+
+// Every numeric flag of every command, found in its --help: NaN and infinities are refused at
+// parse time with one line naming the flag (the render command once aborted in Embree).
+TEST(Cli, EveryNumericFlagRefusesNanAndInfinity) {
+  size_t checked = 0;
+  for (const std::string& command : commands()) {
+    for (const std::string& flag : numericFlags(command)) {
+      for (const char* value : {"nan", "inf", "-inf", "NaN"}) {
+        const CliResult r = runCli(command + " " + flag + " " + value);
+        EXPECT_EQ(r.status, 1) << command << " " << flag << " " << value << ": " << r.err;
+        EXPECT_EQ(r.errLines(), 1u) << command << " " << flag << " " << value << ": " << r.err;
+        EXPECT_NE(r.err.find(flag), std::string::npos) << command << " " << flag << " " << value << ": " << r.err;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 40u);  // the flags were found
+}
+
+TEST(Cli, NumbersOutOfRangeNameTheFlagAndTheRange) {
+  struct Case {
+    std::string args, flag, range;
+  };
+  const std::vector<Case> cases = {
+      {"synth x.png -o y.png --threads -4", "--threads", "0 to 4096"},
+      {"synth x.png -o y.png --jitter 1.5", "--jitter", "0 to 1"},
+      {"solid x.png -o y --volume 8 --jitter 5", "--jitter", "0 to 4"},
+      {"texture m.off -e x.png -o y.glb --scale 0", "--scale", "greater than 0"},
+      {"texture m.off -e x.png -o y.glb --scale -5", "--scale", "greater than 0"},
+      {"texture m.off -e x.png -o y.glb --resolution 8", "--resolution", "16 to 16384"},
+      {"atlas m.off -o y.glb --resolution 100000", "--resolution", "16 to 16384"},
+      {"render m.off -o y.png --spp 0", "--spp", "1 to 4096"},
+  };
+  for (const Case& c : cases) {
+    const CliResult r = runCli(c.args);
+    EXPECT_EQ(r.status, 1) << c.args;
+    EXPECT_EQ(r.errLines(), 1u) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.flag + ": "), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.range), std::string::npos) << c.args << ": " << r.err;
+  }
+  // The help states --resolution's range the same way.
+  EXPECT_NE(runCli("texture --help").out.find("16 to 16384"), std::string::npos);
+}
+
+TEST(Cli, ABadImageGivesOneLine) {
+  TempDir d("texfab-cli");
+  std::ofstream(d / "bad.png", std::ios::binary) << "\x89PNG\r\n\x1a\n" << std::string(64, 'x');
+  const std::string png = texfab::test::readFile(kExemplar);
+  std::ofstream(d / "truncated.png", std::ios::binary) << png.substr(0, png.size() / 2);
+  for (const char* name : {"bad.png", "truncated.png"}) {
+    const CliResult r = runCli("synth " + quote(d / name) + " -o " + quote(d / "o.png") + " --no-cache");
+    EXPECT_EQ(r.status, 2) << name;
+    EXPECT_EQ(r.errLines(), 1u) << name << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("texfab synth: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+  }
+}
+
+TEST(Cli, SingularAndPluralCounts) {
+  TempDir d("texfab-cli");
+  std::ofstream(d / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const CliResult r = runCli("atlas " + quote(d / "tri.obj") + " -o " + quote(d / "a.glb") + " --resolution 64");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find(" 1 chart,"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(" 1 charts"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" 1 triangle"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(" 1 triangles"), std::string::npos) << r.err;
+}
+
+// A model that cannot carry the texture is refused before any work.
+TEST(Cli, TextureRefusesFormatsWithoutTextures) {
+  TempDir d("texfab-cli");
+  for (const char* out : {"x.ply", "x.stl", "x.off"}) {
+    const CliResult r = runCli("texture " + quote(kModel) + " -e " + quote(kExemplar) + " -o " + quote(d / out));
+    EXPECT_EQ(r.status, 1) << out << ": " << r.err;
+    EXPECT_NE(r.err.find("cannot carry the texture"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::is_empty(d.path())) << out;
+  }
+}
+
+// Every output location is checked before any work, and outputs appear only together.
+TEST(Cli, OutputsAreCheckedBeforeTheWorkAndCommittedTogether) {
+  TempDir d("texfab-cli");
+  const std::string missing = quote(d / "missing" / "r.json");
+  const std::vector<std::string> jobs = {
+      "texture " + quote(kModel) + " -e " + quote(kExemplar) + " -o " + quote(d / "out.glb") + " --resolution 256 --no-cache",
+      "synth " + quote(kExemplar) + " -o " + quote(d / "out.png") + " --size 64 --no-cache",
+      "solid " + quote(kExemplar) + " --plane 0,0,0,1,0,0,0,1,0 --size 16 -o " + quote(d / "out.png") + " --no-cache",
+      "atlas " + quote(kModel) + " -o " + quote(d / "out.glb") + " --resolution 256",
+  };
+  for (const std::string& job : jobs) {
+    const CliResult r = runCli(job + " --report " + missing);
+    EXPECT_EQ(r.status, 2) << job << ": " << r.err;
+    EXPECT_EQ(r.errLines(), 1u) << job << ": " << r.err;  // no stage line: nothing ran
+    EXPECT_NE(r.err.find("missing"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::is_empty(d.path())) << job;  // no output, no temporary
+  }
+  // A second output that cannot be written (a folder in its way) stops the first too.
+  fs::create_directory(d / "coords.png");
+  const CliResult r = runCli("synth " + quote(kExemplar) + " -o " + quote(d / "out.png") + " --size 64 --no-cache --coords " +
+                             quote(d / "coords.png"));
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_FALSE(fs::exists(d / "out.png"));
+  fs::remove(d / "coords.png");
+  // When all succeed, all are there and nothing else.
+  ASSERT_EQ(runCli("synth " + quote(kExemplar) + " -o " + quote(d / "out.png") + " --size 64 --no-cache -q --coords " +
+                   quote(d / "coords.exr") + " --report " + quote(d / "r.json")).status,
+            0);
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(d.path())) names.insert(e.path().filename().string());
+  EXPECT_EQ(names, (std::set<std::string>{"coords.exr", "out.png", "r.json"}));
+}
+
+// An output folder that cannot be written says why, in the system's words.
+TEST(Cli, AnUnwritableFolderSaysWhy) {
+  TempDir d("texfab-cli");
+  fs::path folder = d / "readonly";
+  fs::create_directory(folder);
+  ::chmod(folder.c_str(), 0555);
+  if (::access(folder.c_str(), W_OK) == 0) folder = "/proc/self";  // root writes anywhere; procfs refuses it
+  const CliResult r = runCli("synth " + quote(kExemplar) + " -o " + quote(folder / "o.png") + " --size 16 --no-cache");
+  ::chmod((d / "readonly").c_str(), 0755);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(r.errLines(), 1u) << r.err;
+  const bool reason = r.err.find("Permission denied") != std::string::npos ||
+                      r.err.find("Operation not permitted") != std::string::npos ||
+                      r.err.find("No such file or directory") != std::string::npos ||
+                      r.err.find("Read-only file system") != std::string::npos;
+  EXPECT_TRUE(reason) << r.err;
+}
+
+namespace {
+
+// Starts texfab with `args` (a vector of words, no shell), stderr to `errFile`; returns its pid.
+pid_t spawn(const std::vector<std::string>& args, const fs::path& errFile) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int err = ::open(errFile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(err, STDERR_FILENO);
+    std::vector<char*> argv{const_cast<char*>(TEXFAB_CLI)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(TEXFAB_CLI, argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+int waitFor(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 256 + WTERMSIG(status);  // killed: not a texfab exit
+}
+
+std::vector<std::string> leftovers(const fs::path& dir) {
+  std::vector<std::string> hidden;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().filename().string().front() == '.') hidden.push_back(e.path().string());
+  return hidden;
+}
+
+// Waits until texfab has printed its first stage line: its signal handling is in place then (a
+// signal before main(), while the libraries load, takes the default action and leaves nothing).
+void awaitStart(const fs::path& errFile) {
+  for (int i = 0; i < 6000 && (!fs::exists(errFile) || fs::file_size(errFile) == 0); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+}
+
+} // namespace
+
+// SIGINT at any moment of a job (synthesis, encoding, writing) ends it with 130 and no temporary,
+// or lets it finish whole; a second signal quits at once, also without temporaries.
+TEST(Cli, SignalsLeaveNoTemporaries) {
+  TempDir d("texfab-cli");
+  const std::vector<std::string> job = {"synth", kExemplar.string(), "-o", (d / "big.png").string(), "--size", "2048",
+                                        "--no-cache", "--coords", (d / "big.exr").string()};
+  int stopped = 0;
+  for (int delayMs : {0, 50, 200, 400, 700, 1000, 1500, 2200, 3000}) {
+    fs::remove(d / "err.txt");
+    const pid_t pid = spawn(job, d / "err.txt");
+    awaitStart(d / "err.txt");
+    std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
+    ::kill(pid, SIGINT);
+    const int status = waitFor(pid);
+    EXPECT_TRUE(status == 130 || status == 0) << delayMs << " ms: " << status << " " << texfab::test::readFile(d / "err.txt");
+    EXPECT_TRUE(leftovers(d.path()).empty()) << delayMs << " ms: " << leftovers(d.path()).front();
+    if (status == 130) {
+      ++stopped;
+      EXPECT_FALSE(fs::exists(d / "big.png")) << delayMs << " ms";
+      EXPECT_FALSE(fs::exists(d / "big.exr")) << delayMs << " ms";
+    }
+    fs::remove(d / "big.png");
+    fs::remove(d / "big.exr");
+  }
+  EXPECT_GT(stopped, 0);
+  for (int delayMs : {100, 600, 1500}) {
+    fs::remove(d / "err.txt");
+    const pid_t pid = spawn(job, d / "err.txt");
+    awaitStart(d / "err.txt");
+    std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
+    ::kill(pid, SIGTERM);
+    ::kill(pid, SIGTERM);
+    const int status = waitFor(pid);
+    EXPECT_TRUE(status == 130 || status == 0) << delayMs << " ms: " << status;
+    EXPECT_TRUE(leftovers(d.path()).empty()) << delayMs << " ms";
+    fs::remove(d / "big.png");
+    fs::remove(d / "big.exr");
+  }
+}
+
+// The analysis cache keeps within --cache-size, dropping the least recently used analysis; a
+// cache that cannot be written is said once, and the job still succeeds.
+TEST(Cli, AnalysisCacheIsBoundedAndAnUnwritableOneIsSaidOnce) {
+  TempDir d("texfab-cli");
+  const fs::path cache = d / "cache";
+  std::vector<fs::path> exemplars;
+  for (const char* name : {"marble.png", "brick.png"}) {  // the first analysis is the larger
+    const fs::path e = kSource / "models" / "exemplars" / name;
+    if (fs::exists(e)) exemplars.push_back(e);
+  }
+  ASSERT_GE(exemplars.size(), 2u);
+  auto synth = [&](const fs::path& exemplar, const std::string& extra) {
+    return runCli("synth " + quote(exemplar) + " -o " + quote(d / "o.png") + " --size 32 -q --cache-dir " + quote(cache) +
+                  " " + extra);
+  };
+  auto cached = [&] {
+    std::vector<std::pair<fs::path, uintmax_t>> files;
+    for (const auto& e : fs::directory_iterator(cache)) files.emplace_back(e.path(), e.file_size());
+    return files;
+  };
+  ASSERT_EQ(synth(exemplars[0], "").status, 0);
+  ASSERT_EQ(cached().size(), 1u);
+  const auto [first, size] = cached()[0];
+  // Room for one analysis: the second run keeps its own, the least recently used goes.
+  ASSERT_EQ(synth(exemplars[1], "--cache-size " + std::to_string(size + size / 2)).status, 0);
+  const auto left = cached();
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_NE(left[0].first, first);
+  ASSERT_EQ(synth(exemplars[0], "--cache-size 1G").status, 0);
+  EXPECT_EQ(cached().size(), 2u);
+  EXPECT_NE(runCli("synth --help").out.find("--cache-size"), std::string::npos);
+
+  // A cache folder that is a file: said once, as a warning, and the job succeeds.
+  std::ofstream(d / "file") << "x";
+  const CliResult r = runCli("synth " + quote(exemplars[0]) + " -o " + quote(d / "o.png") + " --size 32 -q --cache-dir " +
+                             quote(d / "file" / "cache"));
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.errLines(), 1u) << r.err;
+  EXPECT_NE(r.err.find("warning: the analysis cache cannot be written"), std::string::npos) << r.err;
+}
