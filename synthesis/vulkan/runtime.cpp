@@ -214,10 +214,16 @@ int deviceFromEnvironment() {
   return int(index);
 }
 
+// $TEXFAB_VULKAN_MAX_RANGE: a lower binding range (bytes), to exercise the splitting of large data.
+uint64_t maxRangeFromEnvironment() {
+  const char* v = std::getenv("TEXFAB_VULKAN_MAX_RANGE");
+  return v && *v ? std::strtoull(v, nullptr, 10) : 0;
+}
+
 // The device to open: `index`, else the environment's, else the best usable one.
 int chooseDevice(const std::vector<DeviceInfo>& infos, const std::vector<VkPhysicalDeviceType>& types, int index) {
   if (index < 0) index = deviceFromEnvironment();
-  if (infos.empty()) throw Error("no Vulkan device found");
+  if (infos.empty()) throw Error(index < 0 ? "no Vulkan device found" : "no Vulkan device found (device " + std::to_string(index) + " asked for)");
   if (index >= int(infos.size()))
     throw Error("Vulkan device " + std::to_string(index) + " does not exist (" + std::to_string(infos.size()) +
                 " found; texfab info --devices lists them)");
@@ -437,9 +443,10 @@ uint64_t Device::maxRangeBytes() const { return impl_->maxRange; }
 std::shared_ptr<Device> sharedDevice(int index) {
   static std::mutex mutex;
   static std::map<int, std::shared_ptr<Device>> devices;
+  if (index < 0) index = deviceFromEnvironment();
   const std::lock_guard lock(mutex);
   std::shared_ptr<Device>& d = devices[index];
-  if (!d || d->impl().lost) d = std::make_shared<Device>(index);
+  if (!d || d->impl().lost) d = std::make_shared<Device>(index, DeviceOptions{maxRangeFromEnvironment()});
   return d;
 }
 

@@ -74,8 +74,9 @@ private:
   std::unique_ptr<Impl> impl_;
 };
 
-/// Device `index` (as Device's constructor), opened on first use and kept for the process (opening costs
-/// ~0.1 s): every computation of the process shares it. A device that was lost is reopened.
+/// Device `index` (as Device's constructor), opened on first use and kept for the process (opening
+/// costs ~0.1 s): every computation of the process shares it. A device that was lost is reopened.
+/// $TEXFAB_VULKAN_MAX_RANGE (bytes) lowers its binding range (DeviceOptions), for tests.
 std::shared_ptr<Device> sharedDevice(int index);
 
 /// A storage buffer in device memory. Its contents are undefined until written.
