@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The Vulkan backend end to end: the golden outputs (2-D window, solid volume and plane, the
 // texture job in both modes, its GLB) computed with the kernels on the device give the golden
-// hashes; more 2-D windows and solid requests equal the CPU backend's; and the choice of the
-// backend (Auto, Vulkan, device indices) behaves as documented.
+// hashes; more 2-D windows, solid requests and a solid box equal the CPU backend's; and the
+// choice of the backend (Auto, Vulkan, device indices) behaves as documented.
 #include "synthesis/backend.h"
 #include "tests/golden/golden_cases.h"
 #include "tests/vulkan/vulkan_test_support.h"
@@ -118,6 +118,18 @@ TEST(VulkanBackend, SolidRequestsEqualTheCpu) {
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x) cut.push_back({x - 20, y + 3, 17});
   expectSameSolid(cut, {}, true);
+}
+
+// A volume (box) away from the origin, every voxel of it: the same triples as the CPU's.
+TEST(VulkanBackend, SolidBoxEqualsTheCpu) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  synthesis::SolidSynthesisOptions o;
+  o.seed = 9;
+  const synthesis::VoxelBox box{-70, 13, 400, 20, 24, 28};
+  const auto cpu = synthesis::synthesizeSolidBox(solidAnalysis32(), box, o, nullptr, synthesisContext(Backend::Cpu));
+  const auto gpu = synthesis::synthesizeSolidBox(solidAnalysis32(), box, o, nullptr, synthesisContext(Backend::Vulkan));
+  ASSERT_EQ(cpu.triples.size(), size_t(20 * 24 * 28));
+  EXPECT_EQ(gpu.triples, cpu.triples);
 }
 
 // The paper's sub-passes (8 per pass; one pass per level, to keep the chain short).
