@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -281,6 +282,9 @@ struct Device::Impl {
   std::mutex mutex;  // pipelines, queue
   std::map<const Kernel*, Pipeline> pipelines;
   std::atomic<bool> lost{false};
+  std::atomic<bool> profiling{false};
+  std::mutex profileMutex;
+  DeviceProfile profile;
 
   ~Impl() {
     if (!device) return;
@@ -440,6 +444,17 @@ Device::~Device() = default;
 const DeviceInfo& Device::info() const { return impl_->info; }
 uint64_t Device::maxRangeBytes() const { return impl_->maxRange; }
 
+void Device::setProfiling(bool on) {
+  const std::lock_guard lock(impl_->profileMutex);
+  impl_->profile = {};
+  impl_->profiling = on;
+}
+
+DeviceProfile Device::profile() const {
+  const std::lock_guard lock(impl_->profileMutex);
+  return impl_->profile;
+}
+
 std::shared_ptr<Device> sharedDevice(int index) {
   static std::mutex mutex;
   static std::map<int, std::shared_ptr<Device>> devices;
@@ -494,6 +509,7 @@ struct Commands::Impl {
     uint64_t bytes;
   };
   std::vector<Download> downloads;
+  uint64_t uploadBytes = 0, downloadBytes = 0, dispatches = 0;
   bool recording = false;
 
   explicit Impl(Device::Impl& device) : d(device) {
@@ -533,12 +549,14 @@ struct Commands::Impl {
     vkCmdPipelineBarrier(cmd, stages, stages | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &b, 0, nullptr, 0, nullptr);
   }
 
-  // Two timestamps around the next dispatch.
-  uint32_t timeSlot(const char* kernel) {
+  // Records `command` between two timestamps when the commands are timed (as `name`).
+  template <class Command> void timed(const char* name, Command&& command) {
     const auto slot = uint32_t(timedKernels.size());
-    if (2 * slot + 2 > queryCapacity) return UINT32_MAX;
-    timedKernels.push_back(kernel);
-    return slot;
+    if (!queries || 2 * slot + 2 > queryCapacity) return command();
+    timedKernels.push_back(name);
+    vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries, 2 * slot);
+    command();
+    vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, 2 * slot + 1);
   }
 
   void reserveQueries(uint32_t count) {
@@ -556,7 +574,7 @@ constexpr uint32_t kTimedDispatches = 4096;  // timestamps kept per submit
 }
 
 Commands::Commands(Device& device, bool timed) : device_(device), impl_(std::make_unique<Impl>(device.impl())) {
-  if (timed && impl_->d.timestamps) impl_->reserveQueries(2 * kTimedDispatches);
+  if ((timed || impl_->d.profiling) && impl_->d.timestamps) impl_->reserveQueries(2 * kTimedDispatches);
 }
 
 Commands::~Commands() {
@@ -569,7 +587,9 @@ void Commands::upload(const Buffer& to, uint64_t offset, const void* data, uint6
   auto s = c.d.allocate(bytes, true, VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   std::memcpy(s->mapped, data, bytes);
   const VkBufferCopy region{0, offset, bytes};
-  vkCmdCopyBuffer(c.begin(), s->buffer, to.impl().allocation->buffer, 1, &region);
+  const VkCommandBuffer cmd = c.begin();
+  c.timed("upload", [&] { vkCmdCopyBuffer(cmd, s->buffer, to.impl().allocation->buffer, 1, &region); });
+  c.uploadBytes += bytes;
   c.barrier();
   c.staging.push_back(std::move(s));
 }
@@ -579,7 +599,9 @@ void Commands::download(const Buffer& from, uint64_t offset, void* data, uint64_
   Impl& c = *impl_;
   auto s = c.d.allocate(bytes, true, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
   const VkBufferCopy region{offset, 0, bytes};
-  vkCmdCopyBuffer(c.begin(), from.impl().allocation->buffer, s->buffer, 1, &region);
+  const VkCommandBuffer cmd = c.begin();
+  c.timed("download", [&] { vkCmdCopyBuffer(cmd, from.impl().allocation->buffer, s->buffer, 1, &region); });
+  c.downloadBytes += bytes;
   c.barrier();
   c.downloads.push_back({s.get(), data, bytes});
   c.staging.push_back(std::move(s));
@@ -622,17 +644,32 @@ void Commands::dispatchRaw(const Kernel& kernel, const void* params, size_t para
   const uint64_t groups = (invocations + kWorkgroupSize - 1) / kWorkgroupSize;
   const uint64_t rows = (groups + 65534) / 65535;
   if (rows > 65535) throw std::logic_error(std::string(kernel.name) + ": too many invocations");
-  const uint32_t slot = c.queries ? c.timeSlot(kernel.name) : UINT32_MAX;
-  if (slot != UINT32_MAX) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, c.queries, 2 * slot);
-  vkCmdDispatch(cmd, uint32_t((groups + rows - 1) / rows), uint32_t(rows), 1);
-  if (slot != UINT32_MAX) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, c.queries, 2 * slot + 1);
+  c.timed(kernel.name, [&] { vkCmdDispatch(cmd, uint32_t((groups + rows - 1) / rows), uint32_t(rows), 1); });
+  ++c.dispatches;
   c.barrier();
+}
+
+void Commands::addToProfile(double wallSeconds) const {
+  const Impl& c = *impl_;
+  const std::lock_guard lock(c.d.profileMutex);
+  DeviceProfile& p = c.d.profile;
+  for (const auto& [name, seconds] : seconds_) {
+    if (name == "upload") p.uploadSeconds += seconds;
+    else if (name == "download") p.downloadSeconds += seconds;
+    else p.dispatchSeconds += seconds;
+  }
+  p.submitSeconds += wallSeconds;
+  p.uploadBytes += c.uploadBytes;
+  p.downloadBytes += c.downloadBytes;
+  p.dispatches += c.dispatches;
+  ++p.submits;
 }
 
 void Commands::submit(const Context& ctx) {
   Impl& c = *impl_;
   Device::Impl& d = c.d;
   if (!c.recording) return;
+  const auto started = std::chrono::steady_clock::now();
   c.recording = false;
   d.check(vkEndCommandBuffer(c.cmd), "vkEndCommandBuffer");
   VkFence fence = VK_NULL_HANDLE;
@@ -669,9 +706,11 @@ void Commands::submit(const Context& ctx) {
     for (size_t i = 0; i < c.timedKernels.size(); ++i)
       seconds_[c.timedKernels[i]] += double(stamps[2 * i + 1] - stamps[2 * i]) * d.limits.timestampPeriod * 1e-9;
   }
+  if (d.profiling) addToProfile(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
   c.downloads.clear();
   c.staging.clear();
   c.timedKernels.clear();
+  c.uploadBytes = c.downloadBytes = c.dispatches = 0;
   d.check(vkResetCommandBuffer(c.cmd, 0), "vkResetCommandBuffer");
 }
 

@@ -44,6 +44,18 @@ struct DeviceInfo {
 /// (never throws).
 std::vector<DeviceInfo> listDevices();
 
+/// Where a device's time went, summed over every submit since profiling was switched on
+/// (Device::setProfiling). Device seconds come from timestamps around each copy and dispatch
+/// (zero when the device has none); wall seconds are the host's, from submit to the fence.
+struct DeviceProfile {
+  double uploadSeconds = 0;    ///< device: host-to-device copies
+  double dispatchSeconds = 0;  ///< device: kernels
+  double downloadSeconds = 0;  ///< device: device-to-host copies
+  double submitSeconds = 0;    ///< host wall time inside submit (queue, wait, copy-out)
+  uint64_t uploadBytes = 0, downloadBytes = 0;
+  uint64_t dispatches = 0, submits = 0;
+};
+
 struct DeviceOptions {
   /// The largest byte range one binding may cover, at most (0 = the device's maxStorageBufferRange).
   /// Tests lower it to exercise the splitting of large data on small inputs.
@@ -66,6 +78,11 @@ public:
   const DeviceInfo& info() const;
   /// The largest byte range one binding may cover (a multiple of 256).
   uint64_t maxRangeBytes() const;
+
+  /// Profiling (off by default): every command of every later submit is timed on the device and
+  /// summed into profile(). Switching it on resets the sums. For benchmarks.
+  void setProfiling(bool on);
+  DeviceProfile profile() const;
 
   struct Impl;
   Impl& impl() const { return *impl_; }
@@ -123,7 +140,8 @@ struct Kernel {
 
 /// Work for the device, recorded in order and run by submit(): each command sees the results of
 /// those before it. Uploads copy their data when recorded; downloads fill their destination
-/// during submit(). With `timed`, dispatches are timed on the device (kernelSeconds()).
+/// during submit(). With `timed` (or a profiling device), dispatches and copies are timed on the
+/// device (kernelSeconds()).
 class Commands {
 public:
   explicit Commands(Device& device, bool timed = false);
@@ -161,7 +179,8 @@ public:
   /// validation message; Cancelled (after the device is done) when ctx's cancel flag is set.
   void submit(const Context& ctx = {});
 
-  /// Device seconds per kernel name over the dispatches of the last submit (timed commands only).
+  /// Device seconds per kernel name over the dispatches of the last submit, and of its copies as
+  /// "upload" and "download" (timed commands only).
   const std::map<std::string, double>& kernelSeconds() const { return seconds_; }
 
   struct Impl;
@@ -169,6 +188,7 @@ public:
 private:
   void dispatchRaw(const Kernel& kernel, const void* params, size_t paramBytes, std::initializer_list<Range> bindings,
                    uint64_t invocations);
+  void addToProfile(double wallSeconds) const;
 
   Device& device_;
   std::unique_ptr<Impl> impl_;

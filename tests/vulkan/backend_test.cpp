@@ -142,6 +142,24 @@ TEST(VulkanBackend, SubPassesEqualTheCpu) {
   expectSameSolid(shell(2, 3, -4, 5), o, false);
 }
 
+// A profiling device sums the work of every submit: the tables and levels uploaded, the kernels,
+// the window downloaded (at least its texels, 4 bytes each).
+TEST(VulkanBackend, ProfileSumsTheWork) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  const auto device = synthesis::vulkan::sharedDevice(-1);
+  device->setProfiling(true);
+  synthesis::synthesize2d(marbleAnalysis(), {0, 0, 40, 24}, {}, synthesisContext(Backend::Vulkan));
+  const synthesis::vulkan::DeviceProfile p = device->profile();
+  device->setProfiling(false);
+  EXPECT_GE(p.downloadBytes, 40u * 24u * 4u);
+  EXPECT_GT(p.uploadBytes, 0u);
+  EXPECT_GT(p.dispatches, 0u);
+  EXPECT_GT(p.submits, 0u);
+  EXPECT_GT(p.submitSeconds, 0.0);
+  EXPECT_GT(p.dispatchSeconds, 0.0);  // lavapipe and GPUs have timestamps
+  EXPECT_EQ(device->profile().submits, 0u);  // switching profiling resets the sums
+}
+
 // Progress events of a computation: the backend's note.
 struct Notes {
   std::mutex mutex;
