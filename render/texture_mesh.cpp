@@ -49,9 +49,15 @@ geometry::Mesh texturedMesh(const geometry::Mesh& mesh, const Atlas& atlas, cons
   m.name = "texfab";
   m.metallicFactor = 0.0f;
   m.roughnessFactor = r.metallicRoughness ? 1.0f : 0.8f;
-  m.baseColorTexture = {r.baseColor, "basecolor.png"};
-  if (r.normal) m.normalTexture = {r.normal, "normal.png"};
-  if (r.metallicRoughness) m.metallicRoughnessTexture = {r.metallicRoughness, "metallic_roughness.png"};
+  auto texture = [](std::shared_ptr<const Image> image, const char* name) {
+    geometry::Texture t;
+    t.image = std::move(image);
+    t.name = name;
+    return t;
+  };
+  m.baseColorTexture = texture(r.baseColor, "basecolor.png");
+  if (r.normal) m.normalTexture = texture(r.normal, "normal.png");
+  if (r.metallicRoughness) m.metallicRoughnessTexture = texture(r.metallicRoughness, "metallic_roughness.png");
   out.materials = {m};
   out.faceMaterials.clear();
   return out;

@@ -14,6 +14,9 @@ packages=(
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
   # which Debian's blender package does not pull in)
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy
+  # Vulkan compute (optional at build time): loader and headers, the GLSL compiler, Mesa's
+  # lavapipe (a CPU device, so the Vulkan tests run anywhere), the Khronos validation layer
+  libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers
   # test data: GIMP's patterns (marble, granite, brick, wood, ...)
   gimp-data
 )

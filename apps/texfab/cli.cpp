@@ -3,6 +3,7 @@
 
 #include "apps/texfab/progress.h"
 #include "synthesis/analysis_cache.h"
+#include "synthesis/backend.h"
 #include "synthesis/exemplar_analysis.h"
 
 #include <sys/resource.h>
@@ -185,6 +186,13 @@ void Flags::common(CommonFlags& c, unsigned which) {
     o->type_name("BYTES");
     o->default_str("1G");
   }
+  if (which & Common::Backend) {
+    choice("--backend", c.backend, {{"cpu", Backend::Cpu}, {"vulkan", Backend::Vulkan}, {"auto", Backend::Auto}},
+           "Where the synthesis kernels run: cpu, vulkan (a Vulkan device; error without one) or auto (a Vulkan "
+           "device when there is one, else the CPU); the result does not depend on it");
+    option("--device", c.device, "Vulkan device index (texfab info --devices lists them)", Range{0, 1024})
+        ->default_str("$TEXFAB_VULKAN_DEVICE, else the best");
+  }
   if (which & Common::Quiet) flag("-q,--quiet", c.quiet, "No progress output (warnings and errors are still printed)");
 }
 
@@ -221,6 +229,26 @@ Run::Run(const std::string& command, const CommonFlags& common)
   ctx_.progress = [p = printer_.get()](const ProgressEvent& e) { (*p)(e); };
   ctx_.cancel = &cancelFlag();
   if (!common.report.empty()) reportPath_ = outputs_.add(common.report);
+  openBackend();
+}
+
+void Run::openBackend() {
+  ctx_.backend = common_.backend;
+  ctx_.device = common_.device;
+  if (common_.backend == Backend::Cpu) return;
+  std::string line;
+  Context probe = ctx_;
+  probe.progress = [&line](const ProgressEvent& e) {
+    if (e.kind == ProgressEvent::Kind::End && e.stage == "backend") line = e.detail;
+  };
+  try {
+    synthesis::deviceFor(probe);
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const Error& e) {
+    throw Error(std::string("--backend vulkan: ") + e.what());
+  }
+  if (!line.empty()) note("backend: " + line);
 }
 
 Run::~Run() = default;

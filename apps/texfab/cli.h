@@ -94,6 +94,7 @@ enum : unsigned {
   Quiet = 2,    ///< -q,--quiet
   Report = 4,   ///< --report FILE
   Cache = 8,    ///< --cache-dir, --no-cache, --cache-size
+  Backend = 16, ///< --backend cpu|vulkan|auto, --device N
 };
 }
 
@@ -104,6 +105,8 @@ struct CommonFlags {
   std::string cacheDir;  ///< empty: synthesis::defaultCacheDir()
   bool noCache = false;
   uint64_t cacheBytes = uint64_t(1) << 30;
+  texfab::Backend backend = texfab::Backend::Cpu;
+  int device = -1;  ///< -1: $TEXFAB_VULKAN_DEVICE, else the best device
 };
 
 /// Declares the flags of one subcommand, bound to the fields they set.
@@ -175,7 +178,8 @@ private:
 /// A running command: the context its library calls take, its outputs and its report.
 class Run {
 public:
-  /// `command` is the subcommand's name ("texture"). Reserves the --report file.
+  /// `command` is the subcommand's name ("texture"). Reserves the --report file and opens the
+  /// --backend device, so that a missing one is an error before any work.
   Run(const std::string& command, const CommonFlags& common);
   ~Run();
   Run(const Run&) = delete;
@@ -198,6 +202,7 @@ public:
   void finish();
 
 private:
+  void openBackend();
   std::string command_;
   CommonFlags common_;
   std::unique_ptr<ProgressPrinter> printer_;

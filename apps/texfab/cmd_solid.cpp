@@ -259,7 +259,7 @@ Command addSolidCommand(CLI::App& root) {
            "Correction passes at the finest level (the paper: 2, about 3x the finest level's work)", {0, 4});
   f.option("--interleave", o.interleave,
            "2: 8 sub-passes per pass, as in the paper; 1: one (a far shorter dependency chain)", {1, 2});
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSolid(*job); }};
 }
 

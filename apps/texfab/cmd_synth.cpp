@@ -162,7 +162,7 @@ Command addSynthCommand(CLI::App& root) {
   f.app()->add_option("--apply", job->apply,
                       "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, roughness, "
                       "height; same size as the exemplar) and write OUT (repeatable)");
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSynth(*job); }};
 }
 

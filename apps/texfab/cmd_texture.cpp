@@ -171,7 +171,7 @@ Command addTextureCommand(CLI::App& root) {
   f.modelOutput(job->write);
   f.text("--preview", job->preview, "Also render the textured model to this image");
   f.size("--preview-size", job->previewOptions.width, job->previewOptions.height, "Preview size", {1, 16384});
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runTexture(*job); }};
 }
 
