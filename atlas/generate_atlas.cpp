@@ -10,7 +10,7 @@
 
 namespace texfab::atlas {
 
-void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const Atlas& atlas, AtlasReport& report) {
+void measureAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const Atlas& atlas, AtlasReport& report) {
   // Atlas texel coordinates are y-down: flip to v-up for orientation.
   const StretchStats s = measureStretch(mesh, {}, [&](size_t c) {
     const Eigen::Vector2f p = atlas.texelUvs[c];
@@ -30,7 +30,7 @@ void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const At
   }
   for (size_t t = 0; t < mesh.triangleCount(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const int32_t g = adj.neighbor[t][size_t(k)];
+      const int32_t g = conn.neighbor(t, k);
       if (g > int32_t(t) && atlas.faceChart[size_t(g)] != atlas.faceChart[t])
         report.seamLength += double((mesh.corner(t, k) - mesh.corner(t, (k + 1) % 3)).norm());
     }
@@ -49,26 +49,26 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
     clock = now;
   };
   r.report.triangles = mesh.triangleCount();
-  r.adjacency = computeMeshAdjacency(mesh);
-  lap("adjacency");
-  r.report.segment = segmentCharts(mesh, r.adjacency, r.atlas, options.segment);
+  r.connectivity = geometry::computeConnectivity(mesh);
+  lap("connectivity");
+  r.report.segment = segmentCharts(mesh, r.connectivity, r.atlas, options.segment);
   lap("charts");
-  r.report.parameterize = parameterizeCharts(mesh, r.adjacency, r.atlas, options.parameterize, ctx);
+  r.report.parameterize = parameterizeCharts(mesh, r.connectivity, r.atlas, options.parameterize, ctx);
   lap("parameterization");
-  r.report.cut = cutChartsForPacking(mesh, r.adjacency, r.atlas, options.pack.width, options.pack.height,
+  r.report.cut = cutChartsForPacking(mesh, r.connectivity, r.atlas, options.pack.width, options.pack.height,
                                      options.pack.gutter, options.cut, ctx);
   lap("cutting");
   r.report.pack = packCharts(mesh, r.atlas, options.pack, ctx);
   lap("packing");
   r.fields = rasterizeAtlas(mesh, r.atlas, ctx);
   lap("texel fields");
-  measureAtlas(mesh, r.adjacency, r.atlas, r.report);
+  measureAtlas(mesh, r.connectivity, r.atlas, r.report);
   r.report.utilization = r.fields.utilization();
   r.report.overlappingTexels = r.fields.overlappingTexels;
   lap("measures");
-  const MeshAdjacency& a = r.adjacency;
-  if (a.degenerateCount)
-    r.report.repairs.push_back(std::to_string(a.degenerateCount) +
+  const geometry::MeshConnectivity& a = r.connectivity;
+  if (a.degenerateTriangles)
+    r.report.repairs.push_back(std::to_string(a.degenerateTriangles) +
                                " degenerate (zero-area) triangles mapped to a point (they cover no texel)");
   if (a.nonManifoldEdges)
     r.report.repairs.push_back(std::to_string(a.nonManifoldEdges) + " non-manifold edges made chart borders");

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// The whole atlas pipeline in one call, with a report: adjacency -> segmentCharts ->
+// The whole atlas pipeline in one call, with a report: connectivity -> segmentCharts ->
 // parameterizeCharts -> cutChartsForPacking -> packCharts -> rasterizeAtlas. Fields that need a tangent field
 // (Jacobians) and indirection maps are separate calls (compute_jacobians.h,
 // build_indirection_map.h) since not every user needs them.
 
 #include "atlas/atlas.h"
 #include "atlas/cut_charts.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "atlas/pack_charts.h"
 #include "atlas/parameterize_charts.h"
 #include "atlas/rasterize_atlas.h"
@@ -49,7 +49,7 @@ struct AtlasReport {
 
 struct GenerateAtlasResult {
   Atlas atlas;
-  MeshAdjacency adjacency;
+  geometry::MeshConnectivity connectivity;
   AtlasFields fields;
   AtlasReport report;
 };
@@ -59,6 +59,6 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
                                   const Context& ctx = {});
 
 /// Global figures of a packed atlas (stretch over all charts in atlas space, flips, seams).
-void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas, AtlasReport& report);
+void measureAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, const Atlas& atlas, AtlasReport& report);
 
 } // namespace texfab::atlas

@@ -130,7 +130,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
   }
   Stage domainStage(ctx, "fields");
   synthesis::SurfaceDomain domain =
-      buildSurfaceDomain(mesh, r.atlas.adjacency, atlas, r.atlas.fields, jacobians, domainOptions, ctx);
+      buildSurfaceDomain(mesh, r.atlas.connectivity, atlas, r.atlas.fields, jacobians, domainOptions, ctx);
   jacobians = {};
   domainStage.finish(std::to_string(domain.levels[0].size()) + " texels, " +
                               std::to_string(domain.levels.size()) + " levels");

@@ -164,7 +164,7 @@ void runAtlas(const AtlasArgs& args) {
   progress.finish();
 
   progress.start("indirection");
-  const atlas::IndirectionMap indirection = atlas::buildIndirectionMap(mesh, result.adjacency, result.atlas, result.fields,
+  const atlas::IndirectionMap indirection = atlas::buildIndirectionMap(mesh, result.connectivity, result.atlas, result.fields,
                                                                        indirectionOptions, ctx);
   progress.finish(std::to_string(indirection.targets.size()) + " border texels, " +
                   std::to_string(indirection.seamCrossings) + " seam crossings");

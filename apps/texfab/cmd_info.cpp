@@ -2,7 +2,7 @@
 // texfab info: what a model contains (size, topology, UVs, materials, textures).
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
-#include "geometry/mesh_topology.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <nlohmann/json.hpp>
 
@@ -30,7 +30,7 @@ nlohmann::json describeTexture(const geometry::Texture& t) {
 void runInfo(const InfoArgs& args) {
   using namespace geometry;
   const Mesh mesh = readMesh(args.model);
-  const MeshTopology topo = computeTopology(mesh);
+  const MeshConnectivity topo = computeConnectivity(mesh);
   const BoundingBox box = boundingBox(mesh);
   nlohmann::json j;
   j["file"] = args.model;
@@ -39,13 +39,15 @@ void runInfo(const InfoArgs& args) {
   j["triangles"] = mesh.triangleCount();
   j["bounding_box"] = {{"min", {box.min.x(), box.min.y(), box.min.z()}}, {"max", {box.max.x(), box.max.y(), box.max.z()}}};
   j["components"] = topo.components;
-  j["edges"] = topo.edges;
+  j["edges"] = topo.edges.size();
   j["boundary_edges"] = topo.boundaryEdges;
   j["non_manifold_edges"] = topo.nonManifoldEdges;
+  j["non_manifold_vertices"] = topo.nonManifoldVertices;
   j["inconsistently_oriented_edges"] = topo.inconsistentEdges;
   j["degenerate_triangles"] = topo.degenerateTriangles;
   j["closed"] = topo.closed;
   j["manifold"] = topo.manifold;
+  j["oriented"] = topo.oriented;
   j["genus"] = topo.genus ? nlohmann::json(*topo.genus) : nlohmann::json(nullptr);
   j["uvs"] = mesh.hasUvs();
   j["normals"] = mesh.hasNormals();
@@ -75,10 +77,12 @@ void runInfo(const InfoArgs& args) {
               double(box.max.x()), double(box.max.y()), double(box.max.z()));
   std::printf("  components      %zu\n", topo.components);
   std::printf("  closed          %s (%zu boundary edges)\n", topo.closed ? "yes" : "no", topo.boundaryEdges);
-  std::printf("  manifold        %s (%zu non-manifold, %zu inconsistently oriented edges)\n", topo.manifold ? "yes" : "no",
-              topo.nonManifoldEdges, topo.inconsistentEdges);
+  std::printf("  manifold        %s (%zu non-manifold edges, %zu non-manifold vertices)\n", topo.manifold ? "yes" : "no",
+              topo.nonManifoldEdges, topo.nonManifoldVertices);
+  std::printf("  oriented        %s (%zu inconsistently oriented edges)\n", topo.oriented ? "yes" : "no",
+              topo.inconsistentEdges);
   if (topo.genus) std::printf("  genus           %lld\n", *topo.genus);
-  else std::printf("  genus           n/a (not a closed manifold)\n");
+  else std::printf("  genus           n/a (not a closed, oriented manifold)\n");
   std::printf("  UVs             %s\n  normals         %s\n  tangents        %s\n", mesh.hasUvs() ? "yes" : "no",
               mesh.hasNormals() ? "yes" : "no", mesh.hasTangents() ? "yes" : "no");
   std::printf("  materials       %zu\n", mesh.materials.size());
