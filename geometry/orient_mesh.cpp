@@ -160,4 +160,24 @@ void flipTriangles(Mesh& mesh, const std::vector<uint32_t>& triangles) {
   }
 }
 
+MeshOrientation orientMesh(Mesh& mesh) {
+  MeshOrientation o = computeOrientation(mesh, computeConnectivity(mesh));
+  flipTriangles(mesh, o.flip);
+  return o;
+}
+
+std::string describeRepair(const MeshOrientation& o) {
+  if (o.flip.empty()) return {};
+  std::string s = "re-oriented " + std::to_string(o.flip.size()) + " triangles (consistent winding";
+  if (o.reversedParts) s += "; " + std::to_string(o.reversedParts) + " inside-out parts turned over";
+  return s + ")";
+}
+
+std::string describeWarning(const MeshOrientation& o) {
+  if (!o.nonOrientableParts) return {};
+  return "the mesh is not orientable (" + std::to_string(o.nonOrientableParts) + " parts, like a Moebius strip): " +
+         std::to_string(o.inconsistentEdgesLeft) +
+         " edges keep inconsistent windings and become chart borders; normals and shading may be wrong there";
+}
+
 } // namespace texfab::geometry

@@ -18,6 +18,7 @@
 #include "geometry/mesh_connectivity.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace texfab::geometry {
@@ -36,5 +37,14 @@ MeshOrientation computeOrientation(const Mesh& mesh, const MeshConnectivity& con
 /// Reverses the winding of the given triangles (corners 1 and 2 swap, with their UVs, normals and
 /// tangents; a normal that then points against its triangle is negated).
 void flipTriangles(Mesh& mesh, const std::vector<uint32_t>& triangles);
+
+/// Orients the mesh in place (computeConnectivity, computeOrientation, flipTriangles).
+MeshOrientation orientMesh(Mesh& mesh);
+
+/// What a repair did, in one line for a report ("re-oriented 6 triangles ..."); empty when the
+/// mesh was oriented already.
+std::string describeRepair(const MeshOrientation& orientation);
+/// A warning for non-orientable parts (their inconsistent edges stay cuts); empty when none.
+std::string describeWarning(const MeshOrientation& orientation);
 
 } // namespace texfab::geometry

@@ -7,6 +7,7 @@
 #include "atlas/compute_jacobians.h"
 #include "atlas/generate_atlas.h"
 #include "geometry/mesh_io.h"
+#include "geometry/orient_mesh.h"
 #include "geometry/tangent_field.h"
 #include "render/image/error.h"
 #include "render/image/memory.h"
@@ -145,8 +146,14 @@ void runAtlas(const AtlasArgs& args) {
   progress.finish(args.model + ": " + std::to_string(mesh.vertexCount()) + " vertices, " +
                   std::to_string(mesh.triangleCount()) + " triangles");
 
+  const geometry::MeshOrientation orientation = geometry::orientMesh(mesh);
+  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty())
+    progress.note("warning: " + warning);
+
   progress.start("atlas");
   atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, options, ctx);
+  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
+    result.report.repairs.insert(result.report.repairs.begin(), repair);
   const atlas::AtlasReport& r = result.report;
   progress.finish(std::to_string(r.charts) + " charts, utilization " + std::to_string(r.utilization) + ", L2 stretch " +
                   std::to_string(r.l2Stretch) + ", max " + std::to_string(r.maxStretch));
