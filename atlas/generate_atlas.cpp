@@ -11,14 +11,22 @@
 namespace texfab::atlas {
 
 void measureAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const Atlas& atlas, AtlasReport& report) {
-  // Atlas texel coordinates are y-down: flip to v-up for orientation.
-  const StretchStats s = measureStretch(mesh, {}, [&](size_t c) {
-    const Eigen::Vector2f p = atlas.texelUvs[c];
-    return Eigen::Vector2d(p.x(), -p.y());
-  });
+  // The triangles of the charts (degenerate ones are mapped to a point); atlas texel coordinates
+  // are y-down: flipped to v-up for orientation.
+  std::vector<uint32_t> faces;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t)
+    if (atlas.faceChart[t] >= 0) faces.push_back(uint32_t(t));
+  const StretchStats s = measureStretch(
+      mesh, faces,
+      [&](size_t c) {
+        const Eigen::Vector2f p = atlas.texelUvs[c];
+        return Eigen::Vector2d(p.x(), -p.y());
+      },
+      atlas.texelUvRounding());
   report.l2Stretch = s.l2;
   report.maxStretch = s.max;
   report.flippedTriangles = s.flipped;
+  report.collapsedTriangles = s.collapsed;
   report.charts = atlas.charts.size();
   report.texelsPerUnit = atlas.texelsPerUnit;
   report.seamLength = 0;
@@ -78,6 +86,9 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
   if (r.report.parameterize.chartsCutToTriangles)
     r.report.repairs.push_back(std::to_string(r.report.parameterize.chartsCutToTriangles) +
                                " charts that could not be flattened without flips were cut into single triangles");
+  if (r.report.collapsedTriangles)
+    r.report.repairs.push_back(std::to_string(r.report.collapsedTriangles) +
+                               " triangles thinner than the precision of atlas coordinates mapped to a line");
   if (r.report.pack.chartsBelowOneTexel)
     r.report.repairs.push_back(std::to_string(r.report.pack.chartsBelowOneTexel) +
                                " charts are smaller than one texel at this resolution");

@@ -34,6 +34,7 @@ struct AtlasReport {
   double l2Stretch = 0;       ///< Sander et al. 2001, area-weighted, normalized (UV area = surface area)
   double maxStretch = 0;
   size_t flippedTriangles = 0;
+  size_t collapsedTriangles = 0; ///< thinner than the rounding of texel coordinates (StretchStats::collapsed)
   size_t overlappingTexels = 0;
   size_t nonDiskCharts = 0;
   double seamLength = 0;      ///< total length of chart borders that are interior mesh edges, model units
