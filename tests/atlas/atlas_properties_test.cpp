@@ -86,6 +86,18 @@ TEST(AtlasOnCgalMeshes, CowElephantEightAndCamel) {
   }
 }
 
+TEST(AtlasOnCgalMeshes, SliversThinnerThanFloatTexelsNeitherFlipNorOverlap) {
+  // triceratops has a sliver that lost or turned its area when its texel coordinates were stored
+  // as floats: one flipped triangle at 128²..1024² before the packer and the measure knew the
+  // rounding.
+  LOAD_OR_SKIP(mesh, "triceratops.off");
+  GenerateAtlasOptions o = options(128);
+  const GenerateAtlasResult r = generateAtlas(mesh, o);
+  EXPECT_EQ(r.report.flippedTriangles, 0u);
+  EXPECT_EQ(r.report.overlappingTexels, 0u);
+  EXPECT_GE(r.report.collapsedTriangles, 1u);
+}
+
 TEST(AtlasOnCgalMeshes, SameAtlasWhateverTheThreadCount) {
   LOAD_OR_SKIP(mesh, "elephant.off");
   const GenerateAtlasResult a = generateAtlas(mesh, options(512), Context{.threads = 1});
