@@ -61,6 +61,22 @@ void writeDebugImages(const fs::path& dir, const geometry::Mesh& mesh, const atl
     std::nth_element(mags.begin(), mags.begin() + long(mags.size() / 2), mags.end());
     median = std::max(mags[mags.size() / 2], 1e-30f);
   }
+  // Anisotropy as log(σ1/σ2), white at the 99th percentile over chart texels (most meshes are
+  // nearly isotropic: a fixed scale leaves the image black).
+  auto logRatio = [&](int x, int y) {
+    const Eigen::Vector2d sv = atlas::singularValues(jac.at(x, y).j);
+    return sv(1) > 0 ? float(std::log(sv(0) / sv(1))) : 0.0f;
+  };
+  std::vector<float> ratios;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (fields.samples.at(x, y).chart >= 0) ratios.push_back(logRatio(x, y));
+  float ratioWhite = 1e-3f;
+  if (!ratios.empty()) {
+    const auto p99 = ratios.begin() + long(ratios.size() * 99 / 100);
+    std::nth_element(ratios.begin(), p99, ratios.end());
+    ratioWhite = std::max(*p99, 1e-3f);
+  }
   const double checkerTexels = std::max(8.0, double(W) / 64.0);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
@@ -72,7 +88,7 @@ void writeDebugImages(const fs::path& dir, const geometry::Mesh& mesh, const atl
       }
       const Eigen::Vector2d sv = atlas::singularValues(jac.at(x, y).j);
       magnitude.at(x, y, 0) = std::clamp(float(0.5 * sv(0) / median), 0.0f, 1.0f);
-      anisotropy.at(x, y, 0) = sv(1) > 0 ? std::clamp(float((sv(0) / sv(1) - 1) / 3), 0.0f, 1.0f) : 1.0f;
+      anisotropy.at(x, y, 0) = s.chart >= 0 ? std::clamp(logRatio(x, y) / ratioWhite, 0.0f, 1.0f) : 0.0f;
       const bool odd = (int(std::floor(x / checkerTexels)) + int(std::floor(y / checkerTexels))) % 2 != 0;
       const float base = odd ? 0.9f : 0.15f;
       for (int c = 0; c < 3; ++c) checker.at(x, y, c) = s.chart >= 0 ? base * (0.6f + 0.4f * hashColor(uint32_t(s.chart), c)) : base;
