@@ -10,6 +10,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +32,10 @@ struct Chart {
   int maskWidth = 0, maskHeight = 0;
 };
 
+/// Largest rounding error of a stored texel coordinate (a float in [0, max(width, height)]) of a
+/// width×height atlas, in texels: half an ulp at the atlas size.
+inline double texelUvRounding(int width, int height) { return std::ldexp(double(std::max(width, height)), -24); }
+
 struct Atlas {
   std::vector<int32_t> faceChart;           ///< #T; -1 = degenerate triangle (no area, mapped to a point)
   std::vector<Chart> charts;                ///< ordered by their smallest triangle id (stable)
@@ -38,6 +44,8 @@ struct Atlas {
   int width = 0, height = 0;                ///< atlas size in texels
   double texelsPerUnit = 0;                 ///< texel density (texels per model unit)
   std::vector<Eigen::Vector2f> texelUvs;    ///< 3·#T, atlas position in texels (x right, y down; row 0 at top)
+
+  double texelUvRounding() const { return atlas::texelUvRounding(width, height); }
 
   /// glTF/OBJ-style UV (v up, 0..1) of atlas texel position p.
   Eigen::Vector2f normalizedUv(const Eigen::Vector2f& p) const {

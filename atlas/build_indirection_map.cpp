@@ -16,7 +16,7 @@ void IndirectionOptions::validate() const {
   if (radius < 1 || radius > 64) throw Error("indirection radius must be 1 to 64 texels, got " + std::to_string(radius));
 }
 
-IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const Atlas& atlas,
+IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const Atlas& atlas,
                             uint32_t triangle, Eigen::Vector2d p, Eigen::Vector2d d) {
   IndirectionTarget out;
   uint32_t t = triangle;
@@ -44,7 +44,7 @@ IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj
       const double dl = l1(i) - l0(i);
       if (dl >= 0 || l1(i) >= -eps) continue;
       const int edge = (i + 1) % 3; // edge from corner i+1 to i+2 is opposite corner i
-      if (adj.neighbor[t][size_t(edge)] == from && from >= 0 && l0(i) <= eps) continue;
+      if (conn.neighbor(t, edge) == from && from >= 0 && l0(i) <= eps) continue;
       const double s = std::max(0.0, -l0(i) / dl);
       if (s < tExit) tExit = s, corner = i;
     }
@@ -55,7 +55,7 @@ IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj
     const int edge = (corner + 1) % 3;
     const Eigen::Vector2d exitPoint = p + tExit * d;
     const Eigen::Vector2d rest = (1 - tExit) * d;
-    const int32_t g = adj.neighbor[t][size_t(edge)];
+    const int32_t g = conn.neighbor(t, edge);
     if (g < 0) { // open boundary (or a cut edge): stop on it
       p = exitPoint;
       out.hitBoundary = 1;
@@ -103,7 +103,7 @@ IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj
   return out;
 }
 
-IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const MeshAdjacency& adj, const Atlas& atlas,
+IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const Atlas& atlas,
                                    const AtlasFields& fields, const IndirectionOptions& options, const Context& ctx) {
   options.validate();
   const int W = fields.samples.width, H = fields.samples.height;
@@ -142,7 +142,7 @@ IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const MeshAdjacen
       const SurfaceSample& s = fields.samples.values[idx];
       for (int k = 0; k < 8; ++k)
         map.targets[size_t(i)][size_t(k)] =
-            walkAtlas(mesh, adj, atlas, s.triangle, {x + 0.5, y + 0.5}, {double(kStepX[k]), double(kStepY[k])});
+            walkAtlas(mesh, conn, atlas, s.triangle, {x + 0.5, y + 0.5}, {double(kStepX[k]), double(kStepY[k])});
     }
   }, 256);
   for (const auto& t8 : map.targets)

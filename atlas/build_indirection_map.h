@@ -8,7 +8,7 @@
 // the boundary.
 
 #include "atlas/atlas.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "atlas/rasterize_atlas.h"
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
@@ -46,12 +46,12 @@ struct IndirectionMap {
   size_t boundaryStops = 0;
 };
 
-IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas,
+IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, const Atlas& atlas,
                                    const AtlasFields& fields, const IndirectionOptions& options = {}, const Context& ctx = {});
 
 /// Walks from atlas point `start` in triangle `triangle` by `step` (texels) across triangles and
 /// seams; exposed for tests and for synthesis of longer steps.
-IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas,
+IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, const Atlas& atlas,
                             uint32_t triangle, Eigen::Vector2d start, Eigen::Vector2d step);
 
 } // namespace texfab::atlas

@@ -27,7 +27,7 @@ uint32_t find(std::vector<uint32_t>& parent, uint32_t x) {
 
 } // namespace
 
-ChartMesh buildChartMesh(const geometry::Mesh& mesh, const MeshAdjacency& adj, const std::vector<uint32_t>& faces) {
+ChartMesh buildChartMesh(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces) {
   const size_t nf = faces.size();
   std::vector<uint32_t> parent(3 * nf);
   std::iota(parent.begin(), parent.end(), 0u);
@@ -35,7 +35,7 @@ ChartMesh buildChartMesh(const geometry::Mesh& mesh, const MeshAdjacency& adj, c
   for (size_t i = 0; i < nf; ++i) {
     const uint32_t f = faces[i];
     for (int k = 0; k < 3; ++k) {
-      const int32_t j = localIndex(faces, adj.neighbor[f][size_t(k)]);
+      const int32_t j = localIndex(faces, conn.neighbor(f, k));
       localNeighbor[i][size_t(k)] = j;
       if (j < 0) continue;
       const uint32_t g = faces[size_t(j)];
@@ -89,7 +89,7 @@ ChartMesh buildChartMesh(const geometry::Mesh& mesh, const MeshAdjacency& adj, c
   return cm;
 }
 
-bool splitFaces(const MeshAdjacency& adj, const std::vector<uint32_t>& faces, std::vector<uint32_t>& first,
+bool splitFaces(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces, std::vector<uint32_t>& first,
                 std::vector<uint32_t>& second) {
   first.clear();
   second.clear();
@@ -113,9 +113,9 @@ bool splitFaces(const MeshAdjacency& adj, const std::vector<uint32_t>& faces, st
       if (label) (*label)[size_t(i)] = l;
       const uint32_t f = faces[size_t(i)];
       for (int k = 0; k < 3; ++k) {
-        const int32_t j = localIndex(faces, adj.neighbor[f][size_t(k)]);
+        const int32_t j = localIndex(faces, conn.neighbor(f, k));
         if (j < 0 || done[size_t(j)]) continue;
-        const double nd = d + (adj.centroid[f] - adj.centroid[faces[size_t(j)]]).norm();
+        const double nd = d + (geometry::triangleCentroid(mesh, f) - geometry::triangleCentroid(mesh, faces[size_t(j)])).norm();
         if (nd <= dist[size_t(j)]) {
           dist[size_t(j)] = nd;
           pq.push({nd, j, l});
@@ -144,7 +144,7 @@ bool splitFaces(const MeshAdjacency& adj, const std::vector<uint32_t>& faces, st
   return true;
 }
 
-std::vector<std::vector<uint32_t>> connectedParts(const MeshAdjacency& adj, const std::vector<uint32_t>& faces) {
+std::vector<std::vector<uint32_t>> connectedParts(const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces) {
   std::vector<std::vector<uint32_t>> parts;
   std::vector<uint8_t> seen(faces.size(), 0);
   for (size_t s = 0; s < faces.size(); ++s) {
@@ -157,7 +157,7 @@ std::vector<std::vector<uint32_t>> connectedParts(const MeshAdjacency& adj, cons
       stack.pop_back();
       part.push_back(faces[i]);
       for (int k = 0; k < 3; ++k) {
-        const int32_t j = localIndex(faces, adj.neighbor[faces[i]][size_t(k)]);
+        const int32_t j = localIndex(faces, conn.neighbor(faces[i], k));
         if (j >= 0 && !seen[size_t(j)]) {
           seen[size_t(j)] = 1;
           stack.push_back(size_t(j));

@@ -5,7 +5,7 @@
 // separate fans (a chart touching itself at a vertex) get separate vertices, so the chart is a
 // manifold surface with boundary and its disk-ness is a matter of counting.
 
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <array>
 #include <cstdint>
@@ -22,17 +22,16 @@ struct ChartMesh {
   bool isDisk() const { return boundaryLoops == 1 && eulerCharacteristic == 1; }
 };
 
-/// `faces` ascending; `inChart(g)` tells whether triangle g belongs to the same chart.
-
-ChartMesh buildChartMesh(const geometry::Mesh& mesh, const MeshAdjacency& adj, const std::vector<uint32_t>& faces);
+/// `faces` ascending; chart vertices are joined across the edges `connectivity` calls neighbours.
+ChartMesh buildChartMesh(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces);
 
 /// Splits a connected set of faces in two connected parts grown from two far-apart seeds
 /// (deterministic). Returns false when `faces` has fewer than two faces.
-bool splitFaces(const MeshAdjacency& adj, const std::vector<uint32_t>& faces, std::vector<uint32_t>& first,
+bool splitFaces(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces, std::vector<uint32_t>& first,
                 std::vector<uint32_t>& second);
 
-/// Connected components (through adjacency) of a face set, each ascending, ordered by their
+/// Connected components (through connectivity) of a face set, each ascending, ordered by their
 /// smallest face.
-std::vector<std::vector<uint32_t>> connectedParts(const MeshAdjacency& adj, const std::vector<uint32_t>& faces);
+std::vector<std::vector<uint32_t>> connectedParts(const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces);
 
 } // namespace texfab::atlas::detail

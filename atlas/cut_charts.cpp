@@ -57,7 +57,7 @@ Rect minimalRectangle(const std::vector<Eigen::Vector2d>& pts, double g) {
 
 struct Cutter {
   const geometry::Mesh& mesh;
-  const MeshAdjacency& adj;
+  const geometry::MeshConnectivity& conn;
   const Atlas& atlas;
   double g;        ///< half gutter plus half a texel, model units
   const CutChartsOptions& options;
@@ -151,7 +151,7 @@ struct Cutter {
     std::vector<std::vector<Eigen::Vector2d>> scratch;
     std::vector<std::array<int32_t, 3>> nb(faces.size());
     for (size_t i = 0; i < faces.size(); ++i)
-      for (int k = 0; k < 3; ++k) nb[i][size_t(k)] = local(faces, adj.neighbor[faces[i]][size_t(k)]);
+      for (int k = 0; k < 3; ++k) nb[i][size_t(k)] = local(faces, conn.neighbor(faces[i], k));
     std::vector<uint8_t> sideOf(faces.size(), 0);
     const Eigen::Vector2d d = whole.dir, n(-d.y(), d.x());
     // Centroid coordinates along both rectangle axes.
@@ -207,7 +207,7 @@ struct Cutter {
       for (uint8_t side = 0; side < 2; ++side)
         for (auto& part : parts(faces, nb, sideOf, side)) pieces.push_back(std::move(part));
       bool disks = pieces.size() >= 2;
-      for (const auto& p : pieces) disks = disks && detail::buildChartMesh(mesh, adj, p).isDisk();
+      for (const auto& p : pieces) disks = disks && detail::buildChartMesh(mesh, conn, p).isDisk();
       if (!disks) continue;
       ++cuts;
       // Every piece may be cut again, one level fewer (a straight cut of a concave chart may
@@ -219,11 +219,11 @@ struct Cutter {
   }
 };
 
-double seamLength(const geometry::Mesh& mesh, const MeshAdjacency& adj, const std::vector<int32_t>& faceChart) {
+double seamLength(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<int32_t>& faceChart) {
   double length = 0;
   for (size_t t = 0; t < mesh.triangleCount(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const int32_t o = adj.neighbor[t][size_t(k)];
+      const int32_t o = conn.neighbor(t, k);
       if (o > int32_t(t) && faceChart[size_t(o)] != faceChart[t])
         length += double((mesh.corner(t, k) - mesh.corner(t, (k + 1) % 3)).norm());
     }
@@ -232,7 +232,7 @@ double seamLength(const geometry::Mesh& mesh, const MeshAdjacency& adj, const st
 
 } // namespace
 
-CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjacency& adj, Atlas& atlas, int width,
+CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, Atlas& atlas, int width,
                                     int height, int gutter, const CutChartsOptions& options, const Context& ctx) {
   options.validate();
   CutChartsReport report;
@@ -248,7 +248,7 @@ CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjace
   std::vector<size_t> cutCount(atlas.charts.size(), 0);
   const int chunks = int(atlas.charts.size());
   parallelFor(0, chunks, ctx, [&](int b, int e) {
-    Cutter cutter{mesh, adj, atlas, g, options};
+    Cutter cutter{mesh, conn, atlas, g, options};
     for (int i = b; i < e; ++i) {
       const Chart& chart = atlas.charts[size_t(i)];
       if (chart.area < options.minChartArea * total) {
@@ -270,8 +270,8 @@ CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjace
       Chart chart;
       chart.faces = std::move(p);
       chart.disk = true;
-      for (uint32_t f : chart.faces) chart.area += adj.area[f];
-      chart.boundaryLength = detail::buildChartMesh(mesh, adj, chart.faces).boundaryLength;
+      for (uint32_t f : chart.faces) chart.area += conn.area[f];
+      chart.boundaryLength = detail::buildChartMesh(mesh, conn, chart.faces).boundaryLength;
       const StretchStats s = measureStretch(mesh, chart.faces, [&](size_t corner) { return atlas.chartUvs[corner]; });
       chart.l2Stretch = s.l2;
       chart.maxStretch = s.max;
@@ -279,12 +279,12 @@ CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjace
     }
   }
   std::sort(charts.begin(), charts.end(), [](const Chart& x, const Chart& y) { return x.faces.front() < y.faces.front(); });
-  const double before = seamLength(mesh, adj, atlas.faceChart);
+  const double before = seamLength(mesh, conn, atlas.faceChart);
   atlas.faceChart.assign(mesh.triangleCount(), -1);
   for (size_t c = 0; c < charts.size(); ++c)
     for (uint32_t f : charts[c].faces) atlas.faceChart[f] = int32_t(c);
   atlas.charts = std::move(charts);
-  report.seamLengthAdded = seamLength(mesh, adj, atlas.faceChart) - before;
+  report.seamLengthAdded = seamLength(mesh, conn, atlas.faceChart) - before;
   return report;
 }
 

@@ -8,7 +8,7 @@
 // parameterizeCharts and packCharts.
 
 #include "atlas/atlas.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "geometry/mesh.h"
 #include "render/image/context.h"
 
@@ -41,7 +41,7 @@ struct CutChartsReport {
 /// Cuts charts of a parameterized atlas (chartUvs unchanged); the atlas size and the gutter
 /// (texels) give the gutter band the cuts are weighed against. Charts are renumbered by their
 /// smallest triangle id. Deterministic whatever ctx.threads.
-CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, Atlas& atlas,
+CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, Atlas& atlas,
                                     int width, int height, int gutter, const CutChartsOptions& options = {},
                                     const Context& ctx = {});
 

@@ -11,15 +11,23 @@
 
 namespace texfab::atlas {
 
-void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const Atlas& atlas, AtlasReport& report) {
-  // Atlas texel coordinates are y-down: flip to v-up for orientation.
-  const StretchStats s = measureStretch(mesh, {}, [&](size_t c) {
-    const Eigen::Vector2f p = atlas.texelUvs[c];
-    return Eigen::Vector2d(p.x(), -p.y());
-  });
+void measureAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const Atlas& atlas, AtlasReport& report) {
+  // The triangles of the charts (degenerate ones are mapped to a point); atlas texel coordinates
+  // are y-down: flipped to v-up for orientation.
+  std::vector<uint32_t> faces;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t)
+    if (atlas.faceChart[t] >= 0) faces.push_back(uint32_t(t));
+  const StretchStats s = measureStretch(
+      mesh, faces,
+      [&](size_t c) {
+        const Eigen::Vector2f p = atlas.texelUvs[c];
+        return Eigen::Vector2d(p.x(), -p.y());
+      },
+      atlas.texelUvRounding());
   report.l2Stretch = s.l2;
   report.maxStretch = s.max;
   report.flippedTriangles = s.flipped;
+  report.collapsedTriangles = s.collapsed;
   report.charts = atlas.charts.size();
   report.texelsPerUnit = atlas.texelsPerUnit;
   report.seamLength = 0;
@@ -31,7 +39,7 @@ void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const At
   }
   for (size_t t = 0; t < mesh.triangleCount(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const int32_t g = adj.neighbor[t][size_t(k)];
+      const int32_t g = conn.neighbor(t, k);
       if (g > int32_t(t) && atlas.faceChart[size_t(g)] != atlas.faceChart[t])
         report.seamLength += double((mesh.corner(t, k) - mesh.corner(t, (k + 1) % 3)).norm());
     }
@@ -55,26 +63,26 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
     clock = now;
   };
   r.report.triangles = mesh.triangleCount();
-  r.adjacency = computeMeshAdjacency(mesh);
-  lap("adjacency");
-  r.report.segment = segmentCharts(mesh, r.adjacency, r.atlas, options.segment);
+  r.connectivity = geometry::computeConnectivity(mesh);
+  lap("connectivity");
+  r.report.segment = segmentCharts(mesh, r.connectivity, r.atlas, options.segment);
   lap("charts");
-  r.report.parameterize = parameterizeCharts(mesh, r.adjacency, r.atlas, options.parameterize, ctx);
+  r.report.parameterize = parameterizeCharts(mesh, r.connectivity, r.atlas, options.parameterize, ctx);
   lap("parameterization");
-  r.report.cut = cutChartsForPacking(mesh, r.adjacency, r.atlas, options.pack.width, options.pack.height,
+  r.report.cut = cutChartsForPacking(mesh, r.connectivity, r.atlas, options.pack.width, options.pack.height,
                                      options.pack.gutter, options.cut, ctx);
   lap("cutting");
   r.report.pack = packCharts(mesh, r.atlas, options.pack, ctx);
   lap("packing");
   r.fields = rasterizeAtlas(mesh, r.atlas, ctx);
   lap("texel fields");
-  measureAtlas(mesh, r.adjacency, r.atlas, r.report);
+  measureAtlas(mesh, r.connectivity, r.atlas, r.report);
   r.report.utilization = r.fields.utilization();
   r.report.overlappingTexels = r.fields.overlappingTexels;
   lap("measures");
-  const MeshAdjacency& a = r.adjacency;
-  if (a.degenerateCount)
-    r.report.repairs.push_back(std::to_string(a.degenerateCount) +
+  const geometry::MeshConnectivity& a = r.connectivity;
+  if (a.degenerateTriangles)
+    r.report.repairs.push_back(std::to_string(a.degenerateTriangles) +
                                " degenerate (zero-area) triangles mapped to a point (they cover no texel)");
   if (a.nonManifoldEdges)
     r.report.repairs.push_back(std::to_string(a.nonManifoldEdges) + " non-manifold edges made chart borders");
@@ -84,6 +92,9 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
   if (r.report.parameterize.chartsCutToTriangles)
     r.report.repairs.push_back(std::to_string(r.report.parameterize.chartsCutToTriangles) +
                                " charts that could not be flattened without flips were cut into single triangles");
+  if (r.report.collapsedTriangles)
+    r.report.repairs.push_back(std::to_string(r.report.collapsedTriangles) +
+                               " triangles thinner than the precision of atlas coordinates mapped to a line");
   if (r.report.pack.chartsBelowOneTexel)
     r.report.repairs.push_back(std::to_string(r.report.pack.chartsBelowOneTexel) +
                                " charts are smaller than one texel at this resolution");

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// The whole atlas pipeline in one call, with a report: adjacency -> segmentCharts ->
+// The whole atlas pipeline in one call, with a report: connectivity -> segmentCharts ->
 // parameterizeCharts -> cutChartsForPacking -> packCharts -> rasterizeAtlas. Fields that need a tangent field
 // (Jacobians) and indirection maps are separate calls (compute_jacobians.h,
 // build_indirection_map.h) since not every user needs them.
 
 #include "atlas/atlas.h"
 #include "atlas/cut_charts.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "atlas/pack_charts.h"
 #include "atlas/parameterize_charts.h"
 #include "atlas/rasterize_atlas.h"
@@ -34,6 +34,7 @@ struct AtlasReport {
   double l2Stretch = 0;       ///< Sander et al. 2001, area-weighted, normalized (UV area = surface area)
   double maxStretch = 0;
   size_t flippedTriangles = 0;
+  size_t collapsedTriangles = 0; ///< thinner than the rounding of texel coordinates (StretchStats::collapsed)
   size_t overlappingTexels = 0;
   size_t nonDiskCharts = 0;
   double seamLength = 0;      ///< total length of chart borders that are interior mesh edges, model units
@@ -49,7 +50,7 @@ struct AtlasReport {
 
 struct GenerateAtlasResult {
   Atlas atlas;
-  MeshAdjacency adjacency;
+  geometry::MeshConnectivity connectivity;
   AtlasFields fields;
   AtlasReport report;
 };
@@ -63,6 +64,6 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
 double atlasMemoryBytes(int width, int height);
 
 /// Global figures of a packed atlas (stretch over all charts in atlas space, flips, seams).
-void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas, AtlasReport& report);
+void measureAtlas(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, const Atlas& atlas, AtlasReport& report);
 
 } // namespace texfab::atlas

@@ -47,13 +47,25 @@ struct StretchStats {
   double max = 1;         ///< normalized largest Γ
   double surfaceArea = 0;
   double uvArea = 0;      ///< unsigned
-  size_t flipped = 0;     ///< non-degenerate triangles with UV area <= 0
+  size_t flipped = 0;     ///< non-degenerate triangles with UV area <= 0 (beyond the rounding)
+  /// Triangles whose UV area is within the rounding of their UVs (|2 A_uv| <= 4 ρ · perimeter,
+  /// ρ = uvRounding): mapped to a line, neither flipped nor counted in the stretch.
+  size_t collapsed = 0;
 };
 
+/// Whether a triangle with UV corners p is within the rounding ρ of its coordinates of having no
+/// area (each coordinate moved by up to ρ moves twice the area by at most ~2√2 ρ · perimeter).
+inline bool collapsedUv(const Eigen::Vector2d p[3], double uvArea, double rounding) {
+  const double perimeter = (p[1] - p[0]).norm() + (p[2] - p[1]).norm() + (p[0] - p[2]).norm();
+  return rounding > 0 && std::abs(2 * uvArea) <= 4 * rounding * perimeter;
+}
+
 /// Stretch over `faces` (all triangles when empty) with per-corner UVs given by uvOf(corner)
-/// (any Eigen 2-vector, v up). Triangles with zero surface area are skipped.
+/// (any Eigen 2-vector, v up). Triangles with zero surface area are skipped; `uvRounding` (UV
+/// units) is the rounding of the UVs as stored (0: exact), see StretchStats::collapsed.
 template <class UvOf>
-StretchStats measureStretch(const geometry::Mesh& mesh, const std::vector<uint32_t>& faces, UvOf&& uvOf) {
+StretchStats measureStretch(const geometry::Mesh& mesh, const std::vector<uint32_t>& faces, UvOf&& uvOf,
+                            double uvRounding = 0) {
   StretchStats s;
   double sum = 0, maxRaw = 0;
   const size_t count = faces.empty() ? mesh.triangleCount() : faces.size();
@@ -70,6 +82,10 @@ StretchStats measureStretch(const geometry::Mesh& mesh, const std::vector<uint32
     const TriangleStretch ts = triangleStretch(q, p);
     s.surfaceArea += area;
     s.uvArea += std::abs(ts.uvArea);
+    if (collapsedUv(p, ts.uvArea, uvRounding)) {
+      ++s.collapsed;
+      continue;
+    }
     if (!(ts.uvArea > 0)) {
       ++s.flipped;
       maxRaw = std::numeric_limits<double>::infinity();

@@ -18,6 +18,7 @@
 #include "atlas/pack_charts.h"
 
 #include "atlas/convex_hull.h"
+#include "atlas/measure_stretch.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
 
@@ -128,7 +129,8 @@ bool triangleCoversCenter(const Eigen::Vector2d t[3], double x, double y, double
   return true;
 }
 
-Mask rasterizeMask(const PreparedChart& chart, double density, int pad) {
+/// `rounding`: the rounding of the stored texel coordinates (Atlas::texelUvRounding), in texels.
+Mask rasterizeMask(const PreparedChart& chart, double density, int pad, double rounding) {
   Mask m;
   m.origin = pad + 1;
   m.w = int(std::ceil(chart.extent.x() * density)) + 2 * m.origin;
@@ -144,10 +146,11 @@ Mask rasterizeMask(const PreparedChart& chart, double density, int pad) {
       y0 = std::min(y0, t[k].y()), y1 = std::max(y1, t[k].y());
     }
     // The texels whose centers the atlas rasterizer tests (rasterize_atlas.cpp): a triangle
-    // whose area rounds to zero claims all of them there, so it reserves them all here.
+    // whose area rounds to zero in the stored (float) coordinates claims all of them there, so a
+    // triangle that may collapse so reserves them all here.
     const int ix0 = std::max(0, int(std::floor(x0 - 0.5))), ix1 = std::min(m.w - 1, int(std::ceil(x1 - 0.5)));
     const int iy0 = std::max(0, int(std::floor(y0 - 0.5))), iy1 = std::min(m.h - 1, int(std::ceil(y1 - 0.5)));
-    const bool sliver = std::abs(cross2(t[0], t[1], t[2])) < 1e-4;
+    const bool sliver = std::abs(cross2(t[0], t[1], t[2])) < 1e-4 || collapsedUv(t, 0.5 * cross2(t[0], t[1], t[2]), rounding);
     for (int y = iy0; y <= iy1; ++y)
       for (int x = ix0; x <= ix1; ++x) {
         uint8_t& c = cover[size_t(y) * size_t(m.w) + size_t(x)];
@@ -251,12 +254,12 @@ struct Placement {
 
 /// Packs every chart at `density` into width W (height unbounded). Returns the used height and the
 /// placements, or -1 when a chart is wider than the atlas in every orientation.
-int packAt(const std::vector<PreparedChart>& charts, double density, int W, int pad, const Context& ctx,
+int packAt(const std::vector<PreparedChart>& charts, double density, int W, int pad, double rounding, const Context& ctx,
            double heightWeight, long long holeBudget,
            std::vector<Placement>& placements, std::vector<Mask>& masks) {
   masks.assign(charts.size(), Mask{});
   parallelFor(0, int(charts.size()), ctx, [&](int b, int e) {
-    for (int i = b; i < e; ++i) masks[size_t(i)] = rasterizeMask(charts[size_t(i)], density, pad);
+    for (int i = b; i < e; ++i) masks[size_t(i)] = rasterizeMask(charts[size_t(i)], density, pad, rounding);
   });
   std::vector<size_t> order(charts.size());
   std::iota(order.begin(), order.end(), size_t(0));
@@ -492,6 +495,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   options.validate();
   const int W = options.width, H = options.height;
   const int pad = (options.gutter + 1) / 2;
+  const double rounding = texelUvRounding(W, H);
   std::vector<PreparedChart> prepared(atlas.charts.size());
   parallelFor(0, int(prepared.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) prepared[size_t(i)] = prepareChart(atlas, atlas.charts[size_t(i)]);
@@ -525,7 +529,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
     parallelFor(0, 2, ctx, [&](int b, int e) {
       for (int i = b; i < e; ++i) {
         Pass& r = out[size_t(i)];
-        r.used = packAt(prepared, r.density, w, p, ctx, hw, holeBudget, r.placements, r.masks);
+        r.used = packAt(prepared, r.density, w, p, rounding, ctx, hw, holeBudget, r.placements, r.masks);
       }
     });
     report.passes += 2;
@@ -582,7 +586,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   if (options.texelsPerUnit > 0) {
     std::vector<Placement> placements;
     std::vector<Mask> masks;
-    const int used = packAt(prepared, options.texelsPerUnit, W, pad, ctx, hw, holeBudget, placements, masks);
+    const int used = packAt(prepared, options.texelsPerUnit, W, pad, rounding, ctx, hw, holeBudget, placements, masks);
     report.passes = 1;
     if (used < 0 || used > H)
       throw Error("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
@@ -609,7 +613,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
         std::vector<size_t> fine(prepared.size(), 0);
         parallelFor(0, int(prepared.size()), ctx, [&](int b, int e) {
           for (int i = b; i < e; ++i)
-            for (uint8_t bit : rasterizeMask(prepared[size_t(i)], start, pad).bits) fine[size_t(i)] += bit;
+            for (uint8_t bit : rasterizeMask(prepared[size_t(i)], start, pad, rounding).bits) fine[size_t(i)] += bit;
         });
         const double fineTexels = double(std::accumulate(fine.begin(), fine.end(), size_t(0)));
         if (coarseMaskTexels > 0 && coarseUsed > 0 && fineTexels > 0) {

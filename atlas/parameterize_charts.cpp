@@ -101,10 +101,10 @@ bool boundarySelfIntersects(const detail::ChartMesh& cm, const std::vector<Eigen
   return false;
 }
 
-ChartResult parameterizeChart(const geometry::Mesh& mesh, const MeshAdjacency& adj, const std::vector<uint32_t>& faces,
+ChartResult parameterizeChart(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces,
                               const ParameterizeChartsOptions& options) {
   ChartResult result;
-  const detail::ChartMesh cm = detail::buildChartMesh(mesh, adj, faces);
+  const detail::ChartMesh cm = detail::buildChartMesh(mesh, conn, faces);
   if (!cm.isDisk()) {
     result.outcome = Outcome::NotDisk;
     return result;
@@ -171,7 +171,7 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const MeshAdjacency& a
     const auto& t = cm.triangles[i];
     const Eigen::Vector2d e1 = vertexUv[t[1]] - vertexUv[t[0]], e2 = vertexUv[t[2]] - vertexUv[t[0]];
     signedArea += 0.5 * (e1.x() * e2.y() - e1.y() * e2.x());
-    surfaceArea += adj.area[faces[i]];
+    surfaceArea += conn.area[faces[i]];
   }
   if (signedArea < 0) {
     for (auto& uv : vertexUv) uv.x() = -uv.x();
@@ -201,7 +201,7 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const MeshAdjacency& a
         q[k] = mesh.corner(faces[i], k).cast<double>();
         p[k] = result.uvs[3 * i + size_t(k)];
       }
-      const double area = adj.area[faces[i]];
+      const double area = conn.area[faces[i]];
       const TriangleStretch ts = triangleStretch(q, p);
       s.surfaceArea += area;
       s.uvArea += std::abs(ts.uvArea);
@@ -224,7 +224,7 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const MeshAdjacency& a
   std::vector<std::array<uint32_t, 2>> segs;
   for (size_t i = 0; i < faces.size(); ++i)
     for (int k = 0; k < 3; ++k) {
-      const int32_t g = adj.neighbor[faces[i]][size_t(k)];
+      const int32_t g = conn.neighbor(faces[i], k);
       const bool inside = g >= 0 && std::binary_search(faces.begin(), faces.end(), uint32_t(g));
       if (!inside) segs.push_back({cm.triangles[i][size_t(k)], cm.triangles[i][size_t((k + 1) % 3)]});
     }
@@ -242,7 +242,7 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const MeshAdjacency& a
 
 } // namespace
 
-ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const MeshAdjacency& adj, Atlas& atlas,
+ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, Atlas& atlas,
                                             const ParameterizeChartsOptions& options, const Context& ctx) {
   options.validate();
   ParameterizeChartsReport report;
@@ -254,7 +254,7 @@ ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const Me
     const bool last = round + 1 >= options.maxRounds;
     std::vector<ChartResult> results(work.size());
     parallelFor(0, int(work.size()), ctx, [&](int b, int e) {
-      for (int i = b; i < e; ++i) results[size_t(i)] = parameterizeChart(mesh, adj, charts[work[size_t(i)]].faces, options);
+      for (int i = b; i < e; ++i) results[size_t(i)] = parameterizeChart(mesh, conn, charts[work[size_t(i)]].faces, options);
     });
     std::vector<size_t> next;
     for (size_t i = 0; i < work.size(); ++i) {
@@ -280,9 +280,9 @@ ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const Me
         for (uint32_t f : chart.faces) pieces.push_back({f});
       } else {
         std::vector<uint32_t> a, b;
-        detail::splitFaces(adj, chart.faces, a, b);
+        detail::splitFaces(mesh, conn, chart.faces, a, b);
         for (auto* half : {&a, &b})
-          for (auto& part : detail::connectedParts(adj, *half)) pieces.push_back(std::move(part));
+          for (auto& part : detail::connectedParts(conn, *half)) pieces.push_back(std::move(part));
       }
       chart.faces = std::move(pieces[0]);
       next.push_back(work[i]);
@@ -303,9 +303,9 @@ ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const Me
     chart.area = 0;
     for (uint32_t f : chart.faces) {
       atlas.faceChart[f] = int32_t(c);
-      chart.area += adj.area[f];
+      chart.area += conn.area[f];
     }
-    chart.boundaryLength = detail::buildChartMesh(mesh, adj, chart.faces).boundaryLength;
+    chart.boundaryLength = detail::buildChartMesh(mesh, conn, chart.faces).boundaryLength;
   }
   atlas.charts = std::move(charts);
   report.charts = atlas.charts.size();

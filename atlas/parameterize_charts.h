@@ -7,7 +7,7 @@
 // are always valid. The result never has flipped or overlapping triangles.
 
 #include "atlas/atlas.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "geometry/mesh.h"
 #include "render/image/context.h"
 
@@ -46,7 +46,7 @@ struct ParameterizeChartsReport {
 /// Fills atlas.chartUvs (chart-local, model units, UV area = surface area per chart) and the
 /// charts' stretch figures; may split charts (then renumbered by smallest triangle id).
 /// Charts are solved in parallel on ctx.threads threads (0 = all); the result does not depend on it.
-ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, Atlas& atlas,
+ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, Atlas& atlas,
                                             const ParameterizeChartsOptions& options = {}, const Context& ctx = {});
 
 } // namespace texfab::atlas

@@ -37,24 +37,38 @@ struct Proxy {
   double radius = 1;
 };
 
+/// Unit normals (zero for degenerate triangles) and centroids, in double precision.
+struct TriangleFrames {
+  std::vector<Eigen::Vector3d> normal, centroid;
+  explicit TriangleFrames(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn)
+      : normal(mesh.triangleCount(), Eigen::Vector3d::Zero()), centroid(mesh.triangleCount()) {
+    for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+      centroid[t] = geometry::triangleCentroid(mesh, t);
+      const Eigen::Vector3d a = mesh.corner(t, 0).cast<double>();
+      const Eigen::Vector3d cr = (mesh.corner(t, 1).cast<double>() - a).cross(mesh.corner(t, 2).cast<double>() - a);
+      if (!conn.degenerate[t]) normal[t] = cr / cr.norm();
+    }
+  }
+};
+
 /// Greedy growth of new charts from every unassigned face, in face order.
-void growGreedy(const MeshAdjacency& adj, std::vector<int32_t>& faceChart, int32_t& chartCount, double cosMax,
-                double compactness) {
+void growGreedy(const geometry::MeshConnectivity& conn, const TriangleFrames& tri, std::vector<int32_t>& faceChart,
+                int32_t& chartCount, double cosMax, double compactness) {
   const size_t n = faceChart.size();
   for (size_t s = 0; s < n; ++s) {
     if (faceChart[s] != -2) continue;
     const int32_t c = chartCount++;
-    Eigen::Vector3d sum = adj.normal[s] * adj.area[s];
-    double area = adj.area[s];
+    Eigen::Vector3d sum = tri.normal[s] * conn.area[s];
+    double area = conn.area[s];
     faceChart[s] = c;
     MinQueue pq;
     auto pushNeighbors = [&](uint32_t f) {
       const Eigen::Vector3d N = sum.normalized();
       const double radius = std::sqrt(std::max(area, 1e-30) / M_PI);
-      for (int32_t g : adj.neighbor[f])
-        if (g >= 0 && faceChart[size_t(g)] == -2) {
-          const double cost = (1 - adj.normal[size_t(g)].dot(N)) +
-                              compactness * (adj.centroid[size_t(g)] - adj.centroid[s]).norm() / radius * 0.1;
+      for (int k = 0; k < 3; ++k)
+        if (const int32_t g = conn.neighbor(f, k); g >= 0 && faceChart[size_t(g)] == -2) {
+          const double cost = (1 - tri.normal[size_t(g)].dot(N)) +
+                              compactness * (tri.centroid[size_t(g)] - tri.centroid[s]).norm() / radius * 0.1;
           pq.push({cost, uint32_t(g), uint32_t(c)});
         }
     };
@@ -64,10 +78,10 @@ void growGreedy(const MeshAdjacency& adj, std::vector<int32_t>& faceChart, int32
       pq.pop();
       if (faceChart[f] != -2) continue;
       const Eigen::Vector3d N = sum.normalized();
-      if (adj.normal[f].dot(N) < cosMax || adj.normal[f].dot(adj.normal[s]) < cosMax) continue;
+      if (tri.normal[f].dot(N) < cosMax || tri.normal[f].dot(tri.normal[s]) < cosMax) continue;
       faceChart[f] = c;
-      sum += adj.normal[f] * adj.area[f];
-      area += adj.area[f];
+      sum += tri.normal[f] * conn.area[f];
+      area += conn.area[f];
       pushNeighbors(f);
     }
   }
@@ -86,16 +100,17 @@ void renumber(std::vector<int32_t>& faceChart, int32_t& chartCount) {
 
 } // namespace
 
-SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacency& adj, Atlas& atlas,
+SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, Atlas& atlas,
                                   const SegmentChartsOptions& options) {
   options.validate();
   const size_t n = mesh.triangleCount();
   const double cosMax = std::cos(options.maxNormalDeviationDegrees * M_PI / 180.0);
+  const TriangleFrames tri(mesh, conn);
   std::vector<int32_t> faceChart(n, -2); // -2 = unassigned, -1 = degenerate
   for (size_t t = 0; t < n; ++t)
-    if (adj.degenerate[t]) faceChart[t] = -1;
+    if (conn.degenerate[t]) faceChart[t] = -1;
   int32_t chartCount = 0;
-  growGreedy(adj, faceChart, chartCount, cosMax, options.compactnessWeight);
+  growGreedy(conn, tri, faceChart, chartCount, cosMax, options.compactnessWeight);
 
   for (int it = 0; it < options.lloydIterations; ++it) {
     // Proxies: area-weighted mean normal, centroid; the seed is the face that best fits both.
@@ -105,9 +120,9 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
     for (size_t t = 0; t < n; ++t) {
       const int32_t c = faceChart[t];
       if (c < 0) continue;
-      proxies[size_t(c)].normal += adj.normal[t] * adj.area[t];
-      centroid[size_t(c)] += adj.centroid[t] * adj.area[t];
-      area[size_t(c)] += adj.area[t];
+      proxies[size_t(c)].normal += tri.normal[t] * conn.area[t];
+      centroid[size_t(c)] += tri.centroid[t] * conn.area[t];
+      area[size_t(c)] += conn.area[t];
     }
     std::vector<double> bestCost(size_t(chartCount), std::numeric_limits<double>::infinity());
     for (size_t c = 0; c < size_t(chartCount); ++c) {
@@ -119,7 +134,7 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
       const int32_t c = faceChart[t];
       if (c < 0) continue;
       const Proxy& p = proxies[size_t(c)];
-      const double cost = (1 - adj.normal[t].dot(p.normal)) + (adj.centroid[t] - centroid[size_t(c)]).norm() / p.radius;
+      const double cost = (1 - tri.normal[t].dot(p.normal)) + (tri.centroid[t] - centroid[size_t(c)]).norm() / p.radius;
       if (cost < bestCost[size_t(c)]) {
         bestCost[size_t(c)] = cost;
         proxies[size_t(c)].seed = uint32_t(t);
@@ -131,7 +146,7 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
     MinQueue pq;
     for (size_t c = 0; c < size_t(chartCount); ++c) {
       if (area[c] <= 0) continue;
-      proxies[c].seedPoint = adj.centroid[proxies[c].seed];
+      proxies[c].seedPoint = tri.centroid[proxies[c].seed];
       pq.push({0.0, proxies[c].seed, uint32_t(c)});
     }
     while (!pq.empty()) {
@@ -140,16 +155,17 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
       if (faceChart[f] != -2) continue;
       faceChart[f] = int32_t(c);
       const Proxy& p = proxies[c];
-      for (int32_t g : adj.neighbor[f]) {
+      for (int k = 0; k < 3; ++k) {
+        const int32_t g = conn.neighbor(f, k);
         if (g < 0 || faceChart[size_t(g)] != -2) continue;
-        const double d = adj.normal[size_t(g)].dot(p.normal);
+        const double d = tri.normal[size_t(g)].dot(p.normal);
         if (d < cosMax) continue;
         const double gc = (1 - d) +
-                          options.compactnessWeight * (adj.centroid[size_t(g)] - p.seedPoint).norm() / p.radius;
+                          options.compactnessWeight * (tri.centroid[size_t(g)] - p.seedPoint).norm() / p.radius;
         pq.push({gc, uint32_t(g), c});
       }
     }
-    growGreedy(adj, faceChart, chartCount, cosMax, options.compactnessWeight);
+    growGreedy(conn, tri, faceChart, chartCount, cosMax, options.compactnessWeight);
     renumber(faceChart, chartCount);
   }
 
@@ -159,7 +175,7 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
   for (int pass = 0; pass < options.smoothingPasses; ++pass) {
     std::vector<Eigen::Vector3d> proxy(size_t(chartCount), Eigen::Vector3d::Zero());
     for (size_t t = 0; t < n; ++t)
-      if (faceChart[t] >= 0) proxy[size_t(faceChart[t])] += adj.normal[t] * adj.area[t];
+      if (faceChart[t] >= 0) proxy[size_t(faceChart[t])] += tri.normal[t] * conn.area[t];
     for (auto& p : proxy)
       if (p.squaredNorm() > 0) p.normalize();
     size_t changed = 0;
@@ -169,14 +185,14 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
       int32_t other[3];
       int count = 0;
       for (int k = 0; k < 3; ++k) {
-        const int32_t g = adj.neighbor[t][size_t(k)];
+        const int32_t g = conn.neighbor(t, k);
         other[k] = g >= 0 ? faceChart[size_t(g)] : -1;
       }
       for (int k = 0; k < 3; ++k) {
         const int32_t o = other[k];
         if (o < 0 || o == c) continue;
         count = (other[0] == o) + (other[1] == o) + (other[2] == o);
-        if (count >= 2 && adj.normal[t].dot(proxy[size_t(o)]) >= cosMax) {
+        if (count >= 2 && tri.normal[t].dot(proxy[size_t(o)]) >= cosMax) {
           faceChart[t] = o;
           ++changed;
           break;
@@ -192,38 +208,38 @@ SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacenc
   for (size_t t = 0; t < n; ++t)
     if (faceChart[t] >= 0) atlas.charts[size_t(faceChart[t])].faces.push_back(uint32_t(t));
   SegmentChartsReport report;
-  report.splitsForDisks = makeChartsDisks(mesh, adj, atlas);
+  report.splitsForDisks = makeChartsDisks(mesh, conn, atlas);
   report.charts = atlas.charts.size();
-  report.degenerateTriangles = adj.degenerateCount;
-  report.nonManifoldEdges = adj.nonManifoldEdges;
-  report.inconsistentEdges = adj.inconsistentEdges;
+  report.degenerateTriangles = conn.degenerateTriangles;
+  report.nonManifoldEdges = conn.nonManifoldEdges;
+  report.inconsistentEdges = conn.inconsistentEdges;
   return report;
 }
 
-size_t makeChartsDisks(const geometry::Mesh& mesh, const MeshAdjacency& adj, Atlas& atlas) {
+size_t makeChartsDisks(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, Atlas& atlas) {
   std::vector<std::vector<uint32_t>> work;
   for (Chart& c : atlas.charts)
-    for (auto& part : detail::connectedParts(adj, c.faces)) work.push_back(std::move(part));
+    for (auto& part : detail::connectedParts(conn, c.faces)) work.push_back(std::move(part));
   std::vector<Chart> done;
   size_t splits = 0;
   while (!work.empty()) {
     std::vector<uint32_t> faces = std::move(work.back());
     work.pop_back();
-    const detail::ChartMesh cm = detail::buildChartMesh(mesh, adj, faces);
+    const detail::ChartMesh cm = detail::buildChartMesh(mesh, conn, faces);
     if (cm.isDisk()) {
       Chart chart;
       chart.faces = std::move(faces);
       chart.disk = true;
       chart.boundaryLength = cm.boundaryLength;
-      for (uint32_t f : chart.faces) chart.area += adj.area[f];
+      for (uint32_t f : chart.faces) chart.area += conn.area[f];
       done.push_back(std::move(chart));
       continue;
     }
     std::vector<uint32_t> a, b;
-    detail::splitFaces(adj, faces, a, b);
+    detail::splitFaces(mesh, conn, faces, a, b);
     ++splits;
     for (auto* half : {&a, &b})
-      for (auto& part : detail::connectedParts(adj, *half)) work.push_back(std::move(part));
+      for (auto& part : detail::connectedParts(conn, *half)) work.push_back(std::move(part));
   }
   std::sort(done.begin(), done.end(), [](const Chart& x, const Chart& y) { return x.faces.front() < y.faces.front(); });
   atlas.charts = std::move(done);

@@ -5,7 +5,7 @@
 // chart is checked to be a topological disk and split until it is.
 
 #include "atlas/atlas.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "geometry/mesh.h"
 
 #include <string>
@@ -39,11 +39,11 @@ struct SegmentChartsReport {
 
 /// Fills atlas.faceChart and atlas.charts (faces, area, boundary length, disk = true).
 /// Deterministic (single-threaded, ordered by triangle id).
-SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, Atlas& atlas,
+SegmentChartsReport segmentCharts(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, Atlas& atlas,
                                   const SegmentChartsOptions& options = {});
 
 /// Splits `atlas.charts` until every chart is a connected topological disk; charts are then
 /// renumbered by their smallest triangle id and faceChart refreshed. Returns the number of splits.
-size_t makeChartsDisks(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, Atlas& atlas);
+size_t makeChartsDisks(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, Atlas& atlas);
 
 } // namespace texfab::atlas

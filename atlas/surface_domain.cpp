@@ -57,7 +57,7 @@ int32_t siteAt(const SurfaceLevel& level, const TexelIndex& index, int cell, dou
 
 // Neighbors of every site of `level` (cells of `cell` atlas texels); repX/repY give each site's
 // representative chart texel of level 0, where border walks start.
-void linkNeighbors(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas,
+void linkNeighbors(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity, const Atlas& atlas,
                    const AtlasFields& fields, SurfaceLevel& level, const std::vector<int32_t>& repX,
                    const std::vector<int32_t>& repY, int cell, const Context& ctx) {
   const TexelIndex index = indexTexels(level);
@@ -71,7 +71,7 @@ void linkNeighbors(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, c
         if (n < 0) {
           const SurfaceSample& sample = fields.samples.at(repX[i], repY[i]);
           const IndirectionTarget t =
-              walkAtlas(mesh, adjacency, atlas, sample.triangle, {repX[i] + 0.5, repY[i] + 0.5},
+              walkAtlas(mesh, connectivity, atlas, sample.triangle, {repX[i] + 0.5, repY[i] + 0.5},
                         {double(dx) * cell, double(dy) * cell});
           if (!t.hitBoundary) n = siteAt(level, index, cell, t.x, t.y, t.chart);
           if (n == s) n = -1;
@@ -170,7 +170,7 @@ SurfaceLevel coarserLevel(SurfaceLevel& fine, const std::vector<int32_t>& fineRe
 
 } // namespace
 
-synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const MeshAdjacency& adjacency,
+synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity,
                                             const Atlas& atlas, const AtlasFields& fields,
                                             const TexelField<TexelJacobian>& jacobians,
                                             const SurfaceDomainOptions& options, const Context& ctx) {
@@ -187,13 +187,13 @@ synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const Me
     return domain;
   }
   std::vector<int32_t> repX = domain.levels[0].x, repY = domain.levels[0].y;
-  linkNeighbors(mesh, adjacency, atlas, fields, domain.levels[0], repX, repY, 1, ctx);
+  linkNeighbors(mesh, connectivity, atlas, fields, domain.levels[0], repX, repY, 1, ctx);
   for (int a = 1; a < options.maxLevels; ++a) {
     const SurfaceLevel& last = domain.levels.back();
     if (last.width <= 1 && last.height <= 1) break;
     std::vector<int32_t> coarseX, coarseY;
     SurfaceLevel coarse = coarserLevel(domain.levels.back(), repX, repY, 1 << a, coarseX, coarseY);
-    linkNeighbors(mesh, adjacency, atlas, fields, coarse, coarseX, coarseY, 1 << a, ctx);
+    linkNeighbors(mesh, connectivity, atlas, fields, coarse, coarseX, coarseY, 1 << a, ctx);
     domain.levels.push_back(std::move(coarse));
     repX = std::move(coarseX);
     repY = std::move(coarseY);

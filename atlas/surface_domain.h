@@ -20,7 +20,7 @@
 
 #include "atlas/atlas.h"
 #include "atlas/compute_jacobians.h"
-#include "atlas/mesh_adjacency.h"
+#include "geometry/mesh_connectivity.h"
 #include "atlas/rasterize_atlas.h"
 #include "geometry/mesh.h"
 #include "render/image/context.h"
@@ -36,7 +36,7 @@ struct SurfaceDomainOptions {
 /// Deterministic; ctx.threads only spreads the work. `jacobians` may be empty when
 /// only level 0 is built (maxLevels = 1: sites and neighbors without a texture frame, as solid
 /// texturing needs): every site's Jacobian is then the identity.
-synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const MeshAdjacency& adjacency,
+synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const geometry::MeshConnectivity& connectivity,
                                             const Atlas& atlas, const AtlasFields& fields,
                                             const TexelField<TexelJacobian>& jacobians,
                                             const SurfaceDomainOptions& options = {}, const Context& ctx = {});

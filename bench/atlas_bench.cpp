@@ -60,7 +60,7 @@ void runAtlas(benchmark::State& state, const char* name, int subdivisions) {
     const auto t2 = std::chrono::steady_clock::now();
     const auto jac = atlas::computeJacobians(mesh, r.atlas, r.fields, field, r.atlas.texelsPerUnit);
     const auto t3 = std::chrono::steady_clock::now();
-    const atlas::IndirectionMap map = atlas::buildIndirectionMap(mesh, r.adjacency, r.atlas, r.fields);
+    const atlas::IndirectionMap map = atlas::buildIndirectionMap(mesh, r.connectivity, r.atlas, r.fields);
     const auto t4 = std::chrono::steady_clock::now();
     const std::clock_t c1 = std::clock();
     benchmark::DoNotOptimize(jac.values.data());

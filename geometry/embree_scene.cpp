@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "geometry/embree_scene.h"
 
-#include "geometry/mesh_topology.h"
+#include "geometry/mesh_connectivity.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
 
@@ -117,7 +117,7 @@ EmbreeScene::EmbreeScene(const Mesh& mesh, const SceneOptions& options) : impl_(
   s.positions = mesh.positions;
   s.triangles = mesh.triangles;
   s.box = boundingBox(mesh);
-  s.watertight = computeTopology(mesh).watertight;
+  s.watertight = computeConnectivity(mesh).watertight;
   s.device = rtcNewDevice(nullptr);
   if (!s.device) throw Error("cannot create an Embree device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
   rtcSetDeviceErrorFunction(s.device, &errorCallback, s.errors.get());

@@ -97,6 +97,11 @@ void validateMesh(const Mesh& mesh, const std::string& name);
 /// Unit geometric normal of triangle t (zero for a degenerate triangle).
 Eigen::Vector3f faceNormal(const Mesh& mesh, size_t t);
 
+/// Centroid of triangle t, in double precision.
+inline Eigen::Vector3d triangleCentroid(const Mesh& mesh, size_t t) {
+  return (mesh.corner(t, 0).cast<double>() + mesh.corner(t, 1).cast<double>() + mesh.corner(t, 2).cast<double>()) / 3.0;
+}
+
 /// Fills `mesh.normals`: each corner gets the area-weighted average of the normals of the
 /// triangles around its vertex that meet its own triangle at less than `creaseDegrees` (so a cube
 /// keeps sharp edges and a sphere is smooth). 180 = smooth everywhere.

@@ -5,6 +5,7 @@
 
 #include "atlas/compute_jacobians.h"
 #include "atlas/surface_domain.h"
+#include "geometry/orient_mesh.h"
 #include "render/bake.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
@@ -15,6 +16,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
+#include <sstream>
 
 namespace texfab::render {
 using namespace atlas;
@@ -79,21 +82,32 @@ double textureMeshMemoryBytes(const TextureMeshOptions& o) {
   return double(o.atlas.pack.width) * double(o.atlas.pack.height) * bytesPerTexel;
 }
 
-TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o,
+TextureMeshResult textureMesh(const geometry::Mesh& input, const TextureExemplar& ex, const TextureMeshOptions& o,
                               const Context& ctx) {
   checkCompanionMaps(ex, o.mode);  // and that there is an exemplar
   const Image& exemplar = *ex.color;
   const bool surface = o.mode == TextureMode::Surface;
   if (surface && !ex.analysis) throw Error("texture: surface mode needs the exemplar analysis");
   if (!surface && !ex.solidAnalysis) throw Error("texture: solid mode needs the solid exemplar analysis");
-  if (mesh.triangleCount() == 0) throw Error("the model has no triangles");
+  if (input.triangleCount() == 0) throw Error("the model has no triangles");
   if (!(o.textureScale >= 0) || !std::isfinite(o.textureScale)) throw Error("texture scale must be >= 0");
   o.surface.validate();
   o.solid.validate();
 
+  // A consistently wound copy where the input is not: charts, frames and the output follow it.
+  const geometry::MeshOrientation orientation =
+      geometry::computeOrientation(input, geometry::computeConnectivity(input));
+  std::optional<geometry::Mesh> oriented;
+  if (!orientation.flip.empty()) geometry::flipTriangles(oriented.emplace(input), orientation.flip);
+  const geometry::Mesh& mesh = oriented ? *oriented : input;
+
   TextureMeshResult r;
   Stage atlasStage(ctx, "atlas");
   r.atlas = generateAtlas(mesh, o.atlas, ctx.nested());
+  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
+    r.atlas.report.repairs.insert(r.atlas.report.repairs.begin(), repair);
+  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty())
+    r.warnings.push_back(warning);
   const Atlas& atlas = r.atlas.atlas;
   const AtlasReport& ar = r.atlas.report;
   if (ar.flippedTriangles || ar.overlappingTexels)
@@ -141,7 +155,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
   }
   Stage domainStage(ctx, "fields");
   synthesis::SurfaceDomain domain =
-      buildSurfaceDomain(mesh, r.atlas.adjacency, atlas, r.atlas.fields, jacobians, domainOptions, ctx);
+      buildSurfaceDomain(mesh, r.atlas.connectivity, atlas, r.atlas.fields, jacobians, domainOptions, ctx);
   jacobians = {};
   domainStage.finish(std::to_string(domain.levels[0].size()) + " texels, " +
                               std::to_string(domain.levels.size()) + " levels");

@@ -8,6 +8,7 @@
 #include "atlas/compute_jacobians.h"
 #include "atlas/generate_atlas.h"
 #include "geometry/mesh_io.h"
+#include "geometry/orient_mesh.h"
 #include "geometry/tangent_field.h"
 #include "render/image/error.h"
 #include "render/image/memory.h"
@@ -55,6 +56,22 @@ void writeDebugImages(const fs::path& dir, const geometry::Mesh& mesh, const atl
     std::nth_element(mags.begin(), mags.begin() + long(mags.size() / 2), mags.end());
     median = std::max(mags[mags.size() / 2], 1e-30f);
   }
+  // Anisotropy as log(σ1/σ2), white at the 99th percentile over chart texels (most meshes are
+  // nearly isotropic: a fixed scale leaves the image black).
+  auto logRatio = [&](int x, int y) {
+    const Eigen::Vector2d sv = atlas::singularValues(jac.at(x, y).j);
+    return sv(1) > 0 ? float(std::log(sv(0) / sv(1))) : 0.0f;
+  };
+  std::vector<float> ratios;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (fields.samples.at(x, y).chart >= 0) ratios.push_back(logRatio(x, y));
+  float ratioWhite = 1e-3f;
+  if (!ratios.empty()) {
+    const auto p99 = ratios.begin() + long(ratios.size() * 99 / 100);
+    std::nth_element(ratios.begin(), p99, ratios.end());
+    ratioWhite = std::max(*p99, 1e-3f);
+  }
   const double checkerTexels = std::max(8.0, double(W) / 64.0);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
@@ -66,7 +83,7 @@ void writeDebugImages(const fs::path& dir, const geometry::Mesh& mesh, const atl
       }
       const Eigen::Vector2d sv = atlas::singularValues(jac.at(x, y).j);
       magnitude.at(x, y, 0) = std::clamp(float(0.5 * sv(0) / median), 0.0f, 1.0f);
-      anisotropy.at(x, y, 0) = sv(1) > 0 ? std::clamp(float((sv(0) / sv(1) - 1) / 3), 0.0f, 1.0f) : 1.0f;
+      anisotropy.at(x, y, 0) = s.chart >= 0 ? std::clamp(logRatio(x, y) / ratioWhite, 0.0f, 1.0f) : 0.0f;
       const bool odd = (int(std::floor(x / checkerTexels)) + int(std::floor(y / checkerTexels))) % 2 != 0;
       const float base = odd ? 0.9f : 0.15f;
       for (int c = 0; c < 3; ++c) checker.at(x, y, c) = s.chart >= 0 ? base * (0.6f + 0.4f * hashColor(uint32_t(s.chart), c)) : base;
@@ -112,12 +129,16 @@ void runAtlas(AtlasJob& job) {
   const fs::path debug = job.debugImages.empty() ? fs::path() : run.outputs().addFolder(job.debugImages);
 
   Stage read(run.ctx(), "read");
-  const geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
+  geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
   read.finish(job.model + ": " + counted(int64_t(mesh.vertexCount()), "vertex", "vertices") + ", " +
               counted(int64_t(mesh.triangleCount()), "triangle"));
+  const geometry::MeshOrientation orientation = geometry::orientMesh(mesh);
+  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty()) run.ctx().warn(warning);
 
   Stage stage(run.ctx(), "atlas");
-  const atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, job.options, stage.inner());
+  atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, job.options, stage.inner());
+  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
+    result.report.repairs.insert(result.report.repairs.begin(), repair);
   const atlas::AtlasReport& r = result.report;
   stage.finish(counted(int64_t(r.charts), "chart") + ", utilization " + figure(r.utilization) + ", L2 stretch " +
                figure(r.l2Stretch) + ", max " + figure(r.maxStretch));
@@ -134,7 +155,7 @@ void runAtlas(AtlasJob& job) {
   jacobianStage.finish();
   Stage indirectionStage(run.ctx(), "indirection");
   const atlas::IndirectionMap indirection =
-      atlas::buildIndirectionMap(mesh, result.adjacency, result.atlas, result.fields, job.indirection, run.ctx());
+      atlas::buildIndirectionMap(mesh, result.connectivity, result.atlas, result.fields, job.indirection, run.ctx());
   indirectionStage.finish(counted(int64_t(indirection.targets.size()), "border texel") + ", " +
                           counted(int64_t(indirection.seamCrossings), "seam crossing"));
 

@@ -4,7 +4,7 @@
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
-#include "geometry/mesh_topology.h"
+#include "geometry/mesh_connectivity.h"
 #include "synthesis/backend.h"
 
 #include <nlohmann/json.hpp>
@@ -62,7 +62,7 @@ void runInfo(const InfoArgs& args) {
   if (args.devices) return printDevices(args.json);
   const Run run("info", {});  // warnings of the reader go to stderr
   const Mesh mesh = readMesh(args.model, run.ctx());
-  const MeshTopology topo = computeTopology(mesh);
+  const MeshConnectivity topo = computeConnectivity(mesh);
   const BoundingBox box = boundingBox(mesh);
   nlohmann::json j;
   j["file"] = args.model;
@@ -71,13 +71,15 @@ void runInfo(const InfoArgs& args) {
   j["triangles"] = mesh.triangleCount();
   j["bounding_box"] = {{"min", {box.min.x(), box.min.y(), box.min.z()}}, {"max", {box.max.x(), box.max.y(), box.max.z()}}};
   j["components"] = topo.components;
-  j["edges"] = topo.edges;
+  j["edges"] = topo.edges.size();
   j["boundary_edges"] = topo.boundaryEdges;
   j["non_manifold_edges"] = topo.nonManifoldEdges;
+  j["non_manifold_vertices"] = topo.nonManifoldVertices;
   j["inconsistently_oriented_edges"] = topo.inconsistentEdges;
   j["degenerate_triangles"] = topo.degenerateTriangles;
   j["closed"] = topo.closed;
   j["manifold"] = topo.manifold;
+  j["oriented"] = topo.oriented;
   j["genus"] = topo.genus ? nlohmann::json(*topo.genus) : nlohmann::json(nullptr);
   j["uvs"] = mesh.hasUvs();
   j["normals"] = mesh.hasNormals();
@@ -107,10 +109,12 @@ void runInfo(const InfoArgs& args) {
               double(box.max.x()), double(box.max.y()), double(box.max.z()));
   std::printf("  components      %zu\n", topo.components);
   std::printf("  closed          %s (%zu boundary edges)\n", topo.closed ? "yes" : "no", topo.boundaryEdges);
-  std::printf("  manifold        %s (%zu non-manifold, %zu inconsistently oriented edges)\n", topo.manifold ? "yes" : "no",
-              topo.nonManifoldEdges, topo.inconsistentEdges);
+  std::printf("  manifold        %s (%zu non-manifold edges, %zu non-manifold vertices)\n", topo.manifold ? "yes" : "no",
+              topo.nonManifoldEdges, topo.nonManifoldVertices);
+  std::printf("  oriented        %s (%zu inconsistently oriented edges)\n", topo.oriented ? "yes" : "no",
+              topo.inconsistentEdges);
   if (topo.genus) std::printf("  genus           %lld\n", *topo.genus);
-  else std::printf("  genus           n/a (not a closed manifold)\n");
+  else std::printf("  genus           n/a (not a closed, oriented manifold)\n");
   std::printf("  UVs             %s\n  normals         %s\n  tangents        %s\n", mesh.hasUvs() ? "yes" : "no",
               mesh.hasNormals() ? "yes" : "no", mesh.hasTangents() ? "yes" : "no");
   std::printf("  materials       %zu\n", mesh.materials.size());

@@ -26,6 +26,7 @@ json toJson(const atlas::GenerateAtlasResult& result) {
           {"l2_stretch", r.l2Stretch},
           {"max_stretch", r.maxStretch},
           {"flipped_triangles", r.flippedTriangles},
+          {"collapsed_triangles", r.collapsedTriangles},
           {"overlapping_texels", r.overlappingTexels},
           {"non_disk_charts", r.nonDiskCharts},
           {"seam_length", r.seamLength},

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab atlas end to end: outputs, report, debug images; bad arguments fail before any output.
 #include "geometry/mesh_io.h"
+#include "render/image/image_io.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -48,6 +49,12 @@ TEST(CliAtlas, WritesMeshReportAndDebugImages) {
   for (const char* f : {"chart_ids.png", "normals.png", "jacobian_magnitude.png", "jacobian_anisotropy.png",
                         "checker.png", "checker.glb"})
     EXPECT_TRUE(fs::exists(d / "dbg" / f)) << f;
+  // The anisotropy image shows something: white at the 99th percentile of the chart texels.
+  const texfab::Image aniso = texfab::readImage(d / "dbg" / "jacobian_anisotropy.png");
+  size_t white = 0, lit = 0;
+  for (float v : aniso.pixels) white += v >= 0.99f, lit += v >= 0.1f;
+  EXPECT_GT(white, 0u);
+  EXPECT_GT(lit, aniso.pixels.size() / 20);
 }
 
 TEST(CliAtlas, BadArgumentsFailWithoutOutput) {

@@ -55,6 +55,37 @@ TEST(CliMesh, InfoJsonDescribesTheBundledModels) {
   EXPECT_EQ(nlohmann::json::parse(out)["uvs"], false);
 }
 
+TEST(CliMesh, InfoFindsTwoClosedCubesJoinedAtOneVertexNonManifold) {
+  // Unit cubes [0,1]^3 and [1,2]^3 sharing the vertex (1,1,1): closed, no non-manifold edge, but
+  // the shared vertex has two fans of triangles.
+  TempDir dir("texfab-cli-info");
+  std::string off = "OFF\n15 24 0\n";
+  for (int cube = 0; cube < 2; ++cube)
+    for (int i = 0; i < 8; ++i)
+      if (cube == 0 || i != 0)
+        off += std::to_string(cube + (i & 1)) + " " + std::to_string(cube + ((i >> 1) & 1)) + " " +
+               std::to_string(cube + ((i >> 2) & 1)) + "\n";
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (int cube = 0; cube < 2; ++cube) {
+    auto index = [&](int i) { return cube == 0 ? i : i == 0 ? 7 : 7 + i; };
+    for (const auto& q : quads)
+      for (auto [a, b, c] : {std::array{q[0], q[1], q[2]}, std::array{q[0], q[2], q[3]}})
+        off += "3 " + std::to_string(index(a)) + " " + std::to_string(index(b)) + " " + std::to_string(index(c)) + "\n";
+  }
+  std::FILE* f = std::fopen((dir / "touching.off").c_str(), "w");
+  ASSERT_TRUE(f);
+  std::fputs(off.c_str(), f);
+  std::fclose(f);
+  auto [status, out] = runCli("info --json " + quote(dir / "touching.off"));
+  ASSERT_EQ(status, 0);
+  const auto j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["closed"], true);
+  EXPECT_EQ(j["non_manifold_edges"], 0);
+  EXPECT_EQ(j["non_manifold_vertices"], 1);
+  EXPECT_EQ(j["manifold"], false);
+  EXPECT_EQ(j["oriented"], true);
+}
+
 TEST(CliMesh, ConvertKeepsMaterialsAndRefusesBadRequests) {
   TempDir dir("texfab-cli-convert");
   ASSERT_EQ(runCli("convert -q " + quote(kMeshes / "marble_cube.obj") + " " + quote(dir / "cube.glb") + " --draco").first, 0);

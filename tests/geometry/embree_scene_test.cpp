@@ -3,7 +3,7 @@
 // CGAL's data set (generalized winding number over every triangle), closest points.
 #include "geometry/embree_scene.h"
 #include "geometry/mesh_io.h"
-#include "geometry/mesh_topology.h"
+#include "geometry/mesh_connectivity.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <cmath>
@@ -119,7 +119,7 @@ TEST(EmbreeScene, InsideAgreesWithWindingNumberOnCgalDataSet) {
                            "bones.off", "dino.off", "camel.off", "fandisk.off"}) {
     if (!std::filesystem::exists(dir / name)) continue;
     const Mesh mesh = readMesh(dir / name);
-    if (!computeTopology(mesh).watertight || mesh.triangleCount() > 30000) continue;
+    if (!computeConnectivity(mesh).watertight || mesh.triangleCount() > 30000) continue;
     checkInsideAgainstWindingNumber(mesh, name, 300);
     ++tested;
   }

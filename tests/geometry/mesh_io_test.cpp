@@ -2,7 +2,7 @@
 // Round trips through every mesh format, what each keeps, and the real clients that must load
 // our outputs (assimp, draco_decoder).
 #include "geometry/mesh_io.h"
-#include "geometry/mesh_topology.h"
+#include "geometry/mesh_connectivity.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <algorithm>
@@ -145,7 +145,7 @@ TEST(MeshIo, PlyRoundTripBinaryAndAscii) {
     EXPECT_EQ(back.vertexCount(), 8u);
     expectSameSurface(cube, back, true, false);
     for (size_t t = 0; t < cube.triangleCount(); ++t) EXPECT_EQ(back.materialOf(t), cube.materialOf(t));
-    EXPECT_TRUE(computeTopology(back).closed);
+    EXPECT_TRUE(computeConnectivity(back).closed);
   }
 }
 
@@ -160,7 +160,7 @@ TEST(MeshIo, OffAndStlRoundTripKeepGeometry) {
     EXPECT_EQ(back.vertexCount(), 8u) << name;  // STL corners are welded back into shared vertices
     SCOPED_TRACE(name);
     expectSameSurface(cube, back, false, false);
-    EXPECT_EQ(computeTopology(back).genus, 0) << name;
+    EXPECT_EQ(computeConnectivity(back).genus, 0) << name;
   }
 }
 
@@ -191,7 +191,7 @@ TEST(MeshIo, GltfAndGlbRoundTripKeepEverything) {
       EXPECT_EQ(back.materialOf(ib.at(key)), cube.materialOf(t));
       EXPECT_EQ(back.tagOf(ib.at(key)), cube.tagOf(t));
     }
-    EXPECT_TRUE(computeTopology(back).closed);
+    EXPECT_TRUE(computeConnectivity(back).closed);
   }
 }
 

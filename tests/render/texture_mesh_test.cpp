@@ -249,6 +249,26 @@ TEST(TextureMesh, ThreadCountDoesNotChangeTheTexture) {
   EXPECT_NE(one.coords, other.coords);
 }
 
+TEST(TextureMesh, InconsistentWindingIsRepairedAndReported) {
+  // A new user's exporter flipped every other face: the job re-orients the mesh, so the charts
+  // and the texture are those of the consistent mesh (before the repair: ~5x the charts).
+  const Exemplar ex(bundledExemplar("brick.png"));
+  TextureMeshOptions o = surfaceOptions(256);
+  o.measure = false;
+  const geometry::Mesh good = test::makeSphere(32, 16);
+  geometry::Mesh bad = good;
+  for (size_t t = 1; t < bad.triangleCount(); t += 2) std::swap(bad.triangles[t][1], bad.triangles[t][2]);
+  const TextureMeshResult a = textureMesh(good, ex.view(), o);
+  const TextureMeshResult b = textureMesh(bad, ex.view(), o);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.atlas.report.charts, b.atlas.report.charts);
+  EXPECT_EQ(a.baseColor->pixels, b.baseColor->pixels);
+  ASSERT_FALSE(b.atlas.report.repairs.empty());
+  EXPECT_NE(b.atlas.report.repairs[0].find("re-oriented " + std::to_string(bad.triangleCount() / 2)), std::string::npos)
+      << b.atlas.report.repairs[0];
+  for (const std::string& repair : a.atlas.report.repairs) EXPECT_EQ(repair.find("re-oriented"), std::string::npos);
+}
+
 TEST(TextureMesh, SolidModeTexelsAreTheSolidTextureAtTheirPositions) {
   // A small exemplar keeps the solid precomputation short.
   const Image full = bundledExemplar("marble.png");
