@@ -33,9 +33,15 @@ LevelGrid parentOf(const LevelGrid& g) {
   return {x0, y0, int(x1 - x0 + 1), int(y1 - y0 + 1)};
 }
 
+// The region a level's coordinates must stay in, for a non-toroidal exemplar; null when it tiles.
+const ValidRegion* clampOf(const ExemplarAnalysis& a, int level) {
+  return a.wrap == ExemplarWrap::Clamp ? &a.levels[size_t(level)].valid : nullptr;
+}
+
 cpu::LevelTables tablesOf(const ExemplarAnalysis& a, int level) {
   const AnalysisLevel& l = a.levels[size_t(level)];
-  return {a.width, a.height, l.spacing, a.k, l.appearance.data(), l.neighborhood.data(), l.candidates.data()};
+  return {a.width, a.height, l.spacing, a.k, l.appearance.data(), l.neighborhood.data(), l.candidates.data(),
+          clampOf(a, level)};
 }
 
 } // namespace
@@ -115,23 +121,25 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
     const int spacing = 1 << shift;
     const int64_t periodX = options.periodX > 0 ? options.periodX >> shift : 0;
     const int64_t periodY = options.periodY > 0 ? options.periodY >> shift : 0;
+    const ValidRegion* clampTo = clampOf(analysis, l);
     current.assign(size_t(grid.width) * size_t(grid.height), 0);
 
     if (l == first) {
       parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
-        cpu::initKernel(current.data(), grid, spacing, analysis.width, analysis.height, periodX, periodY, r0, r1);
+        cpu::initKernel(current.data(), grid, spacing, analysis.width, analysis.height, periodX, periodY, r0, r1,
+                        clampTo);
       }, kRowGrain);
     } else {
       const LevelGrid& parentGrid = padded[size_t(l) - 1];
       parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
         cpu::upsampleKernel(previous.data(), parentGrid, current.data(), grid, spacing, analysis.width,
-                            analysis.height, r0, r1);
+                            analysis.height, r0, r1, clampTo);
       }, kRowGrain);
     }
     const auto amplitude256 = int64_t(std::lrint(double(jitter[size_t(l)]) * spacing * 256.0));
     parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
       cpu::jitterKernel(current.data(), grid, options.seed, l, amplitude256, periodX, periodY, analysis.width,
-                        analysis.height, r0, r1);
+                        analysis.height, r0, r1, clampTo);
     }, kRowGrain);
 
     // Correction: each sub-pass reads `current` and writes `scratch` over a rectangle one texel

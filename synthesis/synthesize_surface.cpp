@@ -83,23 +83,25 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
     const SurfaceLevel& level = domain.levels[size_t(a)];
     const int l = stackLevelForAtlasLevel(analysis, a, ppt);
     const AnalysisLevel& al = analysis.levels[size_t(l)];
+    const ValidRegion* clampTo = analysis.wrap == ExemplarWrap::Clamp ? &al.valid : nullptr;
     current.assign(level.size(), 0);
     if (a == top)
       forSites(level.size(), ctx, [&](size_t b, size_t e) {
-        cpu::initSurfaceKernel(level, current.data(), analysis.width, analysis.height, b, e);
+        cpu::initSurfaceKernel(level, current.data(), analysis.width, analysis.height, b, e, clampTo);
       });
     else
       forSites(level.size(), ctx, [&](size_t b, size_t e) {
-        cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), analysis.width, analysis.height, b, e);
+        cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), analysis.width, analysis.height, b, e,
+                                   clampTo);
       });
     const auto amplitude256 = int64_t(std::lrint(double(jitter[size_t(l)]) * al.spacing * 256.0));
     forSites(level.size(), ctx, [&](size_t b, size_t e) {
       cpu::jitterSurfaceKernel(level, current.data(), options.seed, a, amplitude256, analysis.width, analysis.height,
-                               b, e);
+                               b, e, clampTo);
     });
 
     const cpu::LevelTables tables{analysis.width, analysis.height, al.spacing, analysis.k,
-                                  al.appearance.data(), al.neighborhood.data(), al.candidates.data()};
+                                  al.appearance.data(), al.neighborhood.data(), al.candidates.data(), clampTo};
     scratch.resize(current.size());
     for (int pass = 0; pass < (options.correct ? options.passes : 0); ++pass)
       for (int cls = 0; cls < 4; ++cls) {

@@ -22,6 +22,33 @@ int parseInt(const std::string& text, const std::string& what) {
 }
 } // namespace
 
+synthesis::ExemplarWrap chooseExemplarWrap(const std::string& flag, const Image& exemplar, const Progress& progress) {
+  using synthesis::ExemplarWrap;
+  if (flag == "tile") return ExemplarWrap::Tile;
+  if (flag == "clamp") return ExemplarWrap::Clamp;
+  if (flag != "auto") throw Error("--exemplar-wrap: expected auto, tile or clamp, got '" + flag + "'");
+  const synthesis::WrapDiscontinuity d = synthesis::wrapDiscontinuity(exemplar);
+  const ExemplarWrap wrap = synthesis::detectExemplarWrap(exemplar);
+  char note[240];
+  std::snprintf(note, sizeof note,
+                "exemplar wrap: %s (auto: the colour jump across its wrap is %.2fx (x), %.2fx (y) the largest "
+                "inside; above %.1fx it does not tile%s)",
+                synthesis::toString(wrap), d.x, d.y, synthesis::kWrapDiscontinuityThreshold,
+                std::min(exemplar.width, exemplar.height) < synthesis::kWrapDetectionMinSide ? "; too small to tell" : "");
+  progress.note(note);
+  return wrap;
+}
+
+ProgressSink stageLines(Progress& progress) {
+  return [&progress](const ProgressEvent& e) {
+    if (e.kind != ProgressEvent::Kind::End) return;
+    char line[256];
+    std::snprintf(line, sizeof line, "%*s%.*s %.3f s%s%.*s", 2 * (e.depth + 1), "", int(e.stage.size()), e.stage.data(),
+                  e.seconds, e.detail.empty() ? "" : "  ", int(e.detail.size()), e.detail.data());
+    progress.note(line);
+  };
+}
+
 std::pair<int, int> parseSize(const std::string& text, const std::string& what) {
   const size_t x = text.find_first_of("xX");
   const int w = parseInt(text.substr(0, x), what);

@@ -2,6 +2,9 @@
 #pragma once
 // Small pieces every subcommand shares: value parsers, progress lines, reports.
 
+#include "render/image/context.h"
+#include "synthesis/exemplar_analysis.h"
+
 #include <nlohmann/json.hpp>
 
 #include <chrono>
@@ -36,6 +39,20 @@ private:
   std::chrono::steady_clock::time_point started_;
   nlohmann::json timings_ = nlohmann::json::object();
 };
+
+/// The --exemplar-wrap help text, shared by the commands that take it.
+inline constexpr const char* kExemplarWrapHelp =
+    "How the exemplar's borders are treated: tile (it is toroidal: coordinates wrap), clamp (a "
+    "photograph that does not tile: synthesis never reads across its border), or auto: clamp when "
+    "the colour jump across its wrap is more than 1.9 times the largest jump between columns (rows) inside";
+
+/// The wrap mode of `exemplar` for the flag value "auto", "tile" or "clamp"; auto measures the
+/// exemplar and says which it chose (a progress note naming the measure). Throws Error otherwise.
+synthesis::ExemplarWrap chooseExemplarWrap(const std::string& flag, const Image& exemplar, const Progress& progress);
+
+/// A progress sink showing the stages a library reports (their End events as lines, through
+/// `progress`); Begin and Advance events are left to the terminal display.
+ProgressSink stageLines(Progress& progress);
 
 /// Peak resident memory of this process so far, in MiB.
 double peakMemoryMiB();

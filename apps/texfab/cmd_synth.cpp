@@ -27,6 +27,7 @@ struct SynthArgs {
   int k = 2;
   float featureWeight = synthesis::AnalysisOptions{}.featureWeight;
   bool tileable = false;
+  std::string exemplarWrap = "auto";
   std::string coords;
   std::vector<std::string> apply;
   int threads = 0;
@@ -102,6 +103,7 @@ void runSynth(const SynthArgs& args) {
     companions.push_back(std::move(companion));
   }
   progress.finish(args.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
+  analysisOptions.wrap = chooseExemplarWrap(args.exemplarWrap, exemplar, progress);
 
   // Coordinates (two buffers while synthesizing) plus the colour and companion images, as floats.
   int channels = exemplar.channels;
@@ -112,6 +114,7 @@ void runSynth(const SynthArgs& args) {
                 std::to_string(int(needed / double(1 << 30)) + 1) + " GiB, more than this machine's memory; " +
                 "synthesize it in windows (--window) instead");
 
+  ctx.progress = stageLines(progress);
   progress.start("analysis");
   bool cached = false;
   const ExemplarAnalysis analysis =
@@ -166,6 +169,7 @@ void runSynth(const SynthArgs& args) {
     report["parameters"] = {{"seed", options.seed},    {"passes", options.passes},
                             {"interleave", options.interleave}, {"k", analysisOptions.k},
                             {"feature_weight", analysisOptions.featureWeight},
+                            {"exemplar_wrap", toString(analysisOptions.wrap)},
                             {"tileable", args.tileable},
                             {"jitter", options.jitter.empty() ? defaultJitter(int(analysis.levels.size())) : options.jitter}};
     nlohmann::json levels = nlohmann::json::array();
@@ -202,6 +206,7 @@ Command addSynthCommand(CLI::App& root) {
                   "Weight of the feature-distance channel in appearance space (0 = off)")
       ->capture_default_str();
   app->add_flag("--tileable", args->tileable, "Make the output wrap at its size (a tile)");
+  app->add_option("--exemplar-wrap", args->exemplarWrap, kExemplarWrapHelp)->capture_default_str();
   app->add_option("--coords", args->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
   app->add_option("--apply", args->apply,
                   "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, "
