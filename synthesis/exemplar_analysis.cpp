@@ -34,6 +34,7 @@ constexpr uint32_t kCacheMagic = 0x41584654;  // "TFXA"
 constexpr uint32_t kCacheVersion = 3;         // bump whenever the analysis changes
 constexpr int kPatchRadius = 2;               // 5x5 appearance neighborhoods
 constexpr float kPatchSigma = 1.5f;           // Gaussian weighting of the 5x5 samples
+constexpr int kValidMarginSpacings = 1;       // Clamp: valid-region margin, in level spacings
 
 int wrap(int a, int m) {
   const int r = a % m;
@@ -376,7 +377,8 @@ const char* toString(ExemplarWrap wrapMode) { return wrapMode == ExemplarWrap::T
 
 ValidRegion validRegion(int width, int height, int spacing, ExemplarWrap wrapMode) {
   if (wrapMode == ExemplarWrap::Tile) return {0, 0, width - 1, height - 1};
-  const int mx = std::min(3 * spacing, (width - 1) / 4), my = std::min(3 * spacing, (height - 1) / 4);
+  const int mx = std::min(kValidMarginSpacings * spacing, (width - 1) / 4);
+  const int my = std::min(kValidMarginSpacings * spacing, (height - 1) / 4);
   return {mx, my, width - 1 - mx, height - 1 - my};
 }
 

@@ -20,11 +20,11 @@
 //
 // Non-toroidal exemplars (ExemplarWrap::Clamp): the stack is filtered, and neighborhoods are read,
 // with mirrored borders instead of wrapped ones, and every level has a valid region: the pixels
-// whose runtime neighborhood (4 diagonal samples h_l apart, each a 5x5 neighborhood with taps h_l
-// apart: 3 h_l in all) lies inside the exemplar, the margin capped at a quarter of the side so
-// that coarse levels keep half of the exemplar. Synthesis keeps every coordinate, candidate and
-// jittered coordinate of a level inside its valid region, so no synthesized neighborhood reads
-// across the exemplar's border (see synthesize_2d.h).
+// whose runtime neighborhood's 4 diagonal samples (h_l apart) lie inside the exemplar, the margin
+// capped at a quarter of the side so that coarse levels keep half of the exemplar. (A margin of
+// 3 h_l, the whole 5x5 footprint of those samples, lost more fidelity than the mirrored reads it
+// avoids.) Synthesis keeps every coordinate, candidate and jittered coordinate of a level inside
+// its valid region, so no synthesized neighborhood reads across the exemplar's border.
 //
 // Deviations from the papers, on purpose:
 //   * appearance vectors and runtime neighborhoods are quantized to int8 with one scale per level,
@@ -113,7 +113,7 @@ struct ValidRegion {
 };
 
 /// The valid region of a level of spacing h: the whole exemplar when it tiles; otherwise a margin
-/// of min(3h, (side - 1) / 4) pixels on every side.
+/// of min(h, (side - 1) / 4) pixels on every side.
 ValidRegion validRegion(int width, int height, int spacing, ExemplarWrap wrap);
 
 /// One level of the Gaussian stack, as synthesis sees it.
