@@ -227,20 +227,22 @@ std::vector<int8_t> appearanceVectors(const Image& level, int spacing, ExemplarW
   const float scale = maxAbs > 0 ? 127.0f / maxAbs : 0.0f;
   raw.resize(0, 0);
   // Each pixel's projection is a fixed-order dot product: independent of the thread count.
-  const RowMatrix b = basis.transpose();
+  // Each coefficient is summed over d in order (the same bits however the loop is vectorized: the
+  // lanes are the kAppearanceDims coefficients, each its own sum).
+  const RowMatrix b = basis;  // dims x kAppearanceDims, row-major
   parallelFor(0, h, ctx, [&](int y0, int y1) {
     std::vector<float> patch(static_cast<size_t>(dims));
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < width; ++x) {
         patchOf(level, x, y, spacing, w, weights.data(), patch.data());
-        for (int d = 0; d < dims; ++d) patch[size_t(d)] -= mean(d);
-        int8_t* o = &out[(size_t(y) * width + x) * kAppearanceDims];
-        for (int k = 0; k < kAppearanceDims; ++k) {
-          const float* row = b.data() + size_t(k) * dims;
-          float sum = 0;
-          for (int d = 0; d < dims; ++d) sum += row[d] * patch[size_t(d)];
-          o[k] = quantize(sum, scale);
+        float sum[kAppearanceDims] = {};
+        for (int d = 0; d < dims; ++d) {
+          const float v = patch[size_t(d)] - mean(d);
+          const float* row = b.data() + size_t(d) * kAppearanceDims;
+          for (int k = 0; k < kAppearanceDims; ++k) sum[k] += row[k] * v;
         }
+        int8_t* o = &out[(size_t(y) * width + x) * kAppearanceDims];
+        for (int k = 0; k < kAppearanceDims; ++k) o[k] = quantize(sum[k], scale);
       }
   }, 4);
   return out;
@@ -270,15 +272,18 @@ std::vector<int8_t> runtimeNeighborhoods(const std::vector<int8_t>& appearance, 
 // match. Without this, coarse levels found no candidate outside the pixel's own blur footprint.
 //
 // Only pixels of the level's valid region are searched and found (pixels outside it are never a
-// coordinate: their sets are the pixel alone). Beyond kExactAnalysisPixels, only the pixels of a
-// grid of the same stride (at least 2) are queried; every other pixel p takes the set of the grid
+// coordinate: their sets are the pixel alone). Beyond kExactAnalysisPixels, the grid's stride is
+// at least sqrt(pixels / kExactAnalysisPixels), and only the pixels of a grid of the same stride
+// (at least 2) are queried; every other pixel p takes the set of the grid
 // pixel q at or before it, shifted by p - q (the candidates of a coherent patch move with it).
 std::vector<uint32_t> coherenceCandidates(const std::vector<int8_t>& appearance, int w, int h, int spacing,
                                           const ValidRegion& valid, const AnalysisOptions& options,
                                           const Context& ctx) {
   const int64_t n = int64_t(w) * h;
-  const int stride = std::max(1, std::min(spacing, std::min(w, h) / 8));
   const bool spread = n > kExactAnalysisPixels;
+  // Large exemplars: the grid never holds more than about kExactAnalysisPixels sites.
+  const int sampleStride = spread ? int(std::ceil(std::sqrt(double(n) / double(kExactAnalysisPixels)))) : 1;
+  const int stride = std::max({1, std::min(spacing, std::min(w, h) / 8), sampleStride});
   const int queryStride = spread ? std::max(2, stride) : 1;
   AppearanceCloud cloud;
   std::vector<uint32_t> sites;  // exemplar index of each point of the search grid
@@ -465,11 +470,12 @@ double analysisMemoryBytes(int width, int height, const AnalysisOptions& options
   const double n = double(width) * height;
   const int levels = stackLevelCount(width, height);
   const int channels = 3 + (options.featureWeight > 0);
-  // Per level: appearance, runtime neighborhoods and candidates (kept); two stack levels and the
-  // base image as floats, the search grid and its tree (transient); plus the PCA sample and slack.
+  // Per level: appearance, runtime neighborhoods and candidates (kept); six float images (the
+  // caller's exemplar, its colour copy, a stack level, the next one and its filter pass, slack),
+  // the search grid and its tree (transient); plus the PCA sample, the program and slack.
   const double kept = levels * (kAppearanceDims + kNeighborhoodDims + 4.0 * options.k);
-  const double transient = 3 * 4.0 * channels + 4.0 * (kAppearanceDims + 3);
-  return n * (kept + transient) + 96.0 * (1 << 20);
+  const double transient = 6 * 4.0 * channels + 4.0 * (kAppearanceDims + 3);
+  return n * (kept + transient) + 128.0 * (1 << 20);
 }
 
 ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, const Context& ctx) {

@@ -155,8 +155,9 @@ Image featureDistance(const Image& exemplar, ExemplarWrap wrap = ExemplarWrap::T
 /// kMaxExemplarSide per side).
 void validateExemplarSize(const Image& exemplar);
 
-/// Peak memory of analyzeExemplar on a width x height exemplar, in bytes (an upper bound, checked
-/// by the analysis benchmarks), so callers can refuse an exemplar before the work.
+/// Peak memory of analyzeExemplar on a width x height exemplar, in bytes, the caller's float copy
+/// of the exemplar included (meant as an upper bound), so callers can refuse an exemplar before
+/// the work.
 double analysisMemoryBytes(int width, int height, const AnalysisOptions& options);
 
 /// Analyses `exemplar` (at least kMinExemplarSide pixels per side). Pure: the result depends only

@@ -105,12 +105,15 @@ void runSynth(const SynthArgs& args) {
   progress.finish(args.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
   analysisOptions.wrap = chooseExemplarWrap(args.exemplarWrap, exemplar, progress);
 
-  // Coordinates (two buffers while synthesizing) plus the colour and companion images, as floats.
+  // Coordinates (two buffers while synthesizing) plus the colour and companion images, as floats,
+  // after the analysis's peak (held while synthesizing).
   int channels = exemplar.channels;
   for (const Companion& c : companions) channels += c.map.channels;
-  const double needed = double(window.width) * window.height * (12.0 + 4.0 * channels);
+  const double needed = double(window.width) * window.height * (12.0 + 4.0 * channels) +
+                        analysisMemoryBytes(exemplar.width, exemplar.height, analysisOptions);
   if (needed > 0.8 * double(physicalMemoryBytes()))
-    throw Error("a " + std::to_string(window.width) + "x" + std::to_string(window.height) + " output needs about " +
+    throw Error("a " + std::to_string(window.width) + "x" + std::to_string(window.height) + " output from a " +
+                std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) + " exemplar needs about " +
                 std::to_string(int(needed / double(1 << 30)) + 1) + " GiB, more than this machine's memory; " +
                 "synthesize it in windows (--window) instead");
 
