@@ -470,12 +470,13 @@ double analysisMemoryBytes(int width, int height, const AnalysisOptions& options
   const double n = double(width) * height;
   const int levels = stackLevelCount(width, height);
   const int channels = 3 + (options.featureWeight > 0);
-  // Per level: appearance, runtime neighborhoods and candidates (kept); six float images (the
-  // caller's exemplar, its colour copy, a stack level, the next one and its filter pass, slack),
-  // the search grid and its tree (transient); plus the PCA sample, the program and slack.
+  // Per level: appearance, runtime neighborhoods and candidates (kept); ten float images' worth
+  // (the caller's exemplar and its decoding, the colour copy, a stack level, the next one and its
+  // filter pass, allocator slack), the search grid and its tree (transient); plus the PCA sample
+  // and the program. Fitted to measured peaks (512^2 to 2048^2) with a margin.
   const double kept = levels * (kAppearanceDims + kNeighborhoodDims + 4.0 * options.k);
-  const double transient = 6 * 4.0 * channels + 4.0 * (kAppearanceDims + 3);
-  return n * (kept + transient) + 128.0 * (1 << 20);
+  const double transient = 10 * 4.0 * channels + 4.0 * (kAppearanceDims + 3);
+  return n * (kept + transient) + 160.0 * (1 << 20);
 }
 
 ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, const Context& ctx) {

@@ -82,8 +82,8 @@ struct WrapDiscontinuity {
 };
 WrapDiscontinuity wrapDiscontinuity(const Image& exemplar);
 
-/// The discontinuity above which `auto` treats an exemplar as non-toroidal. Measured (docs): GIMP's
-/// patterns 0.42 to 1.77, photograph crops 2.0 to 18.
+/// The discontinuity above which `auto` treats an exemplar as non-toroidal. Measured
+/// (docs/exemplars.md): GIMP's patterns 0.42 to 1.77, photograph crops 2.0 to 18.
 inline constexpr double kWrapDiscontinuityThreshold = 1.9;
 /// Exemplars with a side below this are too small to tell (a single motif whose one strong edge
 /// may lie on the wrap, as GIMP's 26-pixel bluegrid): auto keeps them toroidal.
