@@ -5,6 +5,7 @@
 #include "render/image/parallel.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -44,9 +45,7 @@ double pearson(const std::vector<float>& lum, int w, int h, int dx, int dy) {
   return cov / std::sqrt(va * vb);
 }
 
-} // namespace
-
-double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx) {
+double fidelityOf(std::span<const float> patches, const Image& exemplar, int radius, bool toroidal, const Context& ctx) {
   const int r = radius, side = 2 * r + 1;
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
   const int c = colourChannelCount(exemplar);
@@ -54,12 +53,15 @@ double patchFidelity(std::span<const float> patches, const Image& exemplar, int 
   if (patches.empty() || patches.size() % size_t(dims) != 0)
     throw Error("fidelity: patches must hold a whole number of " + std::to_string(dims) + "-value neighborhoods");
 
-  // All exemplar neighborhoods (toroidal), 8-bit, one contiguous vector each.
+  // All exemplar neighborhoods (toroidal, or those wholly inside), 8-bit, one contiguous vector each.
   const int ew = exemplar.width, eh = exemplar.height;
-  std::vector<uint8_t> ex(size_t(ew) * size_t(eh) * size_t(dims));
-  for (int y = 0; y < eh; ++y)
-    for (int x = 0; x < ew; ++x) {
-      uint8_t* v = &ex[(size_t(y) * ew + x) * size_t(dims)];
+  const int m = toroidal ? 0 : r;  // margin of the centres
+  if (ew <= 2 * m || eh <= 2 * m) throw Error("fidelity: the exemplar is smaller than its neighborhoods");
+  const size_t exemplarCount = size_t(ew - 2 * m) * size_t(eh - 2 * m);
+  std::vector<uint8_t> ex(exemplarCount * size_t(dims));
+  for (int y = m; y < eh - m; ++y)
+    for (int x = m; x < ew - m; ++x) {
+      uint8_t* v = &ex[(size_t(y - m) * size_t(ew - 2 * m) + size_t(x - m)) * size_t(dims)];
       for (int j = -r; j <= r; ++j)
         for (int i = -r; i <= r; ++i) {
           const float* p = exemplar.pixel(((x + i) % ew + ew) % ew, ((y + j) % eh + eh) % eh);
@@ -76,7 +78,7 @@ double patchFidelity(std::span<const float> patches, const Image& exemplar, int 
       // Exact search with partial-distance elimination, one neighborhood row at a time.
       const int rowDims = side * c;
       int64_t best = std::numeric_limits<int64_t>::max();
-      for (size_t e = 0; e < size_t(ew) * size_t(eh); ++e) {
+      for (size_t e = 0; e < exemplarCount; ++e) {
         const uint8_t* a = &ex[e * size_t(dims)];
         int64_t sum = 0;
         for (int row = 0; row < side && sum < best; ++row) {
@@ -93,6 +95,12 @@ double patchFidelity(std::span<const float> patches, const Image& exemplar, int 
     }
   }, 16);
   return std::accumulate(nearest.begin(), nearest.end(), 0.0) / double(nearest.size());
+}
+
+} // namespace
+
+double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx) {
+  return fidelityOf(patches, exemplar, radius, true, ctx);
 }
 
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, const Context& ctx) {
@@ -117,7 +125,7 @@ double neighborhoodFidelity(const Image& image, const Image& exemplar, const Fid
           const float* p = image.pixel(x + i, y + j);
           patches.insert(patches.end(), p, p + c);
         }
-  return patchFidelity(patches, exemplar, r, ctx);
+  return fidelityOf(patches, exemplar, r, options.toroidal, ctx);
 }
 
 double histogramDistance(const Image& image, const Image& exemplar) {
@@ -162,6 +170,54 @@ double coherence(const CoordMap& m) {
       }
     }
   return pairs ? double(coherent) / double(pairs) : 0.0;
+}
+
+int64_t wrapCrossings(const CoordMap& m) {
+  const auto crosses = [](uint32_t a, uint32_t b, int size) {
+    const int d = std::abs(int(a) - int(b));
+    return d > 2 && size - d <= 2;
+  };
+  int64_t count = 0;
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x) {
+      const uint32_t c = m.at(x, y);
+      for (const uint32_t n : {x + 1 < m.width ? m.at(x + 1, y) : c, y + 1 < m.height ? m.at(x, y + 1) : c})
+        count += crosses(coordU(c), coordU(n), m.exemplarWidth) || crosses(coordV(c), coordV(n), m.exemplarHeight);
+    }
+  return count;
+}
+
+double seamVisibility(const CoordMap& m, const Image& exemplar) {
+  if (exemplar.width != m.exemplarWidth || exemplar.height != m.exemplarHeight)
+    throw Error("seam visibility: the coordinates index a " + std::to_string(m.exemplarWidth) + "x" +
+                std::to_string(m.exemplarHeight) + " exemplar, got " + std::to_string(exemplar.width) + "x" +
+                std::to_string(exemplar.height));
+  const std::vector<float> lum = luminance(exemplar);
+  const int ew = exemplar.width, eh = exemplar.height;
+  const auto at = [&](uint32_t c) { return double(lum[size_t(coordV(c)) * ew + coordU(c)]); };
+  double inside = 0;
+  for (int y = 0; y < eh; ++y)
+    for (int x = 0; x < ew; ++x) {
+      if (x + 1 < ew) inside += std::abs(lum[size_t(y) * ew + x + 1] - lum[size_t(y) * ew + x]);
+      if (y + 1 < eh) inside += std::abs(lum[size_t(y + 1) * ew + x] - lum[size_t(y) * ew + x]);
+    }
+  inside /= double(ew - 1) * eh + double(eh - 1) * ew;
+  double seams = 0;
+  int64_t count = 0;
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x) {
+      const uint32_t c = m.at(x, y);
+      if (x + 1 < m.width) {
+        const uint32_t n = m.at(x + 1, y);
+        if (coordU(n) != coordU(c) + 1 || coordV(n) != coordV(c)) seams += std::abs(at(n) - at(c)), ++count;
+      }
+      if (y + 1 < m.height) {
+        const uint32_t n = m.at(x, y + 1);
+        if (coordU(n) != coordU(c) || coordV(n) != coordV(c) + 1) seams += std::abs(at(n) - at(c)), ++count;
+      }
+    }
+  if (count == 0) return 0.0;
+  return inside > 1e-12 ? seams / double(count) / inside : 1.0;
 }
 
 double coverage(const CoordMap& m) {

@@ -17,10 +17,11 @@ namespace texfab::synthesis {
 struct FidelityOptions {
   int radius = 3;      ///< neighborhoods are (2*radius+1)^2: 7x7 by default
   int samples = 2048;  ///< output neighborhoods measured (a regular grid); 0 = all of them
+  bool toroidal = true; ///< exemplar neighborhoods wrap; false: only those wholly inside it (a photograph)
 };
 
 /// Neighborhood fidelity: mean over output neighborhoods of the RMS difference (values in [0,1])
-/// to the nearest exemplar neighborhood (toroidal), found by exact search. Lower is better.
+/// to the nearest exemplar neighborhood (toroidal, or inside only), found by exact search. Lower is better.
 /// Output neighborhoods must lie inside the image; the image needs 2*radius+1 texels per side.
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options = {},
                             const Context& ctx = {});
@@ -37,6 +38,18 @@ double histogramDistance(const Image& image, const Image& exemplar);
 /// Coherence: fraction of horizontally and vertically adjacent texel pairs whose exemplar
 /// coordinates are adjacent in the same direction (toroidally). 1 = verbatim tiling, ~0 = noise.
 double coherence(const CoordMap& coords);
+
+/// Wrap crossings: adjacent texel pairs whose exemplar coordinates are adjacent only through the
+/// exemplar's wrap (toroidal distance at most 2 pixels per axis, plain distance more): the pairs
+/// that show the exemplar's opposite borders side by side. 0 for a non-toroidal synthesis.
+int64_t wrapCrossings(const CoordMap& coords);
+
+/// Seam visibility: the mean luminance jump between adjacent texels whose exemplar coordinates
+/// are not adjacent in the same direction (without wrap: a wrap crossing is a seam), over the mean
+/// jump between adjacent pixels inside the exemplar (no wrap). About 1 when seams look like the
+/// exemplar's own edges; larger when they show (a photograph's dark edge against its bright one).
+/// 0 when the map has no seam. `exemplar` is the image the coordinates index.
+double seamVisibility(const CoordMap& coords, const Image& exemplar);
 
 /// Coverage: fraction of exemplar pixels that at least one output texel uses.
 double coverage(const CoordMap& coords);

@@ -37,9 +37,15 @@ LevelGrid parentOf(const LevelGrid& g) {
   return {x0, y0, int(x1 - x0 + 1), int(y1 - y0 + 1)};
 }
 
+// The region a level's coordinates must stay in, for a non-toroidal exemplar; null when it tiles.
+const ValidRegion* clampOf(const ExemplarAnalysis& a, int level) {
+  return a.wrap == ExemplarWrap::Clamp ? &a.levels[size_t(level)].valid : nullptr;
+}
+
 cpu::LevelTables tablesOf(const ExemplarAnalysis& a, int level) {
   const AnalysisLevel& l = a.levels[size_t(level)];
-  return {a.width, a.height, l.spacing, a.k, l.appearance.data(), l.neighborhood.data(), l.candidates.data()};
+  return {a.width, a.height, l.spacing, a.k, l.appearance.data(), l.neighborhood.data(), l.candidates.data(),
+          clampOf(a, level)};
 }
 
 
@@ -107,15 +113,19 @@ std::vector<uint32_t> synthesizeOnCpu(const ExemplarAnalysis& analysis, const Pl
     const int spacing = plan.spacing(l);
     const int64_t periodX = plan.period(options.periodX, l), periodY = plan.period(options.periodY, l);
     const auto rows = [&](auto&& kernel) { parallelFor(0, grid.height, ctx, kernel, kRowGrain); };
+    const ValidRegion* clampTo = clampOf(analysis, l);
     current.assign(size_t(grid.width) * size_t(grid.height), 0);
     if (l == plan.first)
-      rows([&](int r0, int r1) { cpu::initKernel(current.data(), grid, spacing, ew, eh, periodX, periodY, r0, r1); });
+      rows([&](int r0, int r1) {
+        cpu::initKernel(current.data(), grid, spacing, ew, eh, periodX, periodY, r0, r1, clampTo);
+      });
     else
       rows([&](int r0, int r1) {
-        cpu::upsampleKernel(previous.data(), plan.grid(l - 1), current.data(), grid, spacing, ew, eh, r0, r1);
+        cpu::upsampleKernel(previous.data(), plan.grid(l - 1), current.data(), grid, spacing, ew, eh, r0, r1, clampTo);
       });
     rows([&](int r0, int r1) {
-      cpu::jitterKernel(current.data(), grid, options.seed, l, plan.amplitude256(l), periodX, periodY, ew, eh, r0, r1);
+      cpu::jitterKernel(current.data(), grid, options.seed, l, plan.amplitude256(l), periodX, periodY, ew, eh, r0, r1,
+                        clampTo);
     });
     const cpu::LevelTables tables = tablesOf(analysis, l);
     scratch.assign(current.size(), 0);
@@ -279,7 +289,7 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
   if (std::abs(window.x) > kMaxPosition || std::abs(window.y) > kMaxPosition)
     throw Error("window position is out of range (|x|, |y| <= 2^40)");
   if (analysis.levels.empty()) throw Error("exemplar analysis is empty");
-  const auto device = deviceFor(ctx);
+  const auto device = deviceFor(ctx, analysis.wrap);
   SynthesisResult result;
   CoordMap& out = result.coords;
   out.width = window.width;

@@ -52,7 +52,11 @@ struct Plan {
   cpu::LevelTables tableView(int a) const {
     const AnalysisLevel& al = tables(a);
     return {analysis.width, analysis.height, al.spacing, analysis.k, al.appearance.data(), al.neighborhood.data(),
-            al.candidates.data()};
+            al.candidates.data(), clampTo(a)};
+  }
+  // The valid region of atlas level a's stack level, for a non-toroidal exemplar; null when it tiles.
+  const ValidRegion* clampTo(int a) const {
+    return analysis.wrap == ExemplarWrap::Clamp ? &tables(a).valid : nullptr;
   }
   int subpasses() const { return options.correct ? options.passes * 4 : 0; }
 };
@@ -77,12 +81,15 @@ std::vector<uint32_t> synthesizeOnCpu(const Plan& plan, const Context& ctx, std:
     const SurfaceLevel& level = plan.domain.levels[size_t(a)];
     const auto sites = [&](auto&& kernel) { forSites(level.size(), ctx, kernel); };
     current.assign(level.size(), 0);
+    const ValidRegion* clampTo = plan.clampTo(a);
     if (a == plan.top)
-      sites([&](size_t b, size_t e) { cpu::initSurfaceKernel(level, current.data(), ew, eh, b, e); });
+      sites([&](size_t b, size_t e) { cpu::initSurfaceKernel(level, current.data(), ew, eh, b, e, clampTo); });
     else
-      sites([&](size_t b, size_t e) { cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), ew, eh, b, e); });
+      sites([&](size_t b, size_t e) {
+        cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), ew, eh, b, e, clampTo);
+      });
     sites([&](size_t b, size_t e) {
-      cpu::jitterSurfaceKernel(level, current.data(), plan.options.seed, a, plan.amplitude256(a), ew, eh, b, e);
+      cpu::jitterSurfaceKernel(level, current.data(), plan.options.seed, a, plan.amplitude256(a), ew, eh, b, e, clampTo);
     });
     const cpu::LevelTables tables = plan.tableView(a);
     scratch.resize(current.size());
@@ -171,12 +178,12 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
   SurfaceSynthesisResult result;
   result.exemplarPixelsPerTexel = plan.pixelsPerTexel;
 #if TEXFAB_HAS_VULKAN
-  if (const auto device = deviceFor(ctx)) {
+  if (const auto device = deviceFor(ctx, analysis.wrap)) {
     result.coords = synthesizeOnDevice(*device, plan, ctx, result.levels);
     return result;
   }
 #else
-  deviceFor(ctx);
+  deviceFor(ctx, analysis.wrap);
 #endif
   result.coords = synthesizeOnCpu(plan, ctx, result.levels);
   return result;

@@ -10,6 +10,8 @@
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <memory>
 
 namespace texfab::cli {
@@ -17,11 +19,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// --exemplar-wrap: the library's modes, or auto (measured on the exemplar).
+enum class WrapChoice { Auto, Tile, Clamp };
+
 struct SynthJob {
   std::string exemplar, output, coords;
   std::vector<std::string> apply;
   synthesis::Window window{0, 0, 512, 512};
   bool windowGiven = false, tileable = false;
+  WrapChoice wrap = WrapChoice::Auto;
   synthesis::SynthesisOptions options;
   synthesis::AnalysisOptions analysis;
   CommonFlags common;
@@ -46,6 +52,22 @@ std::vector<Companion> reserveCompanions(const SynthJob& job, Run& run) {
   return companions;
 }
 
+// The wrap mode --exemplar-wrap asks for; auto measures the exemplar and says what it chose.
+synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run) {
+  using synthesis::ExemplarWrap;
+  if (choice != WrapChoice::Auto) return choice == WrapChoice::Tile ? ExemplarWrap::Tile : ExemplarWrap::Clamp;
+  const synthesis::WrapDiscontinuity d = synthesis::wrapDiscontinuity(exemplar);
+  const ExemplarWrap wrap = synthesis::detectExemplarWrap(exemplar);
+  char note[240];
+  std::snprintf(note, sizeof note,
+                "exemplar wrap: %s (auto: the colour jump across its wrap is %.2fx (x), %.2fx (y) the largest "
+                "inside; above %.1fx it does not tile%s)",
+                synthesis::toString(wrap), d.x, d.y, synthesis::kWrapDiscontinuityThreshold,
+                std::min(exemplar.width, exemplar.height) < synthesis::kWrapDetectionMinSide ? "; too small to tell" : "");
+  run.note(note);
+  return wrap;
+}
+
 Image load(const SynthJob& job, std::vector<Companion>& companions, const Context& ctx) {
   Stage stage(ctx, "load");
   Image exemplar = readImage(job.exemplar);
@@ -62,9 +84,11 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Contex
                   " but the exemplar is " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
     channels += c.map.channels;
   }
-  checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels),
-              "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) +
-                  " output (synthesize it in windows, --window)");
+  checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels) +
+                  synthesis::analysisMemoryBytes(exemplar.width, exemplar.height, job.analysis),
+              "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " output from a " +
+                  std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
+                  " exemplar (synthesize it in windows, --window)");
   stage.finish(job.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
   return exemplar;
 }
@@ -86,6 +110,7 @@ void runSynth(SynthJob& job) {
   std::vector<Companion> companions = reserveCompanions(job, run);
 
   const Image exemplar = load(job, companions, run.ctx());
+  job.analysis.wrap = chooseWrap(job.wrap, exemplar, run);
   bool cached = false;
   const ExemplarAnalysis analysis = analyzeExemplar(run, exemplar, job.analysis, cached);
   const int levels = int(analysis.levels.size());
@@ -123,6 +148,7 @@ void runSynth(SynthJob& job) {
   r["parameters"] = {{"seed", job.options.seed}, {"passes", job.options.passes},
                      {"interleave", job.options.interleave}, {"k", job.analysis.k},
                      {"feature_weight", job.analysis.featureWeight}, {"tileable", job.tileable},
+                     {"exemplar_wrap", toString(job.analysis.wrap)},
                      {"jitter", job.options.jitter.empty() ? defaultJitter(levels) : job.options.jitter}};
   r["levels"] = toJson(result.levels);
   run.finish();
@@ -158,6 +184,11 @@ Command addSynthCommand(CLI::App& root) {
   f.option("--feature-weight", job->analysis.featureWeight,
            "Weight of the feature-distance channel in appearance space (0 = off)", {0, 100});
   f.flag("--tileable", job->tileable, "Make the output wrap at its size (a tile)");
+  f.choice("--exemplar-wrap", job->wrap, Names<WrapChoice>{{"auto", WrapChoice::Auto}, {"tile", WrapChoice::Tile},
+                                                          {"clamp", WrapChoice::Clamp}},
+           "How the exemplar's borders are treated: tile (it is toroidal: coordinates wrap), clamp (a photograph "
+           "that does not tile: synthesis never reads across its border), or auto: clamp when the colour jump "
+           "across its wrap is more than 1.9 times the largest jump between columns (rows) inside");
   f.text("--coords", job->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
   f.app()->add_option("--apply", job->apply,
                       "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, roughness, "

@@ -7,6 +7,7 @@
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/hash.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -34,8 +35,12 @@ inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
   return {roundToInt((ax + bx) * float(kOne)), roundToInt((ay + by) * float(kOne))};
 }
 
-// c + (dx, dy) subpixels, wrapped to the exemplar (sizes in subpixels).
-inline uint32_t shifted(uint32_t c, int dx, int dy, int64_t w, int64_t h) {
+// c + (dx, dy) subpixels, wrapped to the exemplar (sizes in subpixels), or reflected into the
+// valid region `clampTo` (whole pixels) when it is given.
+inline uint32_t shifted(uint32_t c, int dx, int dy, int64_t w, int64_t h, const ValidRegion* clampTo = nullptr) {
+  if (clampTo)
+    return packCoord(uint32_t(reflectInto(int64_t(coordU(c)) + dx, int64_t(clampTo->x0) * kOne, int64_t(clampTo->x1) * kOne)),
+                     uint32_t(reflectInto(int64_t(coordV(c)) + dy, int64_t(clampTo->y0) * kOne, int64_t(clampTo->y1) * kOne)));
   return packCoord(uint32_t(floorMod(int64_t(coordU(c)) + dx, w)), uint32_t(floorMod(int64_t(coordV(c)) + dy, h)));
 }
 
@@ -51,23 +56,25 @@ inline int stepToward(float fx, float fy) {
 
 } // namespace
 
-void initSurfaceKernel(const SurfaceLevel& level, uint32_t* out, int ew, int eh, size_t begin, size_t end) {
+void initSurfaceKernel(const SurfaceLevel& level, uint32_t* out, int ew, int eh, size_t begin, size_t end,
+                       const ValidRegion* clampTo) {
   for (size_t s = begin; s < end; ++s) {
     const Offset o = applyJ(level.jacobian[s], float(level.x[s]) + 0.5f, float(level.y[s]) + 0.5f);
     out[s] = shifted(0, o.x, o.y, int64_t(ew) * kOne, int64_t(eh) * kOne);
+    if (clampTo) out[s] = shifted(out[s], 0, 0, 0, 0, clampTo);  // the tiling's value, reflected into the region
   }
 }
 
 void upsampleSurfaceKernel(const SurfaceLevel& level, const uint32_t* parent, uint32_t* out, int ew, int eh,
-                           size_t begin, size_t end) {
+                           size_t begin, size_t end, const ValidRegion* clampTo) {
   for (size_t s = begin; s < end; ++s) {
     const Offset o = applyJ(level.jacobian[s], float(level.x[s] & 1) - 0.5f, float(level.y[s] & 1) - 0.5f);
-    out[s] = shifted(parent[level.parent[s]], o.x, o.y, int64_t(ew) * kOne, int64_t(eh) * kOne);
+    out[s] = shifted(parent[level.parent[s]], o.x, o.y, int64_t(ew) * kOne, int64_t(eh) * kOne, clampTo);
   }
 }
 
 void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t seed, int atlasLevel,
-                         int64_t amplitude256, int ew, int eh, size_t begin, size_t end) {
+                         int64_t amplitude256, int ew, int eh, size_t begin, size_t end, const ValidRegion* clampTo) {
   if (amplitude256 == 0) return;
   for (size_t s = begin; s < end; ++s) {
     const uint32_t chartSeed = seed ^ pcgHash(uint32_t(level.chart[s]) + 0x9e3779b9u);
@@ -75,7 +82,7 @@ void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t s
     const int64_t hy = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 1) >> 16) - 32768;
     const int64_t jx = (amplitude256 * kOne * hx + (int64_t(1) << 22)) >> 23;  // subpixels
     const int64_t jy = (amplitude256 * kOne * hy + (int64_t(1) << 22)) >> 23;
-    coords[s] = shifted(coords[s], int(jx), int(jy), int64_t(ew) * kOne, int64_t(eh) * kOne);
+    coords[s] = shifted(coords[s], int(jx), int(jy), int64_t(ew) * kOne, int64_t(eh) * kOne, clampTo);
   }
 }
 
@@ -92,6 +99,12 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
   const auto add = [](uint32_t a, uint32_t b, uint32_t m) {  // (a + b) mod m for a, b < m
     const uint32_t sum = a + b;
     return sum >= m ? sum - m : sum;
+  };
+  // Non-toroidal: a predicted neighborhood sample c + (dx, dy) clamped to the valid region (no wrap).
+  const ValidRegion* clampTo = t.clampTo;
+  const auto clampedShift = [&](uint32_t c, int64_t dx, int64_t dy) {
+    return packCoord(uint32_t(std::clamp(int64_t(coordU(c)) + dx, int64_t(clampTo->x0) * kOne, int64_t(clampTo->x1) * kOne)),
+                     uint32_t(std::clamp(int64_t(coordV(c)) + dy, int64_t(clampTo->y0) * kOne, int64_t(clampTo->y1) * kOne)));
   };
   const auto pixelIndex = [&](uint32_t c) {  // the exemplar pixel nearest subpixel coordinate c
     uint32_t u = (coordU(c) + kOne / 2) >> kSubpixelBits, v = (coordV(c) + kOne / 2) >> kSubpixelBits;
@@ -132,13 +145,16 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
       for (int d : {d1, d2}) {
         const int32_t n = nb[size_t(d)];
         if (n < 0) continue;
-        const uint32_t predicted = packCoord(add(coordU(in[n]), reduce(int64_t(dx) * kOne + back[d].x, sw), sw),
-                                             add(coordV(in[n]), reduce(int64_t(dy) * kOne + back[d].y, sh), sh));
+        const uint32_t predicted =
+            clampTo ? clampedShift(in[n], int64_t(dx) * kOne + back[d].x, int64_t(dy) * kOne + back[d].y)
+                    : packCoord(add(coordU(in[n]), reduce(int64_t(dx) * kOne + back[d].x, sw), sw),
+                                add(coordV(in[n]), reduce(int64_t(dy) * kOne + back[d].y, sh), sh));
         estimates[count++] = t.appearance + pixelIndex(predicted) * kAppearanceDims;
       }
       if (count == 0) {  // no neighbor on that side (an open boundary): from the site itself
-        const uint32_t predicted = packCoord(add(coordU(current), reduce(int64_t(dx) * kOne, sw), sw),
-                                             add(coordV(current), reduce(int64_t(dy) * kOne, sh), sh));
+        const uint32_t predicted = clampTo ? clampedShift(current, int64_t(dx) * kOne, int64_t(dy) * kOne)
+                                           : packCoord(add(coordU(current), reduce(int64_t(dx) * kOne, sw), sw),
+                                                       add(coordV(current), reduce(int64_t(dy) * kOne, sh), sh));
         estimates[count++] = t.appearance + pixelIndex(predicted) * kAppearanceDims;
       }
       for (int c = 0; c < kAppearanceDims; ++c)
@@ -160,7 +176,17 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
       const uint32_t oy = reduce(int64_t(fracY) + (d < 8 ? back[d].y : 0), sh);
       const uint32_t* cand = t.candidates + basePixel * size_t(t.k);
       for (int i = 0; i < t.k; ++i) {
-        const uint32_t c = packCoord(add(coordU(cand[i]) * kOne, ox, sw), add(coordV(cand[i]) * kOne, oy, sh));
+        uint32_t c;
+        if (clampTo) {  // C_i(S[n]) - J(p)δ unwrapped; skipped outside the valid region
+          const int64_t u = int64_t(coordU(cand[i])) * kOne + fracX + (d < 8 ? back[d].x : 0);
+          const int64_t v = int64_t(coordV(cand[i])) * kOne + fracY + (d < 8 ? back[d].y : 0);
+          if (u < int64_t(clampTo->x0) * kOne || u > int64_t(clampTo->x1) * kOne || v < int64_t(clampTo->y0) * kOne ||
+              v > int64_t(clampTo->y1) * kOne)
+            continue;
+          c = packCoord(uint32_t(u), uint32_t(v));
+        } else {
+          c = packCoord(add(coordU(cand[i]) * kOne, ox, sw), add(coordV(cand[i]) * kOne, oy, sh));
+        }
         if (c == best) continue;
         const int32_t dist = neighborhoodDistance(target, t.neighborhood + pixelIndex(c) * kNeighborhoodDims);
         if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {

@@ -15,19 +15,25 @@
 
 namespace texfab::synthesis::cpu {
 
+// Non-toroidal exemplars: with `clampTo` (the stack level's valid region, in whole pixels), every
+// coordinate these kernels write is reflected into the region (reflectInto, in subpixels) instead
+// of wrapped; correctSurfaceKernel clamps predicted neighborhood samples to the region and skips
+// candidates outside it.
+
 /// Top level: S[s] = J(s) * (texel centre) mod exemplar size, a tiling that follows each chart's
 /// Jacobian (jitter then randomizes it).
 void initSurfaceKernel(const SurfaceLevel& level, uint32_t* out, int exemplarWidth, int exemplarHeight,
-                       size_t begin, size_t end);
+                       size_t begin, size_t end, const ValidRegion* clampTo = nullptr);
 
 /// Upsampling: S[s] = S_parent[parent(s)] + J(s) * ((x mod 2, y mod 2) - 1/2): the child's offset
 /// from its parent's centre, in this level's texels, mapped to the exemplar.
 void upsampleSurfaceKernel(const SurfaceLevel& level, const uint32_t* parent, uint32_t* out, int exemplarWidth,
-                           int exemplarHeight, size_t begin, size_t end);
+                           int exemplarHeight, size_t begin, size_t end, const ValidRegion* clampTo = nullptr);
 
 /// Jitter in place, as jitterKernel, hashed on (seed, chart, level, x, y).
 void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t seed, int atlasLevel,
-                         int64_t amplitude256, int exemplarWidth, int exemplarHeight, size_t begin, size_t end);
+                         int64_t amplitude256, int exemplarWidth, int exemplarHeight, size_t begin, size_t end,
+                         const ValidRegion* clampTo = nullptr);
 
 /// One correction sub-pass over the sites of class `cls` = (x mod 2) + 2 (y mod 2); other sites
 /// are copied. The neighborhood of site s: for each diagonal Δ = h(±1, ±1), the mean appearance

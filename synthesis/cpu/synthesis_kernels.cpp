@@ -7,6 +7,7 @@
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/hash.h"
 
+#include <algorithm>
 #include <cstddef>
 
 namespace texfab::synthesis::cpu {
@@ -21,22 +22,50 @@ inline uint32_t wrapAdd(uint32_t a, uint32_t b, uint32_t m) {  // (a + b) mod m 
 } // namespace
 
 void initKernel(uint32_t* out, const LevelGrid& grid, int spacing, int exemplarWidth,
-                int exemplarHeight, int64_t periodX, int64_t periodY, int rowBegin, int rowEnd) {
+                int exemplarHeight, int64_t periodX, int64_t periodY, int rowBegin, int rowEnd,
+                const ValidRegion* clampTo) {
   for (int y = rowBegin; y < rowEnd; ++y) {
     int64_t qy = grid.y0 + y;
     if (periodY > 0) qy = floorMod(qy, periodY);
-    const auto v = uint32_t(floorMod(qy * spacing, exemplarHeight));
+    int64_t v = floorMod(qy * spacing, exemplarHeight);
+    if (clampTo) v = reflectInto(v, clampTo->y0, clampTo->y1);
     for (int x = 0; x < grid.width; ++x) {
       int64_t qx = grid.x0 + x;
       if (periodX > 0) qx = floorMod(qx, periodX);
-      out[size_t(y) * grid.width + x] = packCoord(uint32_t(floorMod(qx * spacing, exemplarWidth)), v);
+      int64_t u = floorMod(qx * spacing, exemplarWidth);
+      if (clampTo) u = reflectInto(u, clampTo->x0, clampTo->x1);
+      out[size_t(y) * grid.width + x] = packCoord(uint32_t(u), uint32_t(v));
     }
   }
 }
 
+namespace {
+
+// The clamped child coordinate of upsampleKernel, one axis.
+inline uint32_t clampedChild(uint32_t parent, int spacing, int64_t bit, int lo, int hi) {
+  int64_t base = std::min<int64_t>(parent, int64_t(hi) - spacing);
+  if (base < lo) base = lo;
+  return uint32_t(std::min<int64_t>(base + bit * spacing, hi));
+}
+
+} // namespace
+
 void upsampleKernel(const uint32_t* parent, const LevelGrid& parentGrid, uint32_t* out,
                     const LevelGrid& grid, int spacing, int exemplarWidth, int exemplarHeight,
-                    int rowBegin, int rowEnd) {
+                    int rowBegin, int rowEnd, const ValidRegion* clampTo) {
+  if (clampTo) {
+    for (int y = rowBegin; y < rowEnd; ++y) {
+      const int64_t qy = grid.y0 + y;
+      const uint32_t* parentRow = parent + size_t(floorShift(qy, 1) - parentGrid.y0) * parentGrid.width;
+      for (int x = 0; x < grid.width; ++x) {
+        const int64_t qx = grid.x0 + x;
+        const uint32_t s = parentRow[floorShift(qx, 1) - parentGrid.x0];
+        out[size_t(y) * grid.width + x] = packCoord(clampedChild(coordU(s), spacing, qx & 1, clampTo->x0, clampTo->x1),
+                                                    clampedChild(coordV(s), spacing, qy & 1, clampTo->y0, clampTo->y1));
+      }
+    }
+    return;
+  }
   const auto offX = uint32_t(spacing % exemplarWidth);
   const auto offY = uint32_t(spacing % exemplarHeight);
   for (int y = rowBegin; y < rowEnd; ++y) {
@@ -56,7 +85,7 @@ void upsampleKernel(const uint32_t* parent, const LevelGrid& parentGrid, uint32_
 
 void jitterKernel(uint32_t* coords, const LevelGrid& grid, uint32_t seed, int level,
                   int64_t amplitude256, int64_t periodX, int64_t periodY, int exemplarWidth,
-                  int exemplarHeight, int rowBegin, int rowEnd) {
+                  int exemplarHeight, int rowBegin, int rowEnd, const ValidRegion* clampTo) {
   if (amplitude256 == 0) return;
   for (int y = rowBegin; y < rowEnd; ++y) {
     int64_t qy = grid.y0 + y;
@@ -70,8 +99,12 @@ void jitterKernel(uint32_t* coords, const LevelGrid& grid, uint32_t seed, int le
       const int64_t jx = (amplitude256 * hx + (int64_t(1) << 22)) >> 23;
       const int64_t jy = (amplitude256 * hy + (int64_t(1) << 22)) >> 23;
       uint32_t& s = coords[size_t(y) * grid.width + x];
-      s = packCoord(uint32_t(floorMod(int64_t(coordU(s)) + jx, exemplarWidth)),
-                    uint32_t(floorMod(int64_t(coordV(s)) + jy, exemplarHeight)));
+      if (clampTo)
+        s = packCoord(uint32_t(reflectInto(int64_t(coordU(s)) + jx, clampTo->x0, clampTo->x1)),
+                      uint32_t(reflectInto(int64_t(coordV(s)) + jy, clampTo->y0, clampTo->y1)));
+      else
+        s = packCoord(uint32_t(floorMod(int64_t(coordU(s)) + jx, exemplarWidth)),
+                      uint32_t(floorMod(int64_t(coordV(s)) + jy, exemplarHeight)));
     }
   }
 }
@@ -113,8 +146,15 @@ void correctKernel(const uint32_t* in, uint32_t* out, const LevelGrid& grid, con
           const uint32_t s = nrow[x + dx];
           const uint32_t* cand = t.candidates + (size_t(coordV(s)) * ew + coordU(s)) * size_t(t.k);
           for (int i = 0; i < t.k; ++i) {
-            const uint32_t c = packCoord(wrapAdd(coordU(cand[i]), backX[dx + 1], ew),
-                                         wrapAdd(coordV(cand[i]), backY[dy + 1], eh));
+            uint32_t c;
+            if (t.clampTo) {  // no wrap: C_i - spacing*D must stay in the valid region
+              const int64_t u = int64_t(coordU(cand[i])) - int64_t(t.spacing) * dx;
+              const int64_t v = int64_t(coordV(cand[i])) - int64_t(t.spacing) * dy;
+              if (!t.clampTo->contains(u, v)) continue;
+              c = packCoord(uint32_t(u), uint32_t(v));
+            } else {
+              c = packCoord(wrapAdd(coordU(cand[i]), backX[dx + 1], ew), wrapAdd(coordV(cand[i]), backY[dy + 1], eh));
+            }
             if (c == best) continue;
             const int32_t d = neighborhoodDistance(
                 target, t.neighborhood + (size_t(coordV(c)) * ew + coordU(c)) * kNeighborhoodDims);

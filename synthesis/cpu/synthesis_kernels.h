@@ -8,6 +8,9 @@
 // A level buffer holds the packed exemplar coordinates (synthesis/coord_map.h) of the texels of a
 // rectangle of one level of the infinite plane; texel (x, y) of the buffer is level position
 // (grid.x0 + x, grid.y0 + y).
+//
+// Exemplar coordinates wrap (a toroidal exemplar), or, when a kernel is given the level's valid
+// region (`clampTo`, a non-toroidal exemplar), never leave that region: nothing wraps.
 
 #include "synthesis/exemplar_analysis.h"
 
@@ -31,7 +34,16 @@ struct LevelTables {
   const int8_t* appearance = nullptr;   ///< exemplarWidth*exemplarHeight*kAppearanceDims
   const int8_t* neighborhood = nullptr; ///< exemplarWidth*exemplarHeight*kNeighborhoodDims
   const uint32_t* candidates = nullptr; ///< exemplarWidth*exemplarHeight*k packed coordinates
+  const ValidRegion* clampTo = nullptr;  ///< non-toroidal: the level's valid region; null = wrap
 };
+
+/// A non-toroidal coordinate pushed back into [lo, hi]: mirrored at the bound it crossed, then
+/// clamped (a step longer than the region).
+constexpr int64_t reflectInto(int64_t v, int64_t lo, int64_t hi) {
+  if (v < lo) v = 2 * lo - v;
+  if (v > hi) v = 2 * hi - v;
+  return v < lo ? lo : v > hi ? hi : v;
+}
 
 /// Integer SSD of two runtime neighborhoods (kNeighborhoodDims int8 values each): the distance
 /// every backend computes identically.
@@ -54,26 +66,32 @@ constexpr int64_t floorShift(int64_t a, int s) { return a >> s; }
 
 /// Coarsest level: S[q] = (q' * spacing) mod exemplar size, q' = q mod period (period 0: q' = q).
 /// With no jitter and no correction this makes the finest level an exact tiling of the exemplar.
+/// With `clampTo`: that value clamped to the region.
 void initKernel(uint32_t* out, const LevelGrid& grid, int spacing, int exemplarWidth,
-                int exemplarHeight, int64_t periodX, int64_t periodY, int rowBegin, int rowEnd);
+                int exemplarHeight, int64_t periodX, int64_t periodY, int rowBegin, int rowEnd,
+                const ValidRegion* clampTo = nullptr);
 
 /// Upsampling (errata §20.2): S_l[q] = S_{l-1}[floor(q/2)] + spacing * (q mod 2), wrapped.
-/// `parent` must cover floor(grid/2).
+/// `parent` must cover floor(grid/2). With `clampTo` = [x0, x1] (per axis): a parent coordinate
+/// u becomes b + spacing * (q mod 2), b = min(u, x1 - spacing) (x0 if that is below x0), the
+/// result at most x1: the two children stay distinct and inside.
 void upsampleKernel(const uint32_t* parent, const LevelGrid& parentGrid, uint32_t* out,
                     const LevelGrid& grid, int spacing, int exemplarWidth, int exemplarHeight,
-                    int rowBegin, int rowEnd);
+                    int rowBegin, int rowEnd, const ValidRegion* clampTo = nullptr);
 
 /// Jitter in place: S[q] += round(amplitude/256 * H(q)), H uniform in [-1, 1)^2 from
 /// texelHash(seed, level, q mod period). `amplitude256` = round(strength * spacing * 256).
+/// Wrapped, or with `clampTo` reflected into the region (reflectInto).
 void jitterKernel(uint32_t* coords, const LevelGrid& grid, uint32_t seed, int level,
                   int64_t amplitude256, int64_t periodX, int64_t periodY, int exemplarWidth,
-                  int exemplarHeight, int rowBegin, int rowEnd);
+                  int exemplarHeight, int rowBegin, int rowEnd, const ValidRegion* clampTo = nullptr);
 
 /// One correction sub-pass. For every texel of the buffer rectangle [ax0, ax1) x [ay0, ay1) whose
 /// level position q satisfies q mod interleave == (classX, classY), writes the best candidate
 /// among { C_i(S[q+D]) - spacing*D : D in 3x3, i < k } (and S[q] itself), comparing 4-sample
 /// appearance-space neighborhoods by integer SSD; ties go to S[q], then to the smallest packed
-/// coordinate. Every other texel of the rectangle is copied. Rows are buffer rows and must lie
+/// coordinate. With tables.clampTo, C_i(S[q+D]) - spacing*D is not wrapped: a candidate outside
+/// the region is skipped. Every other texel of the rectangle is copied. Rows are buffer rows and must lie
 /// in [ay0, ay1); the rectangle must keep one texel of margin inside the buffer.
 void correctKernel(const uint32_t* in, uint32_t* out, const LevelGrid& grid, const LevelTables& tables,
                    int interleave, int classX, int classY, int ax0, int ax1, int rowBegin, int rowEnd);
