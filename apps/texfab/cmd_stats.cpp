@@ -42,6 +42,7 @@ void runStats(const StatsArgs& args) {
   std::printf("fidelity             %.4f   (7x7 RMS distance to the nearest exemplar neighborhood; lower is better)\n",
               q.fidelity);
   std::printf("histogram distance   %.4f   (largest per-channel earth mover's distance)\n", q.histogramDistance);
+  std::printf("contrast ratio       %.4f   (luminance standard deviation, image / exemplar; 1 = kept)\n", q.contrast);
   if (std::isnan(q.shiftedCorrelation))
     std::printf("shifted correlation  n/a      (image not larger than the exemplar)\n");
   else
@@ -54,6 +55,7 @@ void runStats(const StatsArgs& args) {
                              {"exemplar", args.exemplar},
                              {"fidelity", q.fidelity},
                              {"histogram_distance", q.histogramDistance},
+                             {"contrast_ratio", q.contrast},
                              {"shifted_correlation", q.shiftedCorrelation}};
     if (q.coherence) report["coherence"] = *q.coherence;
     if (q.coverage) report["coverage"] = *q.coverage;
