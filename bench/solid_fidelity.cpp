@@ -7,10 +7,10 @@
 // planes at the exemplar's period. The 2-D synthesis and a random-pixel image are the baselines.
 //   build/bench/solid_fidelity models/exemplars/marble.png /usr/share/gimp/2.0/patterns/Stone/rock.pat
 // Environment: SIDE (crop), N (plane side), BIG (repetition plane side), JITTER, PASSES, FINEST,
-// INTERLEAVE, STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and synthesis options), FK3D, FK2D,
+// INTERLEAVE, MATCH (matchColors 0/1), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and synthesis options), FK3D, FK2D,
 // CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
 // (writes the exemplars as PNG and stops),
-// SAVE=1 (writes the images to /tmp/solidfid-*.png).
+// RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png).
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
   so.finestPasses = int(env("FINEST", so.finestPasses));
   so.passes = int(env("PASSES", so.passes));
   so.interleave = int(env("INTERLEAVE", so.interleave));
+  so.matchColors = env("MATCH", so.matchColors) > 0;
   SolidAnalysisOptions ao;
   ao.strips = int(env("STRIPS", ao.strips));
   ao.kept = int(env("KEPT", ao.kept));
@@ -237,6 +238,7 @@ int main(int argc, char** argv) {
       std::printf("  coherence of the plane's own exemplar:%s\n", line.c_str());
     }
     for (const auto& [name, rule] : rules) {
+      if (const char* only = std::getenv("RULES"); only && std::string(",") .append(only).append(",").find("," + name + ",") == std::string::npos) continue;
       size_t at = 0;
       double cr = 0, fid = 0, hist = 0, shifted = 0;
       std::string line;

@@ -42,7 +42,7 @@ Prepared prepare(const SolidLevel& l) {
                                       l.projection3d.dims, l.projection3d.divisor)};
 }
 
-cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared) {
+cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared, bool matchColors) {
   const SolidLevel& l = a.levels[size_t(li)];
   cpu::SolidTables t;
   t.exemplarWidth = a.width;
@@ -63,6 +63,8 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
   }
   t.projection2d = &prepared.projection2d;
   t.projection3d = &prepared.projection3d;
+  static_assert(sizeof(l.searchColors) == 3 * kSolidColorSums * sizeof(int16_t));
+  if (matchColors) t.searchColors = l.searchColors[0].data();
   return t;
 }
 
@@ -75,6 +77,7 @@ uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   h.add(o.jitter);
   h.add(o.passes);
   h.add(o.interleave);
+  h.add(o.matchColors);
   return h.h;
 }
 
@@ -476,7 +479,7 @@ struct Engine {
       layers.push_back({b, e});
       b = e;
     }
-    const cpu::SolidTables tables = tablesOf(a, li, prepared(li));
+    const cpu::SolidTables tables = tablesOf(a, li, prepared(li), o.matchColors);
     std::vector<ChunkValues> pool;
     std::vector<int32_t> freeList;
     std::vector<std::vector<int32_t>> bufferOf(size_t(T) + 1, std::vector<int32_t>(n, -1));

@@ -178,13 +178,16 @@ using ProjectFn = void (*)(const int16_t* x, const SolidKernelProjection& p, int
 
 std::atomic<bool> gAllowSimd{true};
 
+// A voxel's colour as the search sees it: the sum of its three exemplar colours, scaled (6x the
+// mean) or through the level's colour transfer.
 inline void colorOf(const SolidTables& t, const uint32_t* s, int16_t* out) {
   int32_t c[3] = {0, 0, 0};
   for (int e = 0; e < 3; ++e) {
     const uint8_t* p = t.colors[e] + (size_t(coordV(s[e])) * size_t(t.exemplarWidth) + coordU(s[e])) * 3;
-    for (int ch = 0; ch < 3; ++ch) c[ch] += 2 * p[ch];
+    for (int ch = 0; ch < 3; ++ch) c[ch] += p[ch];
   }
-  for (int ch = 0; ch < 3; ++ch) out[ch] = int16_t(c[ch]);
+  for (int ch = 0; ch < 3; ++ch)
+    out[ch] = t.searchColors ? t.searchColors[ch * kSolidColorSums + c[ch]] : int16_t(2 * c[ch]);
   out[3] = 0;
 }
 
