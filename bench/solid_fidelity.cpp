@@ -35,6 +35,8 @@ using namespace texfab::synthesis;
 
 namespace {
 
+const Context kCtx{.threads = 2};
+
 Image crop(const Image& full, int side) {
   Image out(side, side, full.channels >= 3 ? 3 : 1);
   for (int y = 0; y < side; ++y)
@@ -126,19 +128,19 @@ int main(int argc, char** argv) {
       continue;
     }
     const Image e = crop(full, std::min({side, full.width, full.height}));
-    SolidAnalysis a = analyzeSolidCached(e, e, e, ao, cache, 2);
+    SolidAnalysis a = analyzeSolidCached(e, e, e, ao, cache, kCtx);
     if (env("FK3D", 0) > 0) a.levels.back().k3d = int(env("FK3D", 4));
     if (env("FK2D", 0) > 0) a.levels.back().k2d = int(env("FK2D", 2));
     if (env("CK3D", 0) > 0) for (auto& l : a.levels) if (&l != &a.levels.back()) l.k3d = int(env("CK3D", 12));
-    const ExemplarAnalysis a2 = analyzeExemplarCached(e, {}, cache, 2);
+    const ExemplarAnalysis a2 = analyzeExemplarCached(e, {}, cache, kCtx);
     const int ch = e.channels;
     const double exStd = lumStd(e);
     // 2-D synthesis baseline.
-    const SynthesisResult s2 = synthesize2d(a2, {0, 0, n, n}, {}, 2);
+    const SynthesisResult s2 = synthesize2d(a2, {0, 0, n, n}, {}, kCtx);
     const Image im2 = applyCoords(s2.coords, e);
     const double f2 = neighborhoodFidelity(im2, e), h2 = histogramDistance(im2, e);
     if (std::getenv("SAVE")) writeImage(im2, "/tmp/solidfid-2d.png"), writeImage(e, "/tmp/solidfid-ex.png");
-    const SynthesisResult s2b = synthesize2d(a2, {0, 0, big, big}, {}, 2);
+    const SynthesisResult s2b = synthesize2d(a2, {0, 0, big, big}, {}, kCtx);
     const double sc2 = shiftedSelfCorrelation(applyCoords(s2b.coords, e), e.width, e.height);
     Image rnd(n, n, ch);
     for (int y = 0; y < n; ++y)
@@ -199,7 +201,7 @@ int main(int argc, char** argv) {
     const auto lut4 = learnLut(candidates(4));
     // Source 2: a synthesized calibration box far from the measured planes.
     const int cb = int(env("CALBOX", 32));
-    const auto cal = learnLut(synthesizeSolidBox(a, {-5000, 7000, 3000, cb, cb, cb}, so, nullptr, 2).triples);
+    const auto cal = learnLut(synthesizeSolidBox(a, {-5000, 7000, 3000, cb, cb, cb}, so, nullptr, kCtx).triples);
     std::vector<std::pair<std::string, Rule>> rules = {
         {"mean", [&](const Triple& t, float* o) { for (int c = 0; c < ch; ++c) { float s = 0; for (int q = 0; q < 3; ++q) s += px(q, t[size_t(q)], c); o[c] = s / 3; } }},
         {"median", [&](const Triple& t, float* o) { for (int c = 0; c < ch; ++c) { float v[3]; for (int q = 0; q < 3; ++q) v[q] = px(q, t[size_t(q)], c); std::sort(v, v + 3); o[c] = v[1]; } }},
@@ -221,7 +223,7 @@ int main(int argc, char** argv) {
     std::vector<Voxel> all;
     for (auto* ps : {&planes, &bigPlanes})
       for (const Plane& p : *ps) all.insert(all.end(), p.voxels.begin(), p.voxels.end());
-    const SolidSynthesisResult r = synthesizeSolid(a, all, so, nullptr, 2);
+    const SolidSynthesisResult r = synthesizeSolid(a, all, so, nullptr, kCtx);
     {
       // Coherence of the in-plane exemplar's coordinates on the three axis planes.
       size_t at = 0;

@@ -13,6 +13,9 @@ packages=(
   libtinygltf-dev libdraco-dev draco libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
   # tests and benchmarks; real clients that check our outputs
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm
+  # Vulkan compute (optional at build time): loader and headers, the GLSL compiler, Mesa's
+  # lavapipe (a CPU device, so the Vulkan tests run anywhere), the Khronos validation layer
+  libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers
   # test data: GIMP's patterns (marble, granite, brick, wood, ...)
   gimp-data
 )

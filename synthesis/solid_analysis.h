@@ -33,6 +33,7 @@
 //     the spirit of the histogram matching Kopf et al. 2007 (Solid Texture Synthesis from 2D
 //     Exemplars, §3.3) run inside their optimization, learned here once from the candidates.
 
+#include "render/image/context.h"
 #include "render/image/image.h"
 
 #include <array>
@@ -138,17 +139,17 @@ const std::array<std::array<int, 3>, kSolidCrossVoxels>& solidCrossOffsets();
 void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez,
                             const std::array<std::string, 3>& names = {"x exemplar", "y exemplar", "z exemplar"});
 
-/// The precomputation. Pure: depends only on the pixels and options, never on `threads`.
+/// The precomputation. Pure: depends only on the pixels and options, never on the context.
 /// Passing the same image three times shares the candidate computation.
 SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
-                           int threads = 0);
+                           const Context& ctx = {});
 
 uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options);
 
 /// Through the on-disk cache `cacheDir/<key>.solid` (see analyzeExemplarCached).
 SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& ez,
                                  const SolidAnalysisOptions& options, const std::filesystem::path& cacheDir,
-                                 int threads = 0, bool* fromCache = nullptr);
+                                 const Context& ctx = {}, bool* fromCache = nullptr);
 
 void writeSolidAnalysis(const SolidAnalysis& analysis, const std::filesystem::path& path);
 std::optional<SolidAnalysis> readSolidAnalysis(const std::filesystem::path& path, uint64_t expectedKey);

@@ -5,10 +5,14 @@
 
 #include "render/image/error.h"
 #include "render/image/parallel.h"
+#include "synthesis/backend.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/hash.h"
+#if TEXFAB_HAS_VULKAN
+#include "synthesis/vulkan/solid_level.h"
+#endif
 
 #include <algorithm>
 #include <climits>
@@ -188,9 +192,9 @@ struct Engine {
   const SolidAnalysis& a;
   const SolidSynthesisOptions& o;
   SolidLevelCache* cache;
-  int threads;
+  const Context& ctx;
   std::vector<SolidLevelStats>& stats;
-  const SolidLevelCallback& onLevel;
+  std::shared_ptr<vulkan::Device> device = deviceFor(ctx);  // null: the CPU
   std::vector<Mask> masks = std::vector<Mask>(a.levels.size());
   std::vector<Finals> finals = std::vector<Finals>(a.levels.size());
   size_t peakBytes = 0;  // masks + finals + step values held at once (diagnostics)
@@ -228,7 +232,7 @@ struct Engine {
       }
       for (size_t b = 0; b < active.size(); b += kBatch) {
         const size_t e = std::min(active.size(), b + kBatch);
-        parallelFor(int(b), int(e), threads, [&](int k0, int k1) {
+        parallelFor(int(b), int(e), ctx, [&](int k0, int k1) {
           for (int k = k0; k < k1; ++k) spread(m, active[size_t(k)], t, grids.data() + size_t(k - int(b)) * kGatheredVoxels);
         });
         for (size_t k = b; k < e; ++k) merge(m, m.keys[active[k]], grids.data() + (k - b) * kGatheredVoxels);
@@ -447,12 +451,41 @@ struct Engine {
         }
   }
 
-  // Synthesizes level li over its whole mask; emit(slot, triples) receives the final values of
-  // each chunk of the finest level.
+  // The final values of chunk `slot` of level li: to emit at the finest level; above it, its seeds
+  // (last = T: the voxels whose final values level li+1 reads) into the store block of each 8^3
+  // block holding one.
+  template <class Emit> void finishChunk(int li, uint32_t slot, const uint32_t* triples, const Emit& emit) {
+    if (li == top()) return emit(slot, triples);
+    const Mask& m = masks[size_t(li)];
+    const ChunkKey key = m.keys[slot];
+    const int8_t* last = m.at(slot);
+    const auto T = int8_t(steps(li));
+    for (int bz = 0; bz < kChunk; bz += kBlock)
+      for (int by = 0; by < kChunk; by += kBlock)
+        for (int bx = 0; bx < kChunk; bx += kBlock) {
+          uint32_t* fv = nullptr;
+          for (int z = 0; z < kBlock; ++z)
+            for (int y = 0; y < kBlock; ++y)
+              for (int x = 0; x < kBlock; ++x) {
+                const int v = ((bz + z) * kChunk + by + y) * kChunk + bx + x;
+                if (last[v] != T) continue;
+                if (!fv) {
+                  const int32_t fs = finals[size_t(li)].find({(key[0] * kChunk + bx) >> kBlockShift,
+                                                              (key[1] * kChunk + by) >> kBlockShift,
+                                                              (key[2] * kChunk + bz) >> kBlockShift});
+                  if (fs < 0) throw std::logic_error("lazy solid synthesis: final block missing");
+                  fv = finals[size_t(li)].at(uint32_t(fs));
+                }
+                std::copy_n(triples + v * 3, 3, fv + ((z * kBlock + y) * kBlock + x) * 3);
+              }
+        }
+  }
+
+  // Synthesizes level li over its whole mask (on the device when there is one); emit(slot,
+  // triples) receives the final values of each chunk of the finest level.
   template <class Emit> void synthesizeLevel(int li, const Emit& emit) {
     const auto started = Clock::now();
-    Mask& m = masks[size_t(li)];
-    const int T = steps(li);
+    const Mask& m = masks[size_t(li)];
     const size_t n = m.size();
     std::vector<int8_t> maxLast(n, -1);
     int64_t voxels = 0, corrections = 0;
@@ -465,6 +498,47 @@ struct Engine {
         corrections += c[v] > 0 ? (c[v] + subpasses - 1) / subpasses : 0;
       }
     }
+#if TEXFAB_HAS_VULKAN
+    if (device) synthesizeLevelOnDevice(li, emit);
+    else
+#endif
+      synthesizeLevelOnCpu(li, maxLast, emit);
+    if (cache && li < top()) fillCache(li);
+    SolidLevelStats& st = stats[size_t(li)];
+    st.voxels += voxels;
+    st.corrections += corrections;
+    st.seconds += since(started);
+  }
+
+#if TEXFAB_HAS_VULKAN
+  template <class Emit> void synthesizeLevelOnDevice(int li, const Emit& emit) {
+    const Mask& m = masks[size_t(li)];
+    vulkan::SolidLevelInput level;
+    level.keys = m.keys;
+    level.last = [&](uint32_t slot) { return m.at(slot); };
+    if (li > 0)
+      level.parents = [&](uint32_t slot) -> const uint32_t* {
+        const int32_t ps = finals[size_t(li) - 1].find(m.keys[slot]);  // the block of this chunk's parents
+        if (ps < 0) throw std::logic_error("lazy solid synthesis: parent values missing");
+        return finals[size_t(li) - 1].at(uint32_t(ps));
+      };
+    level.steps = steps(li);
+    level.interleave = o.interleave;
+    level.seed = o.seed;
+    level.jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
+    vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li), o.matchColors), level,
+                                 [&](uint32_t slot, const uint32_t* triples) { finishChunk(li, slot, triples, emit); },
+                                 ctx);
+  }
+#endif
+
+  // The CPU pipelines the level's z-layers of chunks: step t of layer j runs once step t-1 of
+  // layers j-1..j+1 is done, and a step's values are dropped as soon as the next step of both
+  // neighbouring layers has read them.
+  template <class Emit> void synthesizeLevelOnCpu(int li, const std::vector<int8_t>& maxLast, const Emit& emit) {
+    const Mask& m = masks[size_t(li)];
+    const int T = steps(li);
+    const size_t n = m.size();
     // Chunks in z-layers (then y, x: neighbours close in memory).
     std::vector<uint32_t> order(n);
     for (size_t s = 0; s < n; ++s) order[s] = uint32_t(s);
@@ -491,7 +565,6 @@ struct Engine {
       }
     };
     const int L = int(layers.size());
-    const auto TT = int8_t(T);
     for (int i = 0; i < L + T; ++i) {
       for (int t = 0; t <= T; ++t) {
         const int j = i - t;
@@ -508,7 +581,7 @@ struct Engine {
           freeList.pop_back();
         }
         peakBytes = std::max(peakBytes, storeBytes() + pool.size() * sizeof(uint32_t) * kChunkVoxels * 5);
-        parallelFor(int(b), int(e), threads, [&](int k0, int k1) {
+        parallelFor(int(b), int(e), ctx, [&](int k0, int k1) {
           thread_local std::unique_ptr<Gathered> scratch;
           if (!scratch) scratch = std::make_unique<Gathered>();
           for (int k = k0; k < k1; ++k) {
@@ -518,34 +591,7 @@ struct Engine {
             ChunkValues& out = pool[size_t(ob)];
             if (t == 0) start(li, slot, tables, out);
             else correct(li, slot, t, bufferOf[size_t(t) - 1], pool, tables, *scratch, out);
-            if (t < T) continue;
-            if (li == top()) {
-              emit(slot, out.triples.get());
-            } else {
-              // Seeds (last = T) are the voxels whose final values level li+1 reads; each 8^3
-              // block of the chunk holding one has its store block.
-              const ChunkKey key = m.keys[slot];
-              const int8_t* last = m.at(slot);
-              for (int bz = 0; bz < kChunk; bz += kBlock)
-                for (int by = 0; by < kChunk; by += kBlock)
-                  for (int bx = 0; bx < kChunk; bx += kBlock) {
-                    uint32_t* fv = nullptr;
-                    for (int z = 0; z < kBlock; ++z)
-                      for (int y = 0; y < kBlock; ++y)
-                        for (int x = 0; x < kBlock; ++x) {
-                          const int v = ((bz + z) * kChunk + by + y) * kChunk + bx + x;
-                          if (last[v] != TT) continue;
-                          if (!fv) {
-                            const int32_t fs = finals[size_t(li)].find(
-                                {(key[0] * kChunk + bx) >> kBlockShift, (key[1] * kChunk + by) >> kBlockShift,
-                                 (key[2] * kChunk + bz) >> kBlockShift});
-                            if (fs < 0) throw std::logic_error("lazy solid synthesis: final block missing");
-                            fv = finals[size_t(li)].at(uint32_t(fs));
-                          }
-                          std::copy_n(out.triples.get() + v * 3, 3, fv + ((z * kBlock + y) * kBlock + x) * 3);
-                        }
-                  }
-            }
+            if (t == T) finishChunk(li, slot, out.triples.get(), emit);
           }
         });
         if (t == T) release(T, size_t(j));
@@ -556,11 +602,6 @@ struct Engine {
         if (j >= 0 && j < L) release(t - 1, size_t(j));
       }
     }
-    if (cache && li < top()) fillCache(li);
-    SolidLevelStats& st = stats[size_t(li)];
-    st.voxels += voxels;
-    st.corrections += corrections;
-    st.seconds += since(started);
   }
 
   std::vector<std::unique_ptr<Prepared>> preparedLevels = std::vector<std::unique_ptr<Prepared>>(a.levels.size());
@@ -572,6 +613,7 @@ struct Engine {
 
   // masks[top] holds the request (last = T); emit as in synthesizeLevel.
   template <class Emit> void run(const Emit& emit) {
+    Stage maskStage(ctx, "masks");
     for (int li = top(); li >= 0; --li) {
       const auto started = Clock::now();
       if (li < top()) seedFromChild(li);
@@ -579,9 +621,12 @@ struct Engine {
       stats[size_t(li)].seconds += since(started);
       peakBytes = std::max(peakBytes, storeBytes());
     }
+    maskStage.finish();
     for (int li = 0; li <= top(); ++li) {
+      Stage levelStage(ctx, "level " + std::to_string(li + 1) + "/" + std::to_string(top() + 1));
       if (masks[size_t(li)].size()) synthesizeLevel(li, emit);
-      if (onLevel) onLevel(stats[size_t(li)], li + 1, top() + 1);
+      const SolidLevelStats& st = stats[size_t(li)];
+      levelStage.finish(std::to_string(st.voxels) + " voxels, " + std::to_string(st.corrections) + " corrections");
       masks[size_t(li)].release();
       if (li > 0) finals[size_t(li) - 1].release();
     }
@@ -674,15 +719,14 @@ void SolidLevelCache::insert(const Key& key, std::shared_ptr<const Brick> brick)
 }
 
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
-                                     const SolidSynthesisOptions& o, SolidLevelCache* cache, int threads,
-                                     const SolidLevelCallback& onLevel) {
+                                     const SolidSynthesisOptions& o, SolidLevelCache* cache, const Context& ctx) {
   prepare(a, o, cache);
   for (const Voxel& v : voxels) validatePosition(v.x, v.y, v.z);
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
   if (voxels.empty()) return result;
-  Engine engine{a, o, cache, threads, result.levels, onLevel};
+  Engine engine{a, o, cache, ctx, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
   // The requested voxels, grouped by finest chunk (counting sort).
@@ -721,7 +765,7 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
 }
 
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& box, const SolidSynthesisOptions& o,
-                                        SolidLevelCache* cache, int threads, const SolidLevelCallback& onLevel) {
+                                        SolidLevelCache* cache, const Context& ctx) {
   prepare(a, o, cache);
   if (box.nx < 1 || box.ny < 1 || box.nz < 1)
     throw Error("voxel box " + std::to_string(box.nx) + "x" + std::to_string(box.ny) + "x" + std::to_string(box.nz) +
@@ -731,7 +775,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(size_t(box.count()));
-  Engine engine{a, o, cache, threads, result.levels, onLevel};
+  Engine engine{a, o, cache, ctx, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
   const int64_t lo[3] = {box.x, box.y, box.z}, hi[3] = {box.x + box.nx, box.y + box.ny, box.z + box.nz};
@@ -792,7 +836,7 @@ void solidColors(std::span<const Triple> triples, const Image& ex, const Image& 
 DependencyChain dependencyChainSize(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   DependencyChain chain;
   const Voxel origin{};
-  const SolidSynthesisResult r = synthesizeSolid(a, std::span<const Voxel>(&origin, 1), o, nullptr, 1);
+  const SolidSynthesisResult r = synthesizeSolid(a, std::span<const Voxel>(&origin, 1), o, nullptr, Context{.threads = 1});
   for (const auto& l : r.levels) chain.exactPerLevel.push_back(l.voxels);
   chain.exact = r.voxelsSynthesized();
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab solid: lazy solid texture synthesis from 2-D exemplars (Dong, Lefebvre, Tong, Drettakis
 // 2008): a whole volume as slices, an arbitrary plane as an image, or colours at listed points.
+#include "apps/texfab/backend_flags.h"
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "render/image/error.h"
@@ -41,6 +42,7 @@ struct SolidArgs {
   int finestPasses = synthesis::SolidSynthesisOptions{}.finestPasses;
   int interleave = synthesis::SolidSynthesisOptions{}.interleave;
   int threads = 0;
+  BackendFlags backend;
   std::string report;
   std::string cacheDir;
   bool noCache = false;
@@ -109,6 +111,8 @@ Image loadExemplar(const std::string& path) {
 void runSolid(const SolidArgs& args) {
   using namespace synthesis;
   Progress progress("texfab solid", args.quiet);
+  Context ctx{.threads = args.threads};
+  if (const std::string line = applyBackend(args.backend, ctx); !line.empty()) progress.note("backend: " + line);
 
   // Validate everything before any work: one mode, its parameters, the outputs.
   const int modes = (args.volume != 0) + !args.plane.empty() + !args.points.empty();
@@ -195,10 +199,10 @@ void runSolid(const SolidArgs& args) {
   bool cached = false;
   const SolidAnalysisOptions analysisOptions;
   const SolidAnalysis analysis =
-      args.noCache ? analyzeSolid(ex, ey, ez, analysisOptions, args.threads)
+      args.noCache ? analyzeSolid(ex, ey, ez, analysisOptions, ctx)
                    : analyzeSolidCached(ex, ey, ez, analysisOptions,
                                         args.cacheDir.empty() ? defaultCacheDir() : fs::path(args.cacheDir),
-                                        args.threads, &cached);
+                                        ctx, &cached);
   progress.finish(cached ? "(cached)" : std::to_string(analysis.levels.size()) + " levels" +
                                             (analysis.shared ? ", candidates shared" : ""));
 
@@ -247,7 +251,7 @@ void runSolid(const SolidArgs& args) {
         // levels cost more than they save (measured: a 64^3 volume synthesizes 7.9 instead of
         // 6.1 voxels per voxel through it).
         const SolidSynthesisResult r =
-            synthesizeSolidBox(analysis, box, options, n > 128 ? &cache : nullptr, args.threads);
+            synthesizeSolidBox(analysis, box, options, n > 128 ? &cache : nullptr, ctx);
         accumulate(r);
         std::vector<float> colours;
         solidColors(r.triples, ex, ey, ez, colours);
@@ -299,7 +303,7 @@ void runSolid(const SolidArgs& args) {
         for (int a = 0; a < 3; ++a) p[size_t(a)] = origin[size_t(a)] + (i + 0.5) * u[size_t(a)] + (j + 0.5) * v[size_t(a)];
         voxels[size_t(j) * width + size_t(i)] = voxelAt(p, args.scale);
       }
-    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, args.threads);
+    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, ctx);
     accumulate(r);
     requested = int64_t(voxels.size());
     std::vector<float> colours;
@@ -314,7 +318,7 @@ void runSolid(const SolidArgs& args) {
     progress.start("synthesis");
     std::vector<Voxel> voxels;
     for (const Vec3& p : points) voxels.push_back(voxelAt(p, args.scale));
-    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, args.threads);
+    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, ctx);
     accumulate(r);
     requested = int64_t(voxels.size());
     std::vector<float> colours;
@@ -417,6 +421,7 @@ Command addSolidCommand(CLI::App& root) {
                   "2: 8 sub-passes per pass, as in the paper; 1: one (a far shorter dependency chain)")
       ->capture_default_str();
   app->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  addBackendFlags(*app, args->backend);
   app->add_option("--report", args->report, "Write timings, voxel counts and memory to this JSON file");
   app->add_option("--cache-dir", args->cacheDir, "Analysis cache folder (default: ~/.cache/texfab)");
   app->add_flag("--no-cache", args->noCache, "Neither read nor write the analysis cache");

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab texture: synthesize a texture over a mesh (anisometric synthesis in the atlas,
 // Lefebvre & Hoppe 2006, or lazy solid synthesis, Dong et al. 2008) and write the textured model.
+#include "apps/texfab/backend_flags.h"
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "render/texture_mesh.h"
@@ -39,6 +40,7 @@ struct TextureArgs {
   std::string previewSize = "800";
   std::string report;
   int threads = 0;
+  BackendFlags backend;
   std::string cacheDir;
   bool noCache = false;
   bool quiet = false;
@@ -77,6 +79,8 @@ fs::path siblingPath(const fs::path& output, const std::string& suffix, const st
 
 void runTexture(const TextureArgs& args) {
   Progress progress("texfab texture", args.quiet);
+  Context ctx{.threads = args.threads};
+  applyBackend(args.backend, ctx);  // the progress lines below name it
   // Everything checkable is checked before any work.
   geometry::meshFormatOf(args.output);
   render::TextureMeshOptions options;
@@ -123,7 +127,6 @@ void runTexture(const TextureArgs& args) {
   if (!args.preview.empty()) {
     checkImageWritable(args.preview);
     std::tie(previewOptions.width, previewOptions.height) = parseSize(args.previewSize, "--preview-size");
-    previewOptions.threads = args.threads;
   }
 
   progress.start("load");
@@ -148,14 +151,14 @@ void runTexture(const TextureArgs& args) {
   std::optional<synthesis::SolidAnalysis> solidAnalysis;
   if (options.mode == render::TextureMode::Surface) {
     const synthesis::AnalysisOptions analysisOptions;
-    analysis = args.noCache ? synthesis::analyzeExemplar(exemplar, analysisOptions, args.threads)
-                            : synthesis::analyzeExemplarCached(exemplar, analysisOptions, cacheDir, args.threads, &cached);
+    analysis = args.noCache ? synthesis::analyzeExemplar(exemplar, analysisOptions, ctx)
+                            : synthesis::analyzeExemplarCached(exemplar, analysisOptions, cacheDir, ctx, &cached);
   } else {
     const synthesis::SolidAnalysisOptions analysisOptions;
     solidAnalysis = args.noCache
-                        ? synthesis::analyzeSolid(exemplar, exemplar, exemplar, analysisOptions, args.threads)
+                        ? synthesis::analyzeSolid(exemplar, exemplar, exemplar, analysisOptions, ctx)
                         : synthesis::analyzeSolidCached(exemplar, exemplar, exemplar, analysisOptions, cacheDir,
-                                                        args.threads, &cached);
+                                                        ctx, &cached);
   }
   progress.finish(cached ? "(cached)" : "");
 
@@ -165,7 +168,6 @@ void runTexture(const TextureArgs& args) {
 
   ex.analysis = analysis ? &*analysis : nullptr;
   ex.solidAnalysis = solidAnalysis ? &*solidAnalysis : nullptr;
-  Context ctx{.threads = args.threads};
   ctx.progress = [&](const ProgressEvent& e) {
     if (e.kind == ProgressEvent::Kind::End) progress.record(std::string(e.stage), e.seconds, std::string(e.detail));
   };
@@ -188,7 +190,7 @@ void runTexture(const TextureArgs& args) {
   if (!args.preview.empty()) {
     progress.start("preview");
     const render::PreviewRenderer renderer(result.mesh);
-    writeImage(renderer.render(previewOptions), args.preview);
+    writeImage(renderer.render(previewOptions, ctx), args.preview);
     progress.finish(args.preview);
   }
 
@@ -264,6 +266,7 @@ Command addTextureCommand(CLI::App& root) {
                   "when a report is asked for) as JSON");
   app->add_option("--threads", args->threads, "Worker threads (0 = all cores); the result does not depend on it")
       ->capture_default_str();
+  addBackendFlags(*app, args->backend);
   app->add_option("--cache-dir", args->cacheDir, "Exemplar analysis cache folder (default: ~/.cache/texfab)");
   app->add_flag("--no-cache", args->noCache, "Neither read nor write the analysis cache");
   app->add_flag("-q,--quiet", args->quiet, "No progress output");
