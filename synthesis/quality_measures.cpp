@@ -234,11 +234,24 @@ double shiftedSelfCorrelation(const Image& image, int dx, int dy) {
   return std::max(pearson(lum, image.width, image.height, dx, 0), pearson(lum, image.width, image.height, 0, dy));
 }
 
+double contrastRatio(const Image& image, const Image& exemplar) {
+  auto deviation = [](const Image& im) {
+    const std::vector<float> lum = luminance(im);
+    double s = 0, ss = 0;
+    for (float l : lum) s += l, ss += double(l) * l;
+    const double n = double(lum.size()), mean = s / n;
+    return std::sqrt(std::max(0.0, ss / n - mean * mean));
+  };
+  const double e = deviation(exemplar);
+  return e > 0 ? deviation(image) / e : std::numeric_limits<double>::quiet_NaN();
+}
+
 QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
                              const FidelityOptions& fidelity, const Context& ctx) {
   QualityReport report;
   report.fidelity = neighborhoodFidelity(image, exemplar, fidelity, ctx);
   report.histogramDistance = histogramDistance(image, exemplar);
+  report.contrast = contrastRatio(image, exemplar);
   if (image.width > exemplar.width && image.height > exemplar.height)
     report.shiftedCorrelation = shiftedSelfCorrelation(image, exemplar.width, exemplar.height);
   else

@@ -59,10 +59,16 @@ double coverage(const CoordMap& coords);
 /// Throws if the image is not larger than the shift in both directions.
 double shiftedSelfCorrelation(const Image& image, int dx, int dy);
 
+/// Luminance contrast ratio: the standard deviation of the image's luminance over the
+/// exemplar's. Near 1 keeps the exemplar's contrast; below 1 is washed out. NaN if the exemplar
+/// is flat.
+double contrastRatio(const Image& image, const Image& exemplar);
+
 /// All measures at once; coherence and coverage need the coordinate map.
 struct QualityReport {
   double fidelity = 0;
   double histogramDistance = 0;
+  double contrast = 0;  ///< contrastRatio()
   double shiftedCorrelation = 0;
   std::optional<double> coherence;
   std::optional<double> coverage;

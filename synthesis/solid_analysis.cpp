@@ -337,8 +337,52 @@ bool samePixels(const Image& a, const Image& b) {
   return a.width == b.width && a.height == b.height && a.channels == b.channels && a.pixels == b.pixels;
 }
 
-// Fills the derived tables of a level (see SolidLevel::candidateDescriptors2d).
+// SolidLevel::searchColors of one channel: `sums` counts the sums of three colours (source),
+// `values` the exemplar colours (target). Exact integer arithmetic: the source quantile at the
+// middle of sum s's share, q = (below + count/2) / total, is looked up in the target's
+// distribution with linear interpolation inside the 8-bit bin it falls in (bin b spans
+// [b - 1/2, b + 1/2]).
+void matchHistogram(const std::array<int64_t, kSolidColorSums>& sums, const std::array<int64_t, 256>& values,
+                    std::array<int16_t, kSolidColorSums>& out) {
+  int64_t sourceTotal = 0, targetTotal = 0;
+  for (int64_t c : sums) sourceTotal += c;
+  for (int64_t c : values) targetTotal += c;
+  int64_t below = 0;
+  for (int s = 0; s < kSolidColorSums; ++s) {
+    // The quantile in target units, as the fraction position / den.
+    const int64_t den = 2 * sourceTotal, position = (2 * below + sums[size_t(s)]) * targetTotal;
+    below += sums[size_t(s)];
+    int64_t before = 0;
+    int b = 0;
+    while (b < 255 && (before + values[size_t(b)]) * den < position) before += values[size_t(b++)];
+    const int64_t inBin = values[size_t(b)] * den;
+    const int64_t sixths = inBin > 0 ? (6 * (position - before * den) + inBin / 2) / inBin : 3;
+    out[size_t(s)] = int16_t(std::clamp<int64_t>(6 * b - 3 + std::clamp<int64_t>(sixths, 0, 6), 0, 6 * 255));
+  }
+}
+
+void matchSearchColors(SolidLevel& level, int w) {
+  auto colours = [&](int e) { return level.colors[level.colors[size_t(e)].empty() ? 0 : size_t(e)].data(); };
+  auto at = [&](int e, uint32_t c) { return colours(e) + (size_t(coordV(c)) * size_t(w) + coordU(c)) * 3; };
+  const size_t pixels = level.colors[0].size() / 3;
+  for (int ch = 0; ch < 3; ++ch) {
+    std::array<int64_t, kSolidColorSums> sums{};
+    std::array<int64_t, 256> values{};
+    for (int e = 0; e < 3; ++e)
+      for (size_t p = 0; p < pixels; ++p) {
+        ++values[colours(e)[p * 3 + size_t(ch)]];
+        for (int k = 0; k < kSolidTransferCandidates; ++k) {
+          const uint32_t* t = &level.triples[size_t(e)][(p * kSolidMaxCandidates + size_t(k)) * 3];
+          ++sums[size_t(at(0, t[0])[ch] + at(1, t[1])[ch] + at(2, t[2])[ch])];
+        }
+      }
+    matchHistogram(sums, values, level.searchColors[size_t(ch)]);
+  }
+}
+
+// Fills the derived tables of a level (see SolidLevel::candidateDescriptors2d, searchColors).
 void deriveTables(SolidLevel& level, int w) {
+  matchSearchColors(level, w);
   for (int e = 0; e < 3; ++e) {
     const auto& cands = level.candidates2d[size_t(e)];
     const auto& desc = level.descriptors2d[size_t(e)];

@@ -27,7 +27,11 @@
 //   * all neighborhood values are integers (colours are 8-bit, PCA bases 12-bit, distances int32)
 //     so that every backend picks the same candidate (DESIGN.md, the determinism contract);
 //   * 2-D neighborhoods for the first search step are PCA-projected 5x5 neighborhoods (8 dims);
-//     2-D candidate sets are the k-coherence sets of synthesis/exemplar_analysis.
+//     2-D candidate sets are the k-coherence sets of synthesis/exemplar_analysis;
+//   * a voxel's colour in the neighborhoods the search compares (§5.1: the mean of its three
+//     exemplar colours) can go through a per-level histogram-matching table (searchColors), in
+//     the spirit of the histogram matching Kopf et al. 2007 (Solid Texture Synthesis from 2D
+//     Exemplars, §3.3) run inside their optimization, learned here once from the candidates.
 
 #include "render/image/context.h"
 #include "render/image/image.h"
@@ -50,6 +54,10 @@ inline constexpr int kSolid2dDims = 8;
 inline constexpr int kSolidMaxDims = 12;
 /// Most 3-D candidates per exemplar pixel after the coherence filter.
 inline constexpr int kSolidMaxCandidates = 12;
+/// Sums of three 8-bit colour values: 0..765.
+inline constexpr int kSolidColorSums = 766;
+/// 3-D candidates per pixel whose colours set the search colour transfer (SolidLevel::searchColors).
+inline constexpr int kSolidTransferCandidates = 4;
 
 struct SolidAnalysisOptions {
   int strips = 65;              ///< S: best crossbar strips taken from each other exemplar; 4..256
@@ -87,6 +95,13 @@ struct SolidLevel {
   /// Derived (not cached): per exemplar, w*h*(2-D candidates)*kSolid2dDims, the descriptor of each
   /// 2-D candidate of a pixel, side by side, so the search reads one cache line per pixel.
   std::array<std::vector<int8_t>, 3> candidateDescriptors2d;
+  /// Derived (not cached): per channel, the colour a voxel shows to the search, indexed by the sum
+  /// of its three 8-bit exemplar colours, at the scale of the projection inputs (6x, 0..1530).
+  /// Histogram matching: the distribution of that sum over the first kSolidTransferCandidates
+  /// 3-D candidates of every pixel is mapped onto the exemplars' own colour distribution (each
+  /// sum to the exemplar quantile at the middle of its share), so that targets built from voxels
+  /// keep the exemplar's contrast instead of regressing to the mean of three.
+  std::array<std::array<int16_t, kSolidColorSums>, 3> searchColors{};
   /// Per exemplar: w*h*kSolidMaxCandidates triples (x, y, z exemplar coordinates, packed), best
   /// crossbar error first; the e-th coordinate is the pixel itself. Short sets repeat their first.
   std::array<std::vector<uint32_t>, 3> triples;

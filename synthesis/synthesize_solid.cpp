@@ -46,7 +46,7 @@ Prepared prepare(const SolidLevel& l) {
                                       l.projection3d.dims, l.projection3d.divisor)};
 }
 
-cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared) {
+cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared, bool matchColors) {
   const SolidLevel& l = a.levels[size_t(li)];
   cpu::SolidTables t;
   t.exemplarWidth = a.width;
@@ -67,6 +67,8 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
   }
   t.projection2d = &prepared.projection2d;
   t.projection3d = &prepared.projection3d;
+  static_assert(sizeof(l.searchColors) == 3 * kSolidColorSums * sizeof(int16_t));
+  if (matchColors) t.searchColors = l.searchColors[0].data();
   return t;
 }
 
@@ -79,6 +81,7 @@ uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   h.add(o.jitter);
   h.add(o.passes);
   h.add(o.interleave);
+  h.add(o.matchColors);
   return h.h;
 }
 
@@ -523,7 +526,7 @@ struct Engine {
     level.interleave = o.interleave;
     level.seed = o.seed;
     level.jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
-    vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li)), level,
+    vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li), o.matchColors), level,
                                  [&](uint32_t slot, const uint32_t* triples) { finishChunk(li, slot, triples, emit); },
                                  ctx);
   }
@@ -550,7 +553,7 @@ struct Engine {
       layers.push_back({b, e});
       b = e;
     }
-    const cpu::SolidTables tables = tablesOf(a, li, prepared(li));
+    const cpu::SolidTables tables = tablesOf(a, li, prepared(li), o.matchColors);
     std::vector<ChunkValues> pool;
     std::vector<int32_t> freeList;
     std::vector<std::vector<int32_t>> bufferOf(size_t(T) + 1, std::vector<int32_t>(n, -1));

@@ -30,6 +30,9 @@
 //   * one correction pass at the finest level by default (SolidSynthesisOptions::finestPasses),
 //     two above it as in the paper: the finest level's work drops ~3x (a planar cut: 6x) for a
 //     small measured loss, documented at the option;
+//   * the search sees voxel colours through a per-level histogram-matching table learned from the
+//     candidates (SolidSynthesisOptions::matchColors) instead of the mean of three; output colours
+//     are still the mean of three;
 //   * the volume has no size and nothing wraps: only exemplar coordinates wrap.
 
 #include "render/image/context.h"
@@ -89,6 +92,12 @@ struct SolidSynthesisOptions {
   /// within 4%, for a 3-6x faster lazy synthesis, hence the default. The paper's dilation (§5.2,
   /// once per pass) is exact for Jacobi passes only.
   int interleave = 1;
+  /// true (default): the neighborhoods the search compares show each voxel's colour through its
+  /// level's histogram-matching table (SolidLevel::searchColors) instead of the mean of its three
+  /// exemplar colours (§5.1). The mean regresses to the middle wherever the three disagree; the
+  /// search then prefers flat exemplar regions, and every pass flattens slices further. Output
+  /// colours (solidColors) stay the mean of three. false: the paper's rule.
+  bool matchColors = true;
 
   int subpasses() const { return interleave == 2 ? 8 : 1; }
   int passesAt(bool finest) const { return finest ? finestPasses : passes; }

@@ -39,6 +39,7 @@ void runStats(const StatsJob& args) {
   std::printf("fidelity             %.4f   (7x7 RMS distance to the nearest exemplar neighborhood; lower is better)\n",
               q.fidelity);
   std::printf("histogram distance   %.4f   (largest per-channel earth mover's distance)\n", q.histogramDistance);
+  std::printf("contrast ratio       %.4f   (luminance standard deviation, image / exemplar; 1 = kept)\n", q.contrast);
   if (std::isnan(q.shiftedCorrelation))
     std::printf("shifted correlation  n/a      (image not larger than the exemplar)\n");
   else

@@ -68,7 +68,7 @@ json toJson(const render::TextureMeasures& m, double requestedPixelsPerUnit) {
 }
 
 json toJson(const synthesis::QualityReport& q) {
-  json j = {{"fidelity", q.fidelity}, {"histogram_distance", q.histogramDistance}};
+  json j = {{"fidelity", q.fidelity}, {"histogram_distance", q.histogramDistance}, {"contrast_ratio", q.contrast}};
   j["shifted_correlation"] = std::isnan(q.shiftedCorrelation) ? json(nullptr) : json(q.shiftedCorrelation);
   if (q.coherence) j["coherence"] = *q.coherence;
   if (q.coverage) j["coverage"] = *q.coverage;

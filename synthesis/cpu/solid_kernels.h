@@ -60,6 +60,9 @@ struct SolidTables {
   const int8_t* candidateDescriptors2d[3] = {};  ///< per exemplar: w*h*k2dStride*8, each candidate's descriptor
   const uint32_t* triples[3] = {};       ///< per exemplar: w*h*12*3 packed coordinates
   const int8_t* descriptors3d[3] = {};   ///< per exemplar: w*h*12*dims
+  /// Null: a voxel's search colour is 2x the sum of its three colours (6x their mean). Otherwise
+  /// 3 channels * 766 entries indexed by that sum (SolidLevel::searchColors).
+  const int16_t* searchColors = nullptr;
   const SolidKernelProjection* projection2d = nullptr;  ///< the 2-D projection, prepared
   const SolidKernelProjection* projection3d = nullptr;  ///< the 3-D projection, prepared
 };

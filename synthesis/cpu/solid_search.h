@@ -61,14 +61,16 @@ struct Correction {
   Correction(const VolumeGrid& g, const SolidTables& t);
 };
 
-/// A voxel's colour record: 2 x the sum of its three exemplar colours, then 0.
+/// A voxel's colour record, as the search sees it: the sum of its three exemplar colours, doubled
+/// (6x their mean) or through the level's colour transfer (SolidTables::searchColors), then 0.
 inline void colorOf(const SolidTables& t, const uint32_t* s, int16_t* out) {
   int32_t c[3] = {0, 0, 0};
   for (int e = 0; e < 3; ++e) {
     const uint8_t* p = t.colors[e] + (size_t(coordV(s[e])) * size_t(t.exemplarWidth) + coordU(s[e])) * 3;
-    for (int ch = 0; ch < 3; ++ch) c[ch] += 2 * p[ch];
+    for (int ch = 0; ch < 3; ++ch) c[ch] += p[ch];
   }
-  for (int ch = 0; ch < 3; ++ch) out[ch] = int16_t(c[ch]);
+  for (int ch = 0; ch < 3; ++ch)
+    out[ch] = t.searchColors ? t.searchColors[ch * kSolidColorSums + c[ch]] : int16_t(2 * c[ch]);
   out[3] = 0;
 }
 

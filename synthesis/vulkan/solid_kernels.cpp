@@ -34,8 +34,8 @@ constexpr uint32_t kCommitSpirv[] =
 
 const Kernel kInit{"solidInitKernel", kInitSpirv, {1, 1, 1, 1}, sizeof(SolidParams)};
 const Kernel kUpsample{"solidUpsampleKernel", kUpsampleSpirv, {1, 1, 1}, sizeof(SolidParams)};
-const Kernel kColor{"solidColorKernel", kColorSpirv, {1, 1, 1, 3}, sizeof(SolidParams)};
-const Kernel kCorrect{"solidCorrectKernel", kCorrectSpirv, {1, 1, 1, 1, 1, 1, 3, 3, 3, 3, 3, 1}, sizeof(SolidParams)};
+const Kernel kColor{"solidColorKernel", kColorSpirv, {1, 1, 1, 3, 1}, sizeof(SolidParams)};
+const Kernel kCorrect{"solidCorrectKernel", kCorrectSpirv, {1, 1, 1, 1, 1, 1, 3, 3, 3, 3, 3, 1, 1}, sizeof(SolidParams)};
 const Kernel kCommit{"solidCommitKernel", kCommitSpirv, {1, 1, 1, 1, 1}, sizeof(SolidParams)};
 
 constexpr int kPlaneInputs = 3 * 25;
@@ -120,6 +120,10 @@ SolidTables uploadSolidTables(Commands& commands, const cpu::SolidTables& t) {
   add(t.descriptors3d, pixels * kSolidMaxCandidates * uint64_t(t.dims), d.descriptors3d);
   const std::vector<int32_t> projection = projectionWords(t);
   d.projection = layout.add(projection.data(), projection.size() * 4);
+  std::vector<int32_t> searchColors(3 * kSolidColorSums);
+  for (size_t i = 0; i < searchColors.size(); ++i)
+    searchColors[i] = t.searchColors ? t.searchColors[i] : int32_t(2 * (i % kSolidColorSums));
+  d.searchColors = layout.add(searchColors.data(), searchColors.size() * 4);
   for (const auto& s : {d.colors, d.candidates2d, d.candidateDescriptors2d, d.triples, d.descriptors3d})
     if (s[0].bytes > commands.device().maxRangeBytes())
       throw Error("solid exemplar tables (" + std::to_string(s[0].bytes >> 20) +
@@ -168,7 +172,8 @@ void solidColorKernel(Commands& commands, const SolidChunks& c, const SolidTable
   SolidParams p = paramsOf(c, &t);
   p.minLast = minLast;
   commands.dispatch(kColor, p,
-                    {c.last, c.triples, c.colors, t.range(t.colors[0]), t.range(t.colors[1]), t.range(t.colors[2])},
+                    {c.last, c.triples, c.colors, t.range(t.colors[0]), t.range(t.colors[1]), t.range(t.colors[2]),
+                     t.range(t.searchColors)},
                     voxels(c));
 }
 
@@ -184,7 +189,7 @@ void solidCorrectKernel(Commands& commands, const SolidChunks& c, const SolidTab
                      t.range(t.candidateDescriptors2d[2]),
                      t.range(t.triples[0]), t.range(t.triples[1]), t.range(t.triples[2]),
                      t.range(t.descriptors3d[0]), t.range(t.descriptors3d[1]), t.range(t.descriptors3d[2]),
-                     t.range(t.projection)},
+                     t.range(t.projection), t.range(t.searchColors)},
                     voxels(c));
 }
 

@@ -31,6 +31,7 @@ struct SolidTables {
   Buffer data;
   std::array<Slice, 3> colors, candidates2d, candidateDescriptors2d, triples, descriptors3d;
   Slice projection;  ///< int32: offsets 2-D [8], offsets 3-D [16], basis 2-D [8][75], basis 3-D [dims][183]
+  Slice searchColors;  ///< int32: [3][766], a voxel's colour record by channel and colour sum (cpu::colorOf)
 
   Range range(const Slice& s) const { return Range(data, s.offset, s.bytes); }
 };

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace texfab::synthesis {
 namespace {
 
@@ -49,6 +51,17 @@ TEST(QualityMeasures, HistogramDistanceIsTheEarthMoversDistance) {
     for (int x = 0; x < 8; ++x)
       for (int c = 0; c < 3; ++c) half.at(x, y, c) = 0.6f;
   EXPECT_NEAR(histogramDistance(half, constant(8, 8, 0.2f)), 0.2, 1.0 / 255.0);
+}
+
+TEST(QualityMeasures, ContrastRatioIsTheRatioOfLuminanceDeviations) {
+  const Image exemplar = test::noiseImage(16, 16);
+  Image halved = exemplar;
+  for (float& v : halved.pixels) v = 0.25f + v / 2;  // half the deviation about a shifted mean
+  EXPECT_NEAR(contrastRatio(exemplar, exemplar), 1.0, 1e-9);
+  EXPECT_NEAR(contrastRatio(halved, exemplar), 0.5, 1e-6);
+  EXPECT_NEAR(contrastRatio(exemplar, halved), 2.0, 1e-5);
+  EXPECT_EQ(contrastRatio(constant(8, 8, 0.4f), exemplar), 0.0);
+  EXPECT_TRUE(std::isnan(contrastRatio(exemplar, constant(8, 8, 0.4f))));
 }
 
 TEST(QualityMeasures, CoherenceOfKnownMaps) {

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -505,6 +506,70 @@ TEST(SolidSynthesis, ThreeDifferentExemplars) {
   std::vector<float> colours;
   solidColors(whole.triples, ex, ey, ez, colours);
   EXPECT_EQ(colours.size(), whole.triples.size() * size_t(solidColorChannels(ex, ey, ez)));
+}
+
+// Colour transfer in the search (SolidSynthesisOptions::matchColors, the default) against the
+// paper's mean of three, on real exemplars, over axis-aligned and oblique 64^2 slices: the slices
+// keep more of the exemplar's contrast and their histograms come closer to the exemplar's, while
+// their neighborhoods stay far from random pixels'.
+TEST(SolidSynthesis, MatchedSearchColoursKeepContrast) {
+  const auto crop = [](const Image& full) {
+    Image out(64, 64, full.channels >= 3 ? 3 : 1);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x)
+        for (int c = 0; c < out.channels; ++c) out.at(x, y, c) = full.at(x, y, c);
+    return out;
+  };
+  const int n = 64;
+  std::vector<std::vector<Voxel>> planes;  // x, y and z slices, and an oblique plane (normal (1, 2, 3))
+  for (int axis = 0; axis < 3; ++axis) {
+    planes.emplace_back();
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        planes.back().push_back(axis == 0 ? Voxel{21, i, j} : axis == 1 ? Voxel{i, 21, j} : Voxel{i, j, 21});
+  }
+  planes.emplace_back();
+  const double u[3] = {2 / std::sqrt(5.0), -1 / std::sqrt(5.0), 0}, w[3] = {3 / std::sqrt(70.0), 6 / std::sqrt(70.0), -5 / std::sqrt(70.0)};
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      int64_t q[3];
+      for (int k = 0; k < 3; ++k) q[k] = int64_t(std::floor(37 + (i + 0.5) * u[k] + (j + 0.5) * w[k]));
+      planes.back().push_back({q[0], q[1], q[2]});
+    }
+  const std::filesystem::path models = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars";
+  for (const auto& path : {models / "marble.png", models / "brick.png", test::gimpPatterns() / "Stone/cracked.pat"}) {
+    const Image e = crop(readImage(path));
+    const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
+    const int ch = solidColorChannels(e, e, e);
+    Image random(n, n, ch);
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const uint32_t h = voxelHash(3, 0, x, y, 0, 0);
+        for (int c = 0; c < ch; ++c) random.at(x, y, c) = e.at(int(h % 64), int((h >> 8) % 64), c);
+      }
+    const double fRandom = neighborhoodFidelity(random, e);
+    // Means over the planes: contrast ratio, histogram distance, fidelity.
+    auto measure = [&](bool match) {
+      SolidSynthesisOptions o;
+      o.matchColors = match;
+      std::array<double, 3> m{};
+      for (const auto& p : planes) {
+        Image slice(n, n, ch);
+        slice.pixels.clear();
+        solidColors(synthesizeSolid(a, p, o, nullptr, Context{.threads = 2}).triples, e, e, e, slice.pixels);
+        m[0] += contrastRatio(slice, e) / double(planes.size());
+        m[1] += histogramDistance(slice, e) / double(planes.size());
+        m[2] += neighborhoodFidelity(slice, e) / double(planes.size());
+      }
+      return m;
+    };
+    const std::array<double, 3> on = measure(true), off = measure(false);
+    std::printf("[ solid    ] %s: contrast %.3f (mean of three %.3f), histogram %.4f (%.4f), fidelity %.4f (%.4f, "
+                "random %.4f)\n", path.filename().c_str(), on[0], off[0], on[1], off[1], on[2], off[2], fRandom);
+    EXPECT_GT(on[0], 1.03 * off[0]) << path;
+    EXPECT_LT(on[1], off[1]) << path;
+    EXPECT_LT(on[2], 0.7 * fRandom) << path;
+  }
 }
 
 TEST(SolidSynthesis, RejectsBadParameters) {

@@ -14,6 +14,7 @@
 const int kAxisU[3] = {1, 2, 0};  // E_x (y, z), E_y (z, x), E_z (x, y)
 const int kAxisV[3] = {2, 0, 1};
 const int kSolidMaxCandidates = 12;
+const int kSolidColorSums = 766;
 const int kSolid2dDims = 8;
 const int kChunkVoxels = 4096;
 

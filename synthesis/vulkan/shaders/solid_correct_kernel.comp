@@ -19,6 +19,7 @@ READ_WORD_ARRAYS(8, candidateDescriptors2d, 3);  // per exemplar: w * h * k2dStr
 READ_WORD_ARRAYS(9, candidateTriples, 3);        // per exemplar: w * h * 12 * 3 packed coordinates
 READ_WORD_ARRAYS(10, descriptors3d, 3);          // per exemplar: w * h * 12 * dims int8
 READ_WORDS(11, projection);  // int32: offsets 2-D [8], offsets 3-D [16], basis 2-D [8][75], basis 3-D [dims][183]
+READ_WORDS(12, searchColors);  // int32 [3][kSolidColorSums]: the colour record by colour sum
 
 const int kOffsets3d = 8, kBasis2d = 24, kBasis3d = 24 + 8 * 75;
 
@@ -144,8 +145,9 @@ void solidCorrectKernel(uint g) {
     const uint s = candidateTripleWord(e, at + x);
     outTriples.words[3u * g + x] = s;
     const uint pixel = (coordV(s) * uint(p.exemplarWidth) + coordU(s)) * 3u;
-    for (uint ch = 0; ch < 3; ++ch) c[ch] += 2 * int(UINT8_AT(exemplarColors[x], pixel + ch));
+    for (uint ch = 0; ch < 3; ++ch) c[ch] += int(UINT8_AT(exemplarColors[x], pixel + ch));
   }
+  for (int ch = 0; ch < 3; ++ch) c[ch] = int(searchColors.words[ch * kSolidColorSums + c[ch]]);
   outColors.words[2u * g] = uint(c[0]) | (uint(c[1]) << 16);
   outColors.words[2u * g + 1u] = uint(c[2]);
 }
