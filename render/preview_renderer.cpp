@@ -86,27 +86,57 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
 
 PreviewRenderer::~PreviewRenderer() = default;
 
+Vector3f frontFor(const Vector3f& up) {
+  const Vector3f u = up.normalized();
+  if (std::abs(u.z()) > 0.9f) return Vector3f(0, u.z() > 0 ? -1.0f : 1.0f, 0);
+  return (Vector3f::UnitZ() - u.z() * u).normalized();
+}
+
+namespace {
+
+// The camera distance from `center` along -forward at which every vertex the triangles use projects
+// inside the view shrunk by `margin` (tanX, tanY: tangents of the half fields of view); at least
+// enough to keep the camera outside the bounding sphere of radius `radius`.
+float framingDistance(const geometry::Mesh& mesh, const Vector3f& center, const Vector3f& forward, const Vector3f& right,
+                      const Vector3f& up, float tanX, float tanY, float margin, float radius) {
+  std::vector<char> used(mesh.positions.size(), 0);
+  for (const auto& t : mesh.triangles)
+    for (uint32_t v : t) used[v] = 1;
+  float distance = 0;
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (!used[v]) continue;
+    const Vector3f p = mesh.positions[v] - center;
+    const float depth = p.dot(forward);  // along the view, relative to the centre
+    distance = std::max({distance, margin * std::abs(p.dot(right)) / tanX - depth,
+                         margin * std::abs(p.dot(up)) / tanY - depth});
+  }
+  return std::max(distance, 1.05f * radius);
+}
+
+} // namespace
+
 Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const {
   if (o.width < 1 || o.height < 1 || o.width > kMaxImageSide || o.height > kMaxImageSide)
     throw Error("render: image size out of range");
   if (o.samplesPerPixel < 1 || o.samplesPerPixel > 4096) throw Error("render: samples per pixel must be 1..4096");
   if (!(o.elevationDegrees > -90 && o.elevationDegrees < 90)) throw Error("render: elevation must be in (-90, 90) degrees");
   if (!(o.fovYDegrees > 1 && o.fovYDegrees < 170)) throw Error("render: field of view must be in (1, 170) degrees");
+  if (!(o.up.allFinite() && o.up.norm() > 0)) throw Error("render: the up direction must be a non-zero vector");
+  if (!(o.margin > 0.01f && o.margin < 100)) throw Error("render: margin must be in (0.01, 100)");
   const geometry::BoundingBox& box = scene_.bounds();
   const Vector3f center = box.center();
   const float radius = std::max(0.5f * box.diagonal(), 1e-6f);
   const float az = o.azimuthDegrees * kPi / 180, el = o.elevationDegrees * kPi / 180;
-  const Vector3f toCamera(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+  const Vector3f modelUp = o.up.normalized(), front = frontFor(modelUp), side = modelUp.cross(front);
+  const Vector3f toCamera = std::cos(el) * (std::sin(az) * side + std::cos(az) * front) + std::sin(el) * modelUp;
   const float tanHalf = std::tan(0.5f * o.fovYDegrees * kPi / 180);
   const float aspect = float(o.width) / float(o.height);
-  // Fit the bounding sphere in the narrower field of view.
-  const float fitTan = std::min(tanHalf, tanHalf * aspect);
-  const float distance = o.margin * radius / std::sin(std::atan(fitTan));
-  const Vector3f eye = center + distance * toCamera;
   const Vector3f forward = -toCamera;
-  const Vector3f right = forward.cross(Vector3f::UnitY()).normalized();
+  const Vector3f right = forward.cross(modelUp).normalized();
   const Vector3f up = right.cross(forward);
-  // Key light from the camera's upper left, a little behind it; sky light from +Y.
+  const float distance = framingDistance(mesh_, center, forward, right, up, tanHalf * aspect, tanHalf, o.margin, radius);
+  const Vector3f eye = center + distance * toCamera;
+  // Key light from the camera's upper left, a little behind it; sky light from the model's up.
   const Vector3f light = (toCamera + 0.9f * up - 0.6f * right).normalized();
   const Vector3f keyColor(2.6f, 2.5f, 2.35f), skyColor(0.55f, 0.6f, 0.7f), groundColor(0.25f, 0.22f, 0.2f);
   const int strata = std::max(1, int(std::sqrt(float(o.samplesPerPixel))));
@@ -231,13 +261,13 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
               Vector3f d = rr * std::cos(phi) * ta + rr * std::sin(phi) * tb + std::sqrt(std::max(0.0f, 1 - r1)) * n;
               if (d.dot(ng) <= 0) d -= 2 * d.dot(ng) * ng;
               if (!scene_.occluded({offset, d, 0.0f, 0.6f * radius})) {
-                const float k = 0.5f * (d.y() + 1);
+                const float k = 0.5f * (d.dot(modelUp) + 1);
                 ambient += k * skyColor + (1 - k) * groundColor;
               }
             }
             ambient /= float(o.aoSamples);
           } else {
-            const float k = 0.5f * (n.y() + 1);
+            const float k = 0.5f * (n.dot(modelUp) + 1);
             ambient = k * skyColor + (1 - k) * groundColor;
           }
           color += ambient.cwiseProduct(diffuse + 0.25f * f0);

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The preview renderer: an Embree ray tracer that shows a textured mesh the way a person wants to
-// look at it. Auto-framed perspective camera on an orbit (azimuth/elevation around the model's
-// bounding sphere), stratified supersampling, textures filtered with mip maps whose level comes
+// look at it. Perspective camera on an orbit (azimuth/elevation around the model's up axis, from
+// its front), framed tightly on the model's projected vertices, stratified supersampling, textures filtered with mip maps whose level comes
 // from the ray footprint [Igehy 1999, "Tracing Ray Differentials"], tangent-space normal maps,
 // a key light with shadows, and a sky light with ambient occlusion. Deterministic: the same
 // inputs give the same image on any thread count.
@@ -24,15 +24,21 @@ struct RenderOptions {
   int width = 800;        ///< pixels
   int height = 800;
   int samplesPerPixel = 16; ///< stratified (a square number is used fully; others round down to one)
-  float azimuthDegrees = 30.0f;   ///< camera orbit angle around +Y, 0 = looking from +Z
+  /// The model's up direction (non-zero; need not be unit): +Y for glTF and OBJ, +Z for most STL.
+  Eigen::Vector3f up{0.0f, 1.0f, 0.0f};
+  float azimuthDegrees = 30.0f;   ///< camera orbit angle around `up`, 0 = looking at the model's front
   float elevationDegrees = 20.0f; ///< above the horizontal plane, in (-90, 90)
   float fovYDegrees = 35.0f;      ///< vertical field of view
-  float margin = 1.08f;           ///< framing: bounding sphere radius times this fills the view
+  float margin = 1.08f;           ///< framing: the model's projected extent times this fills the view (< 1: zoomed in)
   bool transparentBackground = false; ///< RGBA output with alpha = coverage
   Eigen::Vector3f background{1.0f, 1.0f, 1.0f}; ///< sRGB background colour when not transparent
   int aoSamples = 1;              ///< ambient-occlusion rays per camera sample (0 = no AO)
   bool shadows = true;            ///< key-light shadow rays
 };
+
+/// The model's front for an up direction: +Z (glTF's forward) made orthogonal to `up`, or -Y when
+/// `up` is along Z (+Y when it points down): the side a Y-up or Z-up model is usually seen from.
+Eigen::Vector3f frontFor(const Eigen::Vector3f& up);
 
 class PreviewRenderer {
 public:

@@ -8,6 +8,7 @@
 
 #include <sys/resource.h>
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -194,6 +195,29 @@ void Flags::common(CommonFlags& c, unsigned which) {
         ->default_str("$TEXFAB_VULKAN_DEVICE, else the best");
   }
   if (which & Common::Quiet) flag("-q,--quiet", c.quiet, "No progress output (warnings and errors are still printed)");
+}
+
+Eigen::Vector3f upVector(UpAxis axis, const fs::path& model) {
+  switch (axis) {
+  case UpAxis::PosX: return Eigen::Vector3f::UnitX();
+  case UpAxis::NegX: return -Eigen::Vector3f::UnitX();
+  case UpAxis::PosY: return Eigen::Vector3f::UnitY();
+  case UpAxis::NegY: return -Eigen::Vector3f::UnitY();
+  case UpAxis::PosZ: return Eigen::Vector3f::UnitZ();
+  case UpAxis::NegZ: return -Eigen::Vector3f::UnitZ();
+  case UpAxis::Auto: break;
+  }
+  std::string ext = model.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".stl" ? Eigen::Vector3f::UnitZ() : Eigen::Vector3f::UnitY();
+}
+
+CLI::Option* Flags::up(UpAxis& axis) {
+  return choice("--up", axis,
+                Names<UpAxis>{{"auto", UpAxis::Auto}, {"x", UpAxis::PosX}, {"-x", UpAxis::NegX}, {"y", UpAxis::PosY},
+                              {"-y", UpAxis::NegY}, {"z", UpAxis::PosZ}, {"-z", UpAxis::NegZ}},
+                "The model's up axis in the preview (auto: z for STL, as 3-D printing uses, else y as glTF and OBJ "
+                "do); the view looks at its front");
 }
 
 void Flags::modelOutput(geometry::MeshWriteOptions& o) {

@@ -109,6 +109,11 @@ struct CommonFlags {
   int device = -1;  ///< -1: $TEXFAB_VULKAN_DEVICE, else the best device
 };
 
+/// A model's up axis for previews (--up); Auto: +Z for STL (3-D printing's convention), else +Y
+/// (glTF's and OBJ's).
+enum class UpAxis { Auto, PosX, NegX, PosY, NegY, PosZ, NegZ };
+Eigen::Vector3f upVector(UpAxis axis, const std::filesystem::path& model);
+
 /// Declares the flags of one subcommand, bound to the fields they set.
 class Flags {
 public:
@@ -161,6 +166,8 @@ public:
   /// A width x height field pair, "N" or "WxH".
   CLI::Option* size(const std::string& flags, int& width, int& height, const std::string& help, const Range& range,
                     bool powerOfTwo = false);
+  /// --up, the model's up axis for previews.
+  CLI::Option* up(UpAxis& axis);
   /// The common flags the command takes (Common::Threads | ...).
   void common(CommonFlags& flags, unsigned which);
   /// How a written model stores its geometry and textures: --draco, --texture-format,

@@ -20,6 +20,8 @@ struct RenderJob {
   std::string model, output;
   render::RenderOptions options;
   int turntable = 0;
+  float zoom = 1;
+  UpAxis up = UpAxis::Auto;
   CommonFlags common;
 };
 
@@ -65,6 +67,8 @@ void runRender(RenderJob& job) {
   const render::PreviewRenderer renderer(mesh);
   bvh.finish();
   render::RenderOptions options = job.options;
+  options.up = upVector(job.up, job.model);
+  options.margin = job.options.margin / job.zoom;
   for (int i = 0; i < views; ++i) {
     Stage stage(run.ctx(), "render");
     if (job.turntable) options.azimuthDegrees = job.options.azimuthDegrees + 360.0f * float(i) / float(views);
@@ -81,18 +85,20 @@ Command addRenderCommand(CLI::App& root) {
   auto job = std::make_shared<RenderJob>();
   render::RenderOptions& o = job->options;
   Flags f(root.add_subcommand("render", "Ray-traced preview picture of a model (textures, normal maps, key light, "
-                                        "ambient occlusion; auto-framed)"));
+                                        "ambient occlusion; framed tightly)"));
   f.input("model", job->model, "Model (.obj, .ply, .off, .stl, .gltf, .glb)");
   f.text("-o,--output", job->output, "Output image (.png); with --turntable, NAME_000.png, NAME_001.png, ...")
       ->required();
   f.size("--size", o.width, o.height, "Image size", {1, 16384});
-  f.option("--azimuth", o.azimuthDegrees, "Camera angle around the vertical axis, degrees (0 = from +Z)",
+  f.up(job->up);
+  f.option("--azimuth", o.azimuthDegrees, "Camera angle around the up axis, degrees (0 = from the model's front)",
            {-3600, 3600});
   f.option("--elevation", o.elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
   f.option("--turntable", job->turntable, "Render N views evenly around the model instead of one", {0, 3600})
       ->default_str("");
   f.option("--spp", o.samplesPerPixel, "Samples per pixel (antialiasing; rounded down to a square)", {1, 4096});
   f.option("--ao", o.aoSamples, "Ambient-occlusion rays per sample (0 = plain sky light)", {0, 64});
+  f.option("--zoom", job->zoom, "Magnification of the tight framing (2: the model appears twice as large, cropped)", {0.05, 50});
   f.option("--fov", o.fovYDegrees, "Vertical field of view, degrees", {1, 170});
   CLI::Option* background = f.app()->add_option_function<std::string>(
       "--background",

@@ -26,6 +26,7 @@ struct TextureJob {
   render::TextureMeshOptions options;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;
+  UpAxis up = UpAxis::Auto;
   CommonFlags common;
 };
 
@@ -120,7 +121,9 @@ void runTexture(TextureJob& job) {
   write.finish(job.output + (result.height ? ", " + heightOut.filename().string() : ""));
   if (!job.preview.empty()) {
     Stage preview(run.ctx(), "preview");
-    writeImage(render::PreviewRenderer(result.mesh).render(job.previewOptions, preview.inner()), previewOut);
+    render::RenderOptions view = job.previewOptions;
+    view.up = upVector(job.up, job.model);
+    writeImage(render::PreviewRenderer(result.mesh).render(view, preview.inner()), previewOut);
     preview.finish(job.preview);
   }
 
@@ -171,6 +174,7 @@ Command addTextureCommand(CLI::App& root) {
   f.modelOutput(job->write);
   f.text("--preview", job->preview, "Also render the textured model to this image");
   f.size("--preview-size", job->previewOptions.width, job->previewOptions.height, "Preview size", {1, 16384});
+  f.up(job->up);
   f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runTexture(*job); }};
 }

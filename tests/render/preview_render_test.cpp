@@ -2,8 +2,10 @@
 // The preview renderer on known scenes, checked by pixel statistics.
 #include "render/mip_pyramid.h"
 #include "render/preview_renderer.h"
+#include "render/image/error.h"
 #include "tests/geometry/test_meshes.h"
 
+#include <algorithm>
 #include <cmath>
 
 using namespace texfab;
@@ -91,12 +93,9 @@ TEST(PreviewRenderer, QuadCoverageAndColourMatchTheScene) {
   const RenderOptions o = frontView(128);
   const Image image = renderer.render(o);
   ASSERT_EQ(image.channels, 4);
-  // The bounding sphere (radius √2) fills the view with margin 1.08 at 35° fov: the quad's side
-  // covers 2 / (2 · d · tan(17.5°)) of the image, d = 1.08 √2 / sin(17.5°).
-  const double d = 1.08 * std::sqrt(2.0) / std::sin(17.5 * M_PI / 180);
-  const double side = 2.0 / (2.0 * d * std::tan(17.5 * M_PI / 180));
+  // Framed tightly with margin 1.08: the quad, facing the camera, spans 1 / 1.08 of each side.
   const Stats s = statistics(image);
-  EXPECT_NEAR(s.coverage, side * side, 0.02);
+  EXPECT_NEAR(s.coverage, 1.0 / (1.08 * 1.08), 0.02);
   // Lit red texture: red dominates, in the same proportion order as the texture.
   EXPECT_GT(s.mean.x(), 1.8 * s.mean.y());
   EXPECT_GT(s.mean.y(), s.mean.z());
@@ -169,4 +168,78 @@ TEST(MipPyramid, LevelsAverageInLinearLight) {
   EXPECT_NEAR(p.levels.back().at(0, 0, 0), 0.5f, 1e-6f);  // linear average of black and white
   EXPECT_NEAR(sampleTrilinear(p, 0.3f, 0.7f, 10.0f).x(), 0.5f, 1e-6f);
   EXPECT_NEAR(linearToSrgb(srgbToLinear(0.3f)), 0.3f, 1e-6f);
+}
+
+namespace {
+
+// The rows and columns with covered pixels: {columns, rows} spanned, and whether any touches the
+// image's border.
+struct Extent {
+  int columns = 0, rows = 0;
+  bool touchesBorder = false;
+};
+
+Extent coveredExtent(const Image& image) {
+  int x0 = image.width, x1 = -1, y0 = image.height, y1 = -1;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      if (image.pixel(x, y)[3] > 0) x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  if (x1 < 0) return {};
+  return {x1 - x0 + 1, y1 - y0 + 1, x0 == 0 || y0 == 0 || x1 == image.width - 1 || y1 == image.height - 1};
+}
+
+// A box of the given size centred at the origin (12 triangles, outward).
+Mesh box(float sx, float sy, float sz) {
+  Mesh m;
+  for (int i = 0; i < 8; ++i)
+    m.positions.push_back({(i & 1 ? 0.5f : -0.5f) * sx, (i & 2 ? 0.5f : -0.5f) * sy, (i & 4 ? 0.5f : -0.5f) * sz});
+  m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return m;
+}
+
+} // namespace
+
+// Default view of a model: it fills the frame (its longer projected side at least 85 % of the
+// image, margin 1.08 leaves about 93 %) without being cut by the border, at any azimuth.
+TEST(PreviewRenderer, DefaultViewFramesTheModelTightly) {
+  const Mesh cube = texfab::testing::texturedCube();
+  const PreviewRenderer renderer(cube);
+  for (float azimuth : {0.0f, 30.0f, 135.0f}) {
+    RenderOptions o;
+    o.width = o.height = 96;
+    o.samplesPerPixel = 1;
+    o.aoSamples = 0;
+    o.transparentBackground = true;
+    o.azimuthDegrees = azimuth;
+    const Extent e = coveredExtent(renderer.render(o));
+    EXPECT_FALSE(e.touchesBorder) << azimuth;
+    EXPECT_GE(std::max(e.columns, e.rows), int(0.85 * 96)) << azimuth;
+  }
+}
+
+// --up: a tall box standing on z is seen standing (taller than wide) with up = +Z, and lying with
+// up = +Y; the front of a Z-up model is -Y.
+TEST(PreviewRenderer, UpAxisStandsTheModelUp) {
+  EXPECT_TRUE(frontFor(Eigen::Vector3f::UnitY()).isApprox(Eigen::Vector3f::UnitZ()));
+  EXPECT_TRUE(frontFor(Eigen::Vector3f::UnitZ()).isApprox(-Eigen::Vector3f::UnitY()));
+  EXPECT_NEAR(frontFor(Eigen::Vector3f(1, 1, 0)).dot(Eigen::Vector3f(1, 1, 0)), 0.0f, 1e-6f);
+  const Mesh tall = box(1, 1, 3);
+  const PreviewRenderer renderer(tall);
+  RenderOptions o;
+  o.width = o.height = 96;
+  o.samplesPerPixel = 1;
+  o.aoSamples = 0;
+  o.transparentBackground = true;
+  o.elevationDegrees = 0;
+  o.azimuthDegrees = 0;
+  o.up = Eigen::Vector3f::UnitZ();
+  const Extent standing = coveredExtent(renderer.render(o));
+  EXPECT_GT(standing.rows, 2 * standing.columns);
+  o.up = Eigen::Vector3f::UnitY();
+  o.azimuthDegrees = 90;  // from +X, across the box's length
+  const Extent lying = coveredExtent(renderer.render(o));
+  EXPECT_GT(lying.columns, lying.rows);
+  o.up = Eigen::Vector3f::Zero();
+  EXPECT_THROW(renderer.render(o), Error);
 }
