@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Benchmarks of issue 3 on a ~1.4M-triangle mesh (CGAL's elephant, bundled, midpoint-subdivided
+// Mesh benchmarks on a ~1.4M-triangle mesh (CGAL's elephant, bundled, midpoint-subdivided
 // 4 times, closed): loading it (binary PLY and GLB) plus building the Embree BVH, inside tests
 // per second, and a 1024^2 preview render at 4 samples per pixel.
 //   build/bench/mesh_bench --benchmark_counters_tabular=true

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Benchmarks of issue 5, lazy solid synthesis, against the paper's figures (Dong et al. 2008:
+// Benchmarks of lazy solid synthesis against the paper's figures (Dong et al. 2008:
 // Core 2 6400 CPU for the precomputation, GeForce 8800 Ultra for synthesis):
 //   precomputation 64^2: paper 7 s; 128^2: paper 25-35 s (target: faster);
 //   full volume 64^3: paper 0.22 s; 128^3: paper 1.7 s (target: within 2x);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Benchmarks of issue 2: exemplar analysis (64^2, 128^2) and synthesis (512^2 to 4096^2), with the
-// process's peak memory. Targets (2 cores, release): analysis 128^2 <= 1 s; 1024^2 <= 0.5 s;
-// 4096^2 <= 8 s with peak memory <= 1 GiB.
+// 2-D synthesis benchmarks: exemplar analysis (64^2, 128^2) and synthesis (512^2 to 4096^2),
+// with the process's peak memory. Targets (2 cores, release): analysis 128^2 <= 1 s;
+// 1024^2 <= 0.5 s; 4096^2 <= 8 s with peak memory <= 1 GiB.
 //   build/bench/synthesis_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
 #include "render/image/image_io.h"

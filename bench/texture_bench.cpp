@@ -2,7 +2,7 @@
 // The whole `texfab texture` job on CGAL's refined_elephant (88,928 triangles) at 2048², in
 // surface and solid mode: seconds per stage (load, atlas, tangent field, fields, synthesis,
 // resolve, write) and peak memory. The exemplar analyses are computed before timing (cached in
-// real use). Targets (issue 6): surface ≤ 20 s, solid ≤ 10 s. Run:
+// real use). Targets: surface ≤ 20 s, solid ≤ 10 s. Run:
 //   build/bench/texture_bench --benchmark_counters_tabular=true
 #include "render/texture_mesh.h"
 #include "bench/bench_support.h"

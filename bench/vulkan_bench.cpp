@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The Vulkan backend against the CPU on the targets (a GPU: 256^2 cut with coarse levels
+// The Vulkan backend against the CPU, with the targets for a GPU (256^2 cut with coarse levels
 // cached <= 1 ms, 128^3 volume <= 20 ms, 2-D 4096^2 window <= 50 ms):
 //   2d      a 2-D window (default 4096^2)
 //   cut     a 256^2 solid cut plane, coarse levels cached by the neighbouring plane

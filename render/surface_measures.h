@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// Quality measures of a texture synthesized over a surface (DESIGN.md, "Quality measures"; issue
-// 6): continuity across chart seams, uniformity of the texture's scale on the surface, and
+// Quality measures of a texture synthesized over a surface (docs/design.md#quality-measures):
+// continuity across chart seams, uniformity of the texture's scale on the surface, and
 // neighborhood fidelity measured in exemplar space. All take the finest level of the surface
 // domain (atlas/surface_domain.h) and are deterministic.
 

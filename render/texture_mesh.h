@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The main job of texfab (`texfab texture`): synthesize a texture over a mesh and return the mesh
-// with an atlas and a PBR material carrying the synthesized maps (DESIGN.md, "Data flow").
+// with an atlas and a PBR material carrying the synthesized maps
+// (docs/design.md#data-flow-of-the-main-job).
 //
 //   surface mode: atlas -> tangent field -> Jacobians J = (t b)⁺ J_f -> surface domain (sites,
 //     neighbors across seams) -> anisometric synthesis in the atlas (Lefebvre & Hoppe 2006 §5–6)

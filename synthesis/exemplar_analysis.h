@@ -16,7 +16,7 @@
 //     synthesis itself must produce the seamless result): non-toroidal exemplars (ExemplarWrap).
 //   C. Eisenacher et al. Example-based texture synthesis on Disney's Tangled. 2010, as summarised
 //     in the thesis §3.3.2.3 (k-nearest sets of large exemplars built by randomized search).
-// Notes: ../shared/notes/lefebvre-hdr-notes.md §2.3, §4 and errata §20.
+// Notes: docs/synthesis-notes.md#appearance-space, #parallel-synthesis, #stack-upsampling.
 //
 // Non-toroidal exemplars (ExemplarWrap::Clamp): the stack is filtered, and neighborhoods are read,
 // with mirrored borders instead of wrapped ones, and every level has a valid region: the pixels
@@ -95,8 +95,8 @@ ExemplarWrap detectExemplarWrap(const Image& exemplar);
 
 struct AnalysisOptions {
   int k = 2;                   ///< candidates per exemplar pixel, the pixel itself first; 2..8
-  /// Weight of the feature-distance channel relative to colour; 0 = off. Off by default: on GIMP's
-  /// brick and parquet it lowered 7x7 neighborhood fidelity (0.048 vs 0.055, 0.045 vs 0.047).
+  /// Weight of the feature-distance channel relative to colour; 0 = off. Off by default: it made
+  /// fidelity worse on GIMP's brick and parquet (docs/measurements.md#feature-distance-channel).
   float featureWeight = 0.0f;
   int searchNeighbors = 12;    ///< nearest neighbors examined to pick k spread-apart candidates
   float minSpread = 0.05f;     ///< candidates lie at least max(2, minSpread * exemplar side) apart

@@ -2,8 +2,9 @@
 #pragma once
 // Counter-based randomness: every random decision in synthesis is a hash of
 // (seed, level, position, purpose), never the state of a generator, so a value depends only on
-// where it is, not on which texels were computed before it or on which thread (DESIGN.md, the
-// determinism contract). 32-bit integer operations only, so the GLSL twin is the same code.
+// where it is, not on which texels were computed before it or on which thread
+// (docs/design.md#the-determinism-contract). 32-bit integer operations only, so the GLSL twin is
+// the same code.
 //
 // Based on: M. Jarzynski, M. Olano. Hash Functions for GPU Rendering. JCGT 9(3), 2020 (PCG hash).
 

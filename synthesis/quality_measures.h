@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// Quality measures of a synthesized texture against its exemplar (DESIGN.md, "Quality measures").
+// Quality measures of a synthesized texture against its exemplar (docs/design.md#quality-measures).
 // Synthesis has no ground truth: these measure properties that good synthesis has and bad
 // synthesis (noise, verbatim tiling, one region copied everywhere) lacks. Colour measures use the
 // first three channels (or the grey channel); alpha is ignored. All values are deterministic.

@@ -8,7 +8,7 @@
 //   error CB; the S best strips of each other exemplar, all S^2 triples ranked by CB, 100 kept),
 //   §4.2 (coherence filter down to <= 12 candidates), §4.3 (candidate slab), §6.1 (one image
 //   used for all three axes shares one candidate set), §6.2 (PCA to 12..8 dimensions, 8-bit).
-// Notes: ../shared/notes/lefebvre-hdr-notes.md §9 and errata §20.2 (stack upsampling).
+// Notes: docs/synthesis-notes.md#lazy-solid-synthesis and #stack-upsampling.
 //
 // Orientation (fixed, cyclic, so one candidate set serves all three axes, Fig. 3 / §6.1):
 //   E_x lies in the (y, z) plane: exemplar u = volume y, v = volume z;
@@ -25,7 +25,7 @@
 //     tap spacing h_l in that exemplar; a filter iteration that would empty a pixel's set is not
 //     applied to that pixel (the paper notes this "happens rarely");
 //   * all neighborhood values are integers (colours are 8-bit, PCA bases 12-bit, distances int32)
-//     so that every backend picks the same candidate (DESIGN.md, the determinism contract);
+//     so that every backend picks the same candidate (docs/design.md#the-determinism-contract);
 //   * 2-D neighborhoods for the first search step are PCA-projected 5x5 neighborhoods (8 dims);
 //     2-D candidate sets are the k-coherence sets of synthesis/exemplar_analysis;
 //   * a voxel's colour in the neighborhoods the search compares (§5.1: the mean of its three

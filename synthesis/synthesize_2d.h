@@ -8,7 +8,7 @@
 //     in sub-passes with k-coherence candidates).
 //   S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §4 (4-sample
 //     appearance-space neighborhoods).
-// Notes: ../shared/notes/lefebvre-hdr-notes.md §4 and errata §20.2 (stack upsampling adds
+// Notes: docs/synthesis-notes.md#parallel-synthesis and #stack-upsampling (stack upsampling adds
 //   h_l * (p mod 2), h_l = 2^(L-l)).
 //
 // Determinism: every output texel is a pure function of (analysis, options, position). A window

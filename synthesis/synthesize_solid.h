@@ -9,9 +9,10 @@
 //   default here, see below) with the two-step search,
 //   colour = mean of the three exemplar colours), §5.2 (masks dilated per pass and level), §6.2
 //   (a cache of coarse levels shared across requests).
-// Notes: ../shared/notes/lefebvre-hdr-notes.md §9; ../shared/notes/wei-levoy-and-jit-notes.md III.
+// Notes: docs/synthesis-notes.md#lazy-solid-synthesis and #order-independence.
 //
-// Determinism (DESIGN.md): a voxel's triple is a pure function of (analysis, options, position).
+// Determinism (docs/design.md#the-determinism-contract): a voxel's triple is a pure function of
+// (analysis, options, position).
 // The mask of §5.2 is computed exactly per sub-pass (a voxel corrected in sub-pass t reads its
 // 61-voxel 3-neighborhood as it was after sub-pass t-1; a voxel not of that sub-pass's class only
 // carries its own value), so every voxel computed for a request has a complete dependency chain,
@@ -20,16 +21,14 @@
 //
 // Deviations from the paper, on purpose:
 //   * Jacobi passes by default (SolidSynthesisOptions::interleave = 1), not 8 sub-passes: the
-//     dependency chain of §5.2 (dilated once per pass) is then exact, 5,037 voxels for one voxel
-//     with 3 levels and two passes each (paper: 6,778; 3,356 with the default one finest pass);
-//     with sub-passes (interleave 2) the exact chain is ~10^5 voxels, since every sub-pass
-//     dilates; dependencyChainSize() reports both;
+//     dependency chain of §5.2 (dilated once per pass) is then exact and ~25x shorter, since
+//     every sub-pass dilates; dependencyChainSize() reports both;
 //   * the jitter warp is a sum of compactly supported polynomial bumps on two hashed grids (4 and
 //     8 voxels at the start level) instead of ~200 Gaussians in a unit volume: the volume is
 //     infinite, and integer arithmetic keeps backends identical;
 //   * one correction pass at the finest level by default (SolidSynthesisOptions::finestPasses),
 //     two above it as in the paper: the finest level's work drops ~3x (a planar cut: 6x) for a
-//     small measured loss, documented at the option;
+//     small loss (docs/measurements.md);
 //   * the search sees voxel colours through a per-level histogram-matching table learned from the
 //     candidates (SolidSynthesisOptions::matchColors) instead of the mean of three; output colours
 //     are still the mean of three;
@@ -71,26 +70,15 @@ struct SolidSynthesisOptions {
   /// (amplitudes 1.5 and 1 voxel on 4- and 8-voxel grids at 1); 0 = a plain tiling of the slab. [0, 4]
   float jitter = 1.0f;
   int passes = 2;        ///< correction passes per level above the finest; 0..4
-  /// Correction passes at the finest level; 0..4. One (default) instead of the paper's two:
-  /// at the finest level each pass is ~85% of the work (the pass before the last is dilated by
-  /// the 3-neighborhood: 5 voxels thick around a planar cut instead of 1), and the second pass
-  /// changes little. Measured on 64^3 volumes from 64^2 crops of marble, granite1, wood1, brick
-  /// and slate (mean 7x7 slice fidelity / RMS disparity of a voxel's three exemplar colours, lower
-  /// is better): 2 passes 0.0160/0.0038, 0.0366/0.0087, 0.0406/0.0128, 0.0814/0.0208,
-  /// 0.0381/0.0021; 1 pass 0.0166/0.0041, 0.0397/0.0095, 0.0419/0.0142, 0.0841/0.0221,
-  /// 0.0389/0.0027 (+2-8% and +6-29%, with slice histograms 5-16% closer to the exemplar); on
-  /// 128^3 volumes of marble, cracked, pink_marble, stone33 and walnut, fidelity +2-16%, with no
-  /// visible difference; 0 passes leave 3-14x the disparity (visible 2x2 blocks). A 256^2 cut
-  /// then corrects 65,536 voxels instead of 403,472. Set 2 for the paper's schedule.
+  /// Correction passes at the finest level; 0..4. One (default) instead of the paper's two: ~6x
+  /// less work on a planar cut for 2-8% worse slice fidelity; 2 = the paper's schedule.
+  /// Figures: docs/measurements.md#correction-passes-at-the-finest-level.
   int finestPasses = 1;
   /// 2: each pass is 8 sub-passes over the 2x2x2 parity classes (§5.1, the paper's choice);
-  /// 1 (default): each pass corrects every voxel at once (Jacobi), a dependency chain ~25x shorter
-  /// (one voxel, two passes per level: 5,037 voxels instead of 125,187 with 3 levels; a thin shell: ~5x fewer voxels per
-  /// requested voxel). Measured on the 64^3 marble volume of the tests, slice fidelity (2-D
-  /// neighborhood measure, lower is better) is 0.0160/0.0158/0.0162 (x/y/z slices) with Jacobi
-  /// against 0.0159/0.0154/0.0156 with sub-passes (extruded exemplar 0.0208/0.0193, random 0.029):
-  /// within 4%, for a 3-6x faster lazy synthesis, hence the default. The paper's dilation (§5.2,
-  /// once per pass) is exact for Jacobi passes only.
+  /// 1 (default): each pass corrects every voxel at once (Jacobi): a dependency chain ~25x shorter
+  /// and 3-6x faster lazy synthesis, slice fidelity within 4%. The paper's dilation (§5.2, once
+  /// per pass) is exact for Jacobi passes only.
+  /// Figures: docs/measurements.md#jacobi-passes-against-sub-passes.
   int interleave = 1;
   /// true (default): the neighborhoods the search compares show each voxel's colour through its
   /// level's histogram-matching table (SolidLevel::searchColors) instead of the mean of its three

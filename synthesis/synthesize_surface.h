@@ -11,7 +11,7 @@
 //     neighborhoods continue across chart seams).
 //   S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3 (coordinate
 //     upsampling, hash jitter, correction sub-passes, k-coherence).
-// Notes: ../shared/notes/lefebvre-hdr-notes.md §8 and errata 3 and 4 (§20).
+// Notes: docs/synthesis-notes.md#atlas-synthesis, #anisometric-step, #anisometric-candidates.
 //
 // synthesis/ knows nothing of meshes: the surface arrives as a SurfaceDomain, a pyramid of sites
 // (atlas texels, one per chart a texel touches) with their Jacobians and their 8 neighbors, built by

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// texfab stats: the quality measures of DESIGN.md for an image synthesized from an exemplar.
+// texfab stats: the quality measures (docs/design.md#quality-measures) of an image synthesized
+// from an exemplar.
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "apps/texfab/report_json.h"

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Based on: S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §5–6;
-//           notes/lefebvre-hdr-notes.md §8 and errata 3–4.
+//           docs/synthesis-notes.md#atlas-synthesis, #anisometric-step, #anisometric-candidates.
 #include "synthesis/cpu/surface_kernels.h"
 
 #include "synthesis/coord_map.h"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The command line as a user meets it (issue 11's defects): every numeric flag of every command
+// The command line as a user meets it, where it used to fail: every numeric flag of every command
 // refuses NaN and infinity naming the flag, ranges are stated one way, unknown commands are named,
 // outputs are checked before any work and committed together, a signal leaves no temporary, the
 // analysis cache is bounded and an unwritable one is said once.

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Synthesis of 1024^2 textures from real exemplars (GIMP's patterns, Debian gimp-data), each
-// measured against the baselines of issue 2: a random-coordinate image (noise made of exemplar
-// pixels) and a verbatim tiling.
+// measured against two baselines: a random-coordinate image (noise made of exemplar pixels) and a
+// verbatim tiling.
 #include "render/image/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"

@@ -159,7 +159,7 @@ TEST(SolidAnalysis, RefusesExemplarsOfDifferentSizes) {
   }
 }
 
-// The heart of laziness (DESIGN.md, the determinism contract): a voxel's value does not depend
+// The heart of laziness (docs/design.md#the-determinism-contract): a voxel's value does not depend
 // on which other voxels are requested, in which order, in how many requests, on how many threads,
 // or on the coarse-level cache. Every request below has a different dependency chain.
 TEST(SolidSynthesis, AnySubsetAgreesWithTheBox) {
