@@ -94,23 +94,46 @@ Vector3f frontFor(const Vector3f& up) {
 
 namespace {
 
-// The camera distance from `center` along -forward at which every vertex the triangles use projects
-// inside the view shrunk by `margin` (tanX, tanY: tangents of the half fields of view); at least
-// enough to keep the camera outside the bounding sphere of radius `radius`.
-float framingDistance(const geometry::Mesh& mesh, const Vector3f& center, const Vector3f& forward, const Vector3f& right,
+// Where the camera looks (a point on the view's axis) and how far from it it stands so that
+// every vertex the triangles use projects inside the view shrunk by `margin`, centred (tanX, tanY:
+// tangents of the half fields of view); never closer than the bounding sphere of radius `radius`
+// around `center`.
+struct Framing {
+  Vector3f target;
+  float distance = 0;
+};
+
+Framing frameVertices(const geometry::Mesh& mesh, const Vector3f& center, const Vector3f& forward, const Vector3f& right,
                       const Vector3f& up, float tanX, float tanY, float margin, float radius) {
   std::vector<char> used(mesh.positions.size(), 0);
   for (const auto& t : mesh.triangles)
     for (uint32_t v : t) used[v] = 1;
-  float distance = 0;
-  for (size_t v = 0; v < mesh.positions.size(); ++v) {
-    if (!used[v]) continue;
-    const Vector3f p = mesh.positions[v] - center;
-    const float depth = p.dot(forward);  // along the view, relative to the centre
-    distance = std::max({distance, margin * std::abs(p.dot(right)) / tanX - depth,
-                         margin * std::abs(p.dot(up)) / tanY - depth});
+  Framing f{center, 0};
+  // The distance that fits the vertices about the target, then the target moved to the centre of
+  // their projection (perspective makes it asymmetric), twice.
+  for (int pass = 0; pass < 3; ++pass) {
+    float distance = 0;
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+      if (!used[v]) continue;
+      const Vector3f p = mesh.positions[v] - f.target;
+      const float depth = p.dot(forward);
+      distance = std::max({distance, margin * std::abs(p.dot(right)) / tanX - depth,
+                           margin * std::abs(p.dot(up)) / tanY - depth});
+    }
+    f.distance = std::max(distance, 1.05f * radius + (f.target - center).norm());
+    if (pass == 2) break;
+    float x0 = std::numeric_limits<float>::max(), x1 = -x0, y0 = x0, y1 = -x0;
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+      if (!used[v]) continue;
+      const Vector3f p = mesh.positions[v] - f.target;
+      const float depth = f.distance + p.dot(forward);
+      x0 = std::min(x0, p.dot(right) / depth), x1 = std::max(x1, p.dot(right) / depth);
+      y0 = std::min(y0, p.dot(up) / depth), y1 = std::max(y1, p.dot(up) / depth);
+    }
+    if (x1 < x0) break;  // no vertices
+    f.target += f.distance * (0.5f * (x0 + x1) * right + 0.5f * (y0 + y1) * up);
   }
-  return std::max(distance, 1.05f * radius);
+  return f;
 }
 
 } // namespace
@@ -134,8 +157,9 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
   const Vector3f forward = -toCamera;
   const Vector3f right = forward.cross(modelUp).normalized();
   const Vector3f up = right.cross(forward);
-  const float distance = framingDistance(mesh_, center, forward, right, up, tanHalf * aspect, tanHalf, o.margin, radius);
-  const Vector3f eye = center + distance * toCamera;
+  const Framing framing = frameVertices(mesh_, center, forward, right, up, tanHalf * aspect, tanHalf, o.margin, radius);
+  const float distance = framing.distance;
+  const Vector3f eye = framing.target + distance * toCamera;
   // Key light from the camera's upper left, a little behind it; sky light from the model's up.
   const Vector3f light = (toCamera + 0.9f * up - 0.6f * right).normalized();
   const Vector3f keyColor(2.6f, 2.5f, 2.35f), skyColor(0.55f, 0.6f, 0.7f), groundColor(0.25f, 0.22f, 0.2f);
