@@ -4,6 +4,7 @@
 // with no flipped triangle and no overlap, or a clear "cannot fit" error; never the internal one.
 #include "atlas/generate_atlas.h"
 #include "render/image/error.h"
+#include "tests/geometry/test_meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -14,25 +15,8 @@ namespace {
 
 using geometry::Mesh;
 
-/// An axis-aligned closed box [lo, lo + size] (12 triangles), normals outward.
-Mesh box(Eigen::Vector3f lo, Eigen::Vector3f size) {
-  Mesh m;
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back(lo + Eigen::Vector3f(size.x() * float(i & 1), size.y() * float((i >> 1) & 1),
-                                               size.z() * float((i >> 2) & 1)));
-  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
-void append(Mesh& a, const Mesh& b) {
-  const uint32_t o = uint32_t(a.positions.size());
-  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
-  for (auto t : b.triangles) a.triangles.push_back({t[0] + o, t[1] + o, t[2] + o});
-}
+using texfab::testing::append;
+using texfab::testing::box;
 
 /// A unit cube whose first triangle (0, 2, 3) is split around two points 1e-7 from its corner 0:
 /// one of the five pieces has a positive area under the degeneracy threshold (1e-14 diag²).

@@ -2,6 +2,7 @@
 // One connectivity for every module, and orientation repair: tiny meshes with one defect each.
 #include "geometry/mesh_connectivity.h"
 #include "geometry/orient_mesh.h"
+#include "tests/geometry/test_meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -11,25 +12,11 @@ using namespace texfab::geometry;
 
 namespace {
 
-/// An axis-aligned closed cube [lo, lo + size]³ (12 triangles), normals outward.
 Mesh cube(Eigen::Vector3f lo = {0, 0, 0}, float size = 1) {
-  Mesh m;
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back(lo + size * Eigen::Vector3f(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)));
-  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
+  return texfab::testing::box(lo, Eigen::Vector3f::Constant(size));
 }
 
-/// Appends b to a (b's vertices renumbered after a's).
-void append(Mesh& a, const Mesh& b) {
-  const uint32_t offset = uint32_t(a.positions.size());
-  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
-  for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-}
+using texfab::testing::append;
 
 double signedVolume(const Mesh& m) {
   double v = 0;

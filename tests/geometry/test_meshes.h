@@ -30,6 +30,27 @@ inline std::shared_ptr<const Image> gradientImage(int w, int h, int channels = 3
 
 /// A closed unit cube (12 triangles, 8 shared vertices) with per-face UV squares (seams on every
 /// edge), flat per-corner normals, two materials (one textured) and a face tag on the top face.
+/// An axis-aligned closed box [lo, lo + size] (12 triangles, 8 shared vertices), normals outward.
+inline geometry::Mesh box(Eigen::Vector3f lo, Eigen::Vector3f size) {
+  geometry::Mesh m;
+  for (int i = 0; i < 8; ++i)
+    m.positions.push_back(lo + Eigen::Vector3f(size.x() * float(i & 1), size.y() * float((i >> 1) & 1),
+                                               size.z() * float((i >> 2) & 1)));
+  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+/// Appends b to a (b's vertices renumbered after a's).
+inline void append(geometry::Mesh& a, const geometry::Mesh& b) {
+  const uint32_t offset = uint32_t(a.positions.size());
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+}
+
 inline geometry::Mesh texturedCube() {
   geometry::Mesh m;
   m.positions = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};

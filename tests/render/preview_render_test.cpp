@@ -188,15 +188,6 @@ Extent coveredExtent(const Image& image) {
   return {x1 - x0 + 1, y1 - y0 + 1, x0 == 0 || y0 == 0 || x1 == image.width - 1 || y1 == image.height - 1};
 }
 
-// A box of the given size centred at the origin (12 triangles, outward).
-Mesh box(float sx, float sy, float sz) {
-  Mesh m;
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back({(i & 1 ? 0.5f : -0.5f) * sx, (i & 2 ? 0.5f : -0.5f) * sy, (i & 4 ? 0.5f : -0.5f) * sz});
-  m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  return m;
-}
 
 } // namespace
 
@@ -224,7 +215,7 @@ TEST(PreviewRenderer, UpAxisStandsTheModelUp) {
   EXPECT_TRUE(frontFor(Eigen::Vector3f::UnitY()).isApprox(Eigen::Vector3f::UnitZ()));
   EXPECT_TRUE(frontFor(Eigen::Vector3f::UnitZ()).isApprox(-Eigen::Vector3f::UnitY()));
   EXPECT_NEAR(frontFor(Eigen::Vector3f(1, 1, 0)).dot(Eigen::Vector3f(1, 1, 0)), 0.0f, 1e-6f);
-  const Mesh tall = box(1, 1, 3);
+  const Mesh tall = texfab::testing::box({-0.5f, -0.5f, -1.5f}, {1, 1, 3});
   const PreviewRenderer renderer(tall);
   RenderOptions o;
   o.width = o.height = 96;
