@@ -104,7 +104,7 @@ IndirectionTarget walkAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj
 }
 
 IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const MeshAdjacency& adj, const Atlas& atlas,
-                                   const AtlasFields& fields, const IndirectionOptions& options, int threads) {
+                                   const AtlasFields& fields, const IndirectionOptions& options, const Context& ctx) {
   options.validate();
   const int W = fields.samples.width, H = fields.samples.height;
   IndirectionMap map;
@@ -135,7 +135,7 @@ IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const MeshAdjacen
       texels.push_back(i);
     }
   map.targets.resize(texels.size());
-  parallelFor(0, int(texels.size()), threads, [&](int b, int e) {
+  parallelFor(0, int(texels.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) {
       const size_t idx = texels[size_t(i)];
       const int x = int(idx % size_t(W)), y = int(idx / size_t(W));

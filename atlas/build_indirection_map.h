@@ -12,6 +12,7 @@
 #include "atlas/rasterize_atlas.h"
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <array>
 #include <cstdint>
@@ -46,7 +47,7 @@ struct IndirectionMap {
 };
 
 IndirectionMap buildIndirectionMap(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas,
-                                   const AtlasFields& fields, const IndirectionOptions& options = {}, int threads = 0);
+                                   const AtlasFields& fields, const IndirectionOptions& options = {}, const Context& ctx = {});
 
 /// Walks from atlas point `start` in triangle `triangle` by `step` (texels) across triangles and
 /// seams; exposed for tests and for synthesis of longer steps.

@@ -29,16 +29,16 @@ Eigen::Vector2d singularValues(const float j[4]) {
 }
 
 TexelField<TexelJacobian> computeJacobians(const geometry::Mesh& mesh, const Atlas& atlas, const AtlasFields& fields,
-                                           const geometry::TangentField& field, double textureScale, int threads) {
+                                           const geometry::TangentField& field, double textureScale, const Context& ctx) {
   const int W = fields.samples.width, H = fields.samples.height;
   TexelField<TexelJacobian> out(W, H);
   // J_f per triangle (analytic; constant over a triangle).
   std::vector<Eigen::Matrix<double, 3, 2>> jf(mesh.triangleCount());
-  parallelFor(0, int(mesh.triangleCount()), threads, [&](int b, int e) {
+  parallelFor(0, int(mesh.triangleCount()), ctx, [&](int b, int e) {
     for (int t = b; t < e; ++t) jf[size_t(t)] = triangleJf(mesh, atlas, size_t(t));
   }, 1024);
   const bool anyChart = fields.chartTexels > 0;
-  parallelFor(0, H, threads, [&](int y0, int y1) {
+  parallelFor(0, H, ctx, [&](int y0, int y1) {
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < W; ++x) {
         if (!anyChart) continue;

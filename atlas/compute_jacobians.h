@@ -11,6 +11,7 @@
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
 #include "geometry/tangent_field.h"
+#include "render/image/context.h"
 
 namespace texfab::atlas {
 
@@ -26,7 +27,7 @@ Eigen::Matrix<double, 3, 2> triangleJf(const geometry::Mesh& mesh, const Atlas& 
 /// Fills every texel that has a triangle (chart texels and filled gutters); empty texels stay 0.
 /// textureScale: exemplar pixels per model unit (> 0).
 TexelField<TexelJacobian> computeJacobians(const geometry::Mesh& mesh, const Atlas& atlas, const AtlasFields& fields,
-                                           const geometry::TangentField& field, double textureScale, int threads = 0);
+                                           const geometry::TangentField& field, double textureScale, const Context& ctx = {});
 
 /// Singular values (largest, smallest) of a 2×2 J.
 Eigen::Vector2d singularValues(const float j[4]);

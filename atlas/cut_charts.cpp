@@ -233,7 +233,7 @@ double seamLength(const geometry::Mesh& mesh, const MeshAdjacency& adj, const st
 } // namespace
 
 CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjacency& adj, Atlas& atlas, int width,
-                                    int height, int gutter, const CutChartsOptions& options, int threads) {
+                                    int height, int gutter, const CutChartsOptions& options, const Context& ctx) {
   options.validate();
   CutChartsReport report;
   if (!options.enabled || atlas.charts.empty()) return report;
@@ -247,7 +247,7 @@ CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjace
   std::vector<std::vector<std::vector<uint32_t>>> pieces(atlas.charts.size());
   std::vector<size_t> cutCount(atlas.charts.size(), 0);
   const int chunks = int(atlas.charts.size());
-  parallelFor(0, chunks, threads, [&](int b, int e) {
+  parallelFor(0, chunks, ctx, [&](int b, int e) {
     Cutter cutter{mesh, adj, atlas, g, options};
     for (int i = b; i < e; ++i) {
       const Chart& chart = atlas.charts[size_t(i)];

@@ -10,6 +10,7 @@
 #include "atlas/atlas.h"
 #include "atlas/mesh_adjacency.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <cstddef>
 
@@ -39,9 +40,9 @@ struct CutChartsReport {
 
 /// Cuts charts of a parameterized atlas (chartUvs unchanged); the atlas size and the gutter
 /// (texels) give the gutter band the cuts are weighed against. Charts are renumbered by their
-/// smallest triangle id. Deterministic whatever `threads`.
+/// smallest triangle id. Deterministic whatever ctx.threads.
 CutChartsReport cutChartsForPacking(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, Atlas& atlas,
                                     int width, int height, int gutter, const CutChartsOptions& options = {},
-                                    int threads = 0);
+                                    const Context& ctx = {});
 
 } // namespace texfab::atlas

@@ -36,7 +36,7 @@ void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adj, const At
     }
 }
 
-GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options) {
+GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options, const Context& ctx) {
   options.segment.validate();
   options.parameterize.validate();
   options.cut.validate();
@@ -53,14 +53,14 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
   lap("adjacency");
   r.report.segment = segmentCharts(mesh, r.adjacency, r.atlas, options.segment);
   lap("charts");
-  r.report.parameterize = parameterizeCharts(mesh, r.adjacency, r.atlas, options.parameterize, options.threads);
+  r.report.parameterize = parameterizeCharts(mesh, r.adjacency, r.atlas, options.parameterize, ctx);
   lap("parameterization");
   r.report.cut = cutChartsForPacking(mesh, r.adjacency, r.atlas, options.pack.width, options.pack.height,
-                                     options.pack.gutter, options.cut, options.threads);
+                                     options.pack.gutter, options.cut, ctx);
   lap("cutting");
-  r.report.pack = packCharts(mesh, r.atlas, options.pack, options.threads);
+  r.report.pack = packCharts(mesh, r.atlas, options.pack, ctx);
   lap("packing");
-  r.fields = rasterizeAtlas(mesh, r.atlas, options.threads);
+  r.fields = rasterizeAtlas(mesh, r.atlas, ctx);
   lap("texel fields");
   measureAtlas(mesh, r.adjacency, r.atlas, r.report);
   r.report.utilization = r.fields.utilization();

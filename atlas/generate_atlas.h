@@ -13,6 +13,7 @@
 #include "atlas/rasterize_atlas.h"
 #include "atlas/segment_charts.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <string>
 #include <vector>
@@ -24,7 +25,6 @@ struct GenerateAtlasOptions {
   ParameterizeChartsOptions parameterize;
   CutChartsOptions cut; ///< cuts of wasteful charts before packing (Box Cutter)
   PackChartsOptions pack;
-  int threads = 0; ///< 0 = all cores; the atlas does not depend on it
 };
 
 struct AtlasReport {
@@ -54,7 +54,9 @@ struct GenerateAtlasResult {
   AtlasReport report;
 };
 
-GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options = {});
+/// Deterministic: ctx.threads only spreads the work.
+GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtlasOptions& options = {},
+                                  const Context& ctx = {});
 
 /// Global figures of a packed atlas (stretch over all charts in atlas space, flips, seams).
 void measureAtlas(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas, AtlasReport& report);

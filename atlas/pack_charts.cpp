@@ -250,11 +250,11 @@ struct Placement {
 
 /// Packs every chart at `density` into width W (height unbounded). Returns the used height and the
 /// placements, or -1 when a chart is wider than the atlas in every orientation.
-int packAt(const std::vector<PreparedChart>& charts, double density, int W, int pad, int threads,
+int packAt(const std::vector<PreparedChart>& charts, double density, int W, int pad, const Context& ctx,
            double heightWeight, long long holeBudget,
            std::vector<Placement>& placements, std::vector<Mask>& masks) {
   masks.assign(charts.size(), Mask{});
-  parallelFor(0, int(charts.size()), threads, [&](int b, int e) {
+  parallelFor(0, int(charts.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) masks[size_t(i)] = rasterizeMask(charts[size_t(i)], density, pad);
   });
   std::vector<size_t> order(charts.size());
@@ -487,12 +487,12 @@ int packAt(const std::vector<PreparedChart>& charts, double density, int W, int 
 
 } // namespace
 
-PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const PackChartsOptions& options, int threads) {
+PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const PackChartsOptions& options, const Context& ctx) {
   options.validate();
   const int W = options.width, H = options.height;
   const int pad = (options.gutter + 1) / 2;
   std::vector<PreparedChart> prepared(atlas.charts.size());
-  parallelFor(0, int(prepared.size()), threads, [&](int b, int e) {
+  parallelFor(0, int(prepared.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) prepared[size_t(i)] = prepareChart(atlas, atlas.charts[size_t(i)]);
   });
   double totalArea = 0;
@@ -521,10 +521,10 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   };
   auto packPair = [&](int w, int p, double d0, double d1, std::array<Pass, 2>& out) {
     out[0].density = d0, out[1].density = d1;
-    parallelFor(0, 2, threads, [&](int b, int e) {
+    parallelFor(0, 2, ctx, [&](int b, int e) {
       for (int i = b; i < e; ++i) {
         Pass& r = out[size_t(i)];
-        r.used = packAt(prepared, r.density, w, p, threads, hw, holeBudget, r.placements, r.masks);
+        r.used = packAt(prepared, r.density, w, p, ctx, hw, holeBudget, r.placements, r.masks);
       }
     });
     report.passes += 2;
@@ -581,7 +581,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   if (options.texelsPerUnit > 0) {
     std::vector<Placement> placements;
     std::vector<Mask> masks;
-    const int used = packAt(prepared, options.texelsPerUnit, W, pad, threads, hw, holeBudget, placements, masks);
+    const int used = packAt(prepared, options.texelsPerUnit, W, pad, ctx, hw, holeBudget, placements, masks);
     report.passes = 1;
     if (used < 0 || used > H)
       throw Error("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
@@ -606,7 +606,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
         // efficiency the fine pass would use k·used·ρ rows (ρ: the ratio of the mask areas);
         // the area grows like the square of the density, which gives the fine density to try.
         std::vector<size_t> fine(prepared.size(), 0);
-        parallelFor(0, int(prepared.size()), threads, [&](int b, int e) {
+        parallelFor(0, int(prepared.size()), ctx, [&](int b, int e) {
           for (int i = b; i < e; ++i)
             for (uint8_t bit : rasterizeMask(prepared[size_t(i)], start, pad).bits) fine[size_t(i)] += bit;
         });

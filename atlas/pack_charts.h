@@ -11,6 +11,7 @@
 
 #include "atlas/atlas.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <cstddef>
 
@@ -41,6 +42,6 @@ struct PackChartsReport {
 /// Fills atlas.width/height/texelsPerUnit/texelUvs and each chart's placement. Throws
 /// texfab::Error when the charts cannot fit (e.g. more charts than the resolution can hold).
 PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const PackChartsOptions& options = {},
-                            int threads = 0);
+                            const Context& ctx = {});
 
 } // namespace texfab::atlas

@@ -243,7 +243,7 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const MeshAdjacency& a
 } // namespace
 
 ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const MeshAdjacency& adj, Atlas& atlas,
-                                            const ParameterizeChartsOptions& options, int threads) {
+                                            const ParameterizeChartsOptions& options, const Context& ctx) {
   options.validate();
   ParameterizeChartsReport report;
   atlas.chartUvs.assign(3 * mesh.triangleCount(), Eigen::Vector2d::Zero());
@@ -253,7 +253,7 @@ ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const Me
   for (int round = 0; !work.empty(); ++round) {
     const bool last = round + 1 >= options.maxRounds;
     std::vector<ChartResult> results(work.size());
-    parallelFor(0, int(work.size()), threads, [&](int b, int e) {
+    parallelFor(0, int(work.size()), ctx, [&](int b, int e) {
       for (int i = b; i < e; ++i) results[size_t(i)] = parameterizeChart(mesh, adj, charts[work[size_t(i)]].faces, options);
     });
     std::vector<size_t> next;

@@ -9,6 +9,7 @@
 #include "atlas/atlas.h"
 #include "atlas/mesh_adjacency.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <cstddef>
 
@@ -44,8 +45,8 @@ struct ParameterizeChartsReport {
 
 /// Fills atlas.chartUvs (chart-local, model units, UV area = surface area per chart) and the
 /// charts' stretch figures; may split charts (then renumbered by smallest triangle id).
-/// Charts are solved in parallel on `threads` threads (0 = all); the result does not depend on it.
+/// Charts are solved in parallel on ctx.threads threads (0 = all); the result does not depend on it.
 ParameterizeChartsReport parameterizeCharts(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, Atlas& atlas,
-                                            const ParameterizeChartsOptions& options = {}, int threads = 0);
+                                            const ParameterizeChartsOptions& options = {}, const Context& ctx = {});
 
 } // namespace texfab::atlas

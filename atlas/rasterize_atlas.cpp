@@ -24,7 +24,7 @@ void atlasBarycentrics(const Atlas& atlas, uint32_t t, const Eigen::Vector2d& p,
   b2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
 }
 
-AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, int threads) {
+AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const Context& ctx) {
   const int W = atlas.width, H = atlas.height;
   AtlasFields fields;
   fields.samples = TexelField<SurfaceSample>(W, H);
@@ -73,7 +73,7 @@ AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, int t
   constexpr int kBand = 32;
   const int bands = (H + kBand - 1) / kBand;
   std::vector<size_t> chartTexels(size_t(bands), 0), overlapping(size_t(bands), 0);
-  parallelFor(0, bands, threads, [&](int b0, int b1) {
+  parallelFor(0, bands, ctx, [&](int b0, int b1) {
     for (int band = b0; band < b1; ++band) {
       const int rowBegin = band * kBand, rowEnd = std::min(H, rowBegin + kBand);
       for (const Triangle& tri : triangles) {

@@ -9,6 +9,7 @@
 #include "atlas/atlas.h"
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <cstddef>
 
@@ -26,8 +27,8 @@ struct AtlasFields {
 };
 
 /// Rasterizes the packed atlas (after packCharts). Normals come from mesh.normals when present,
-/// else from area-weighted vertex normals. Deterministic; `threads` only spreads the gutter fill.
-AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, int threads = 0);
+/// else from area-weighted vertex normals. Deterministic; ctx.threads only spreads the gutter fill.
+AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const Context& ctx = {});
 
 /// The triangle id and barycentrics (b1, b2) of atlas point p (texels) in triangle t (extrapolated
 /// when p is outside it).

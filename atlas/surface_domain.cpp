@@ -59,10 +59,10 @@ int32_t siteAt(const SurfaceLevel& level, const TexelIndex& index, int cell, dou
 // representative chart texel of level 0, where border walks start.
 void linkNeighbors(const geometry::Mesh& mesh, const MeshAdjacency& adjacency, const Atlas& atlas,
                    const AtlasFields& fields, SurfaceLevel& level, const std::vector<int32_t>& repX,
-                   const std::vector<int32_t>& repY, int cell, int threads) {
+                   const std::vector<int32_t>& repY, int cell, const Context& ctx) {
   const TexelIndex index = indexTexels(level);
   level.neighbors.assign(level.size(), {});
-  parallelFor(0, int(level.size()), threads, [&](int begin, int end) {
+  parallelFor(0, int(level.size()), ctx, [&](int begin, int end) {
     for (int s = begin; s < end; ++s) {
       const size_t i = size_t(s);
       for (int d = 0; d < 8; ++d) {
@@ -173,7 +173,7 @@ SurfaceLevel coarserLevel(SurfaceLevel& fine, const std::vector<int32_t>& fineRe
 synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const MeshAdjacency& adjacency,
                                             const Atlas& atlas, const AtlasFields& fields,
                                             const TexelField<TexelJacobian>& jacobians,
-                                            const SurfaceDomainOptions& options, int threads) {
+                                            const SurfaceDomainOptions& options, const Context& ctx) {
   if (options.maxLevels < 1) throw Error("surface domain: maxLevels must be >= 1");
   if (fields.samples.width != atlas.width)
     throw Error("surface domain: the texel fields must have the atlas's size");
@@ -187,13 +187,13 @@ synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const Me
     return domain;
   }
   std::vector<int32_t> repX = domain.levels[0].x, repY = domain.levels[0].y;
-  linkNeighbors(mesh, adjacency, atlas, fields, domain.levels[0], repX, repY, 1, threads);
+  linkNeighbors(mesh, adjacency, atlas, fields, domain.levels[0], repX, repY, 1, ctx);
   for (int a = 1; a < options.maxLevels; ++a) {
     const SurfaceLevel& last = domain.levels.back();
     if (last.width <= 1 && last.height <= 1) break;
     std::vector<int32_t> coarseX, coarseY;
     SurfaceLevel coarse = coarserLevel(domain.levels.back(), repX, repY, 1 << a, coarseX, coarseY);
-    linkNeighbors(mesh, adjacency, atlas, fields, coarse, coarseX, coarseY, 1 << a, threads);
+    linkNeighbors(mesh, adjacency, atlas, fields, coarse, coarseX, coarseY, 1 << a, ctx);
     domain.levels.push_back(std::move(coarse));
     repX = std::move(coarseX);
     repY = std::move(coarseY);

@@ -23,6 +23,7 @@
 #include "atlas/mesh_adjacency.h"
 #include "atlas/rasterize_atlas.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 #include "synthesis/synthesize_surface.h"
 
 namespace texfab::atlas {
@@ -32,12 +33,12 @@ struct SurfaceDomainOptions {
   bool neighbors = true; ///< link the sites' neighbors (false: the tables stay empty)
 };
 
-/// Deterministic; `threads` (0 = all cores) only spreads the work. `jacobians` may be empty when
+/// Deterministic; ctx.threads only spreads the work. `jacobians` may be empty when
 /// only level 0 is built (maxLevels = 1: sites and neighbors without a texture frame, as solid
 /// texturing needs): every site's Jacobian is then the identity.
 synthesis::SurfaceDomain buildSurfaceDomain(const geometry::Mesh& mesh, const MeshAdjacency& adjacency,
                                             const Atlas& atlas, const AtlasFields& fields,
                                             const TexelField<TexelJacobian>& jacobians,
-                                            const SurfaceDomainOptions& options = {}, int threads = 0);
+                                            const SurfaceDomainOptions& options = {}, const Context& ctx = {});
 
 } // namespace texfab::atlas

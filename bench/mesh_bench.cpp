@@ -81,7 +81,7 @@ void BM_InsideTests(benchmark::State& state) {
   const BoundingBox& box = scene.bounds();
   std::vector<Eigen::Vector3f> points(100000);
   for (auto& p : points) p = box.min + Eigen::Vector3f(u(rng), u(rng), u(rng)).cwiseProduct(box.max - box.min);
-  for (auto _ : state) benchmark::DoNotOptimize(scene.inside(points, int(state.range(0))));
+  for (auto _ : state) benchmark::DoNotOptimize(scene.inside(points, Context{.threads = int(state.range(0))}));
   state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(points.size()));
 }
 BENCHMARK(BM_InsideTests)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -180,9 +180,9 @@ bool EmbreeScene::occluded(const Ray& ray) const {
   return r.tfar < 0;  // Embree sets tfar = -inf on a hit
 }
 
-std::vector<RayHit> EmbreeScene::intersect(std::span<const Ray> rays, int threads) const {
+std::vector<RayHit> EmbreeScene::intersect(std::span<const Ray> rays, const Context& ctx) const {
   std::vector<RayHit> hits(rays.size());
-  parallelFor(0, int(rays.size()), threads, [&](int b, int e) {
+  parallelFor(0, int(rays.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) hits[size_t(i)] = intersect(rays[size_t(i)]);
   }, 256);
   return hits;
@@ -205,11 +205,11 @@ bool EmbreeScene::inside(const Eigen::Vector3f& point) const {
   return 2 * votes > int(impl_->insideDirections.size());
 }
 
-std::vector<uint8_t> EmbreeScene::inside(std::span<const Eigen::Vector3f> points, int threads) const {
+std::vector<uint8_t> EmbreeScene::inside(std::span<const Eigen::Vector3f> points, const Context& ctx) const {
   if (!impl_->watertight)
     throw Error("inside/outside test on an open mesh (it has boundary edges): the mesh has no inside");
   std::vector<uint8_t> out(points.size());
-  parallelFor(0, int(points.size()), threads, [&](int b, int e) {
+  parallelFor(0, int(points.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) out[size_t(i)] = inside(points[size_t(i)]) ? 1 : 0;
   }, 256);
   return out;
@@ -230,9 +230,9 @@ SurfacePoint EmbreeScene::closestPoint(const Eigen::Vector3f& point, float maxDi
   return best;
 }
 
-std::vector<SurfacePoint> EmbreeScene::closestPoints(std::span<const Eigen::Vector3f> points, int threads) const {
+std::vector<SurfacePoint> EmbreeScene::closestPoints(std::span<const Eigen::Vector3f> points, const Context& ctx) const {
   std::vector<SurfacePoint> out(points.size());
-  parallelFor(0, int(points.size()), threads, [&](int b, int e) {
+  parallelFor(0, int(points.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) out[size_t(i)] = closestPoint(points[size_t(i)]);
   }, 256);
   return out;

@@ -3,9 +3,10 @@
 // Ray casts, inside/outside tests and closest-point queries over a mesh, on an Embree BVH.
 // Embree types stay in embree_scene.cpp; the scene owns its device (RAII) and reports Embree
 // errors as texfab::Error. All queries are const and thread-safe; the batch versions spread the
-// work over `threads` (0 = all cores) and return results in input order.
+// work over ctx.threads (0 = all cores) and return results in input order.
 
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 
 #include <Eigen/Core>
 
@@ -62,7 +63,7 @@ public:
   RayHit intersect(const Ray& ray) const;
   /// True when anything lies on the ray within [tnear, tfar] (shadow rays).
   bool occluded(const Ray& ray) const;
-  std::vector<RayHit> intersect(std::span<const Ray> rays, int threads = 0) const;
+  std::vector<RayHit> intersect(std::span<const Ray> rays, const Context& ctx = {}) const;
 
   /// Whether inside/outside is defined: every edge has an even number of triangles.
   bool watertight() const;
@@ -70,12 +71,12 @@ public:
   /// texfab::Error when the mesh is not watertight: an open mesh has no inside, and the test
   /// reports that rather than guess.
   bool inside(const Eigen::Vector3f& point) const;
-  std::vector<uint8_t> inside(std::span<const Eigen::Vector3f> points, int threads = 0) const;
+  std::vector<uint8_t> inside(std::span<const Eigen::Vector3f> points, const Context& ctx = {}) const;
 
   /// Closest point of the surface to `point` within `maxDistance` (rtcPointQuery).
   SurfacePoint closestPoint(const Eigen::Vector3f& point,
                             float maxDistance = std::numeric_limits<float>::infinity()) const;
-  std::vector<SurfacePoint> closestPoints(std::span<const Eigen::Vector3f> points, int threads = 0) const;
+  std::vector<SurfacePoint> closestPoints(std::span<const Eigen::Vector3f> points, const Context& ctx = {}) const;
 
   const BoundingBox& bounds() const;
   size_t triangleCount() const;

@@ -57,6 +57,6 @@ struct SolidSites {
 /// a position times the scale leaves the solid texture's range.
 SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
                                const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
-                               double scale, const Context& ctx = {}, const synthesis::SolidLevelCallback& onLevel = {});
+                               double scale, const Context& ctx = {});
 
 } // namespace texfab::render

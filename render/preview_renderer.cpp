@@ -86,7 +86,7 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
 
 PreviewRenderer::~PreviewRenderer() = default;
 
-Image PreviewRenderer::render(const RenderOptions& o) const {
+Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const {
   if (o.width < 1 || o.height < 1 || o.width > kMaxImageSide || o.height > kMaxImageSide)
     throw Error("render: image size out of range");
   if (o.samplesPerPixel < 1 || o.samplesPerPixel > 4096) throw Error("render: samples per pixel must be 1..4096");
@@ -121,7 +121,7 @@ Image PreviewRenderer::render(const RenderOptions& o) const {
   const Vector3f bg(srgbToLinear(o.background.x()), srgbToLinear(o.background.y()), srgbToLinear(o.background.z()));
 
   Image out(o.width, o.height, o.transparentBackground ? 4 : 3, PixelFormat::UInt8);
-  parallelFor(0, o.height, o.threads, [&](int y0, int y1) {
+  parallelFor(0, o.height, ctx, [&](int y0, int y1) {
     for (int py = y0; py < y1; ++py)
       for (int px = 0; px < o.width; ++px) {
         Vector3f sum = Vector3f::Zero();

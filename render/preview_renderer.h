@@ -9,6 +9,7 @@
 
 #include "geometry/embree_scene.h"
 #include "geometry/mesh.h"
+#include "render/image/context.h"
 #include "render/image/image.h"
 #include "render/mip_pyramid.h"
 
@@ -31,7 +32,6 @@ struct RenderOptions {
   Eigen::Vector3f background{1.0f, 1.0f, 1.0f}; ///< sRGB background colour when not transparent
   int aoSamples = 1;              ///< ambient-occlusion rays per camera sample (0 = no AO)
   bool shadows = true;            ///< key-light shadow rays
-  int threads = 0;                ///< 0 = all cores
 };
 
 class PreviewRenderer {
@@ -42,7 +42,7 @@ public:
   ~PreviewRenderer();
 
   /// Renders one view: 8-bit sRGB, 4 channels (RGBA) when the background is transparent, else 3.
-  Image render(const RenderOptions& options) const;
+  Image render(const RenderOptions& options, const Context& ctx = {}) const;
 
 private:
   struct MaterialMaps {

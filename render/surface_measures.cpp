@@ -108,7 +108,7 @@ ScaleMeasure measureScale(const synthesis::SurfaceLevel& finest, const std::vect
 }
 
 SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& image,
-                                       const Image& exemplar, const AtlasFields& fields, int samples, int threads) {
+                                       const Image& exemplar, const AtlasFields& fields, int samples, const Context& ctx) {
   constexpr int r = 3;
   const int c = colourChannels(exemplar);
   if (colourChannels(image) != c) throw Error("surface fidelity: image and exemplar differ in colour channels");
@@ -145,7 +145,7 @@ SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, co
     patches.insert(patches.end(), patch.begin(), patch.end());
     ++out.samples;
   }
-  if (out.samples) out.fidelity = synthesis::patchFidelity(patches, exemplar, r, threads);
+  if (out.samples) out.fidelity = synthesis::patchFidelity(patches, exemplar, r, ctx);
   return out;
 }
 

@@ -6,6 +6,7 @@
 // domain (atlas/surface_domain.h) and are deterministic.
 
 #include "atlas/rasterize_atlas.h"
+#include "render/image/context.h"
 #include "render/image/image.h"
 #include "synthesis/synthesize_surface.h"
 
@@ -51,6 +52,6 @@ struct SurfaceFidelity {
 };
 SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& atlasImage,
                                        const Image& exemplar, const atlas::AtlasFields& fields, int samples = 1024,
-                                       int threads = 0);
+                                       const Context& ctx = {});
 
 } // namespace texfab::render

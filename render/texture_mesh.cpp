@@ -89,9 +89,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
 
   TextureMeshResult r;
   Stage atlasStage(ctx, "atlas");
-  GenerateAtlasOptions atlasOptions = o.atlas;
-  atlasOptions.threads = ctx.threads;
-  r.atlas = generateAtlas(mesh, atlasOptions);
+  r.atlas = generateAtlas(mesh, o.atlas, ctx.nested());
   const Atlas& atlas = r.atlas.atlas;
   const AtlasReport& ar = r.atlas.report;
   if (ar.flippedTriangles || ar.overlappingTexels)
@@ -122,7 +120,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     Stage fieldStage(ctx, "tangent field");
     const geometry::TangentField field = geometry::computeTangentField(mesh, o.field);
     fieldStage.finish(std::to_string(field.singularTriangles.size()) + " singularities");
-    jacobians = computeJacobians(mesh, atlas, r.atlas.fields, field, r.textureScale, ctx.threads);
+    jacobians = computeJacobians(mesh, atlas, r.atlas.fields, field, r.textureScale, ctx);
     // Levels down to the one whose texels span the whole exemplar.
     const int side = std::max(exemplar.width, exemplar.height);
     domainOptions.maxLevels = std::clamp(2 + int(std::ceil(std::log2(side / std::max(pixelsPerTexel, 1e-3)))), 1, 16);
@@ -132,7 +130,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
   }
   Stage domainStage(ctx, "fields");
   synthesis::SurfaceDomain domain =
-      buildSurfaceDomain(mesh, r.atlas.adjacency, atlas, r.atlas.fields, jacobians, domainOptions, ctx.threads);
+      buildSurfaceDomain(mesh, r.atlas.adjacency, atlas, r.atlas.fields, jacobians, domainOptions, ctx);
   jacobians = {};
   domainStage.finish(std::to_string(domain.levels[0].size()) + " texels, " +
                               std::to_string(domain.levels.size()) + " levels");
@@ -141,7 +139,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
   const int gutter = o.atlas.pack.gutter;
   Stage synthesisStage(ctx, "synthesis");
   if (surface) {
-    synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex.analysis, domain, o.surface, ctx.threads);
+    synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex.analysis, domain, o.surface, ctx);
     r.coords = std::move(s.coords);
     r.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
     r.synthesisLevels = s.levels;
@@ -149,17 +147,9 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
                                    " exemplar pixels per texel");
   } else {
     r.exemplarPixelsPerTexel = pixelsPerTexel;
-    // Long on large atlases: each level is reported as it ends.
-    const Context levelContext = synthesisStage.inner();
-    auto onLevel = [&](const synthesis::SolidLevelStats& level, int number, int levels) {
-      if (!levelContext.progress) return;
-      const std::string name = "level " + std::to_string(number) + "/" + std::to_string(levels);
-      const std::string detail =
-          std::to_string(level.voxels) + " voxels, " + std::to_string(level.corrections) + " corrections";
-      levelContext.progress({ProgressEvent::Kind::End, name, levelContext.depth, 1.0, level.seconds, detail});
-    };
+    // Long on large atlases: the engine reports each level inside this stage.
     SolidSites solid =
-        solidTriplesAtSites(sites, r.atlas.fields, *ex.solidAnalysis, o.solid, r.textureScale, ctx, onLevel);
+        solidTriplesAtSites(sites, r.atlas.fields, *ex.solidAnalysis, o.solid, r.textureScale, synthesisStage.inner());
     r.triples = std::move(solid.triples);
     r.voxelsRequested = solid.voxelsRequested;
     r.voxelsSynthesized = solid.voxelsSynthesized;
@@ -213,7 +203,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar&
     if (surface) {
       r.measures.scale = measureScale(sites, r.coords, r.atlas.fields, ex.analysis->width, ex.analysis->height,
                                       r.textureScale);
-      r.measures.fidelity = measureSurfaceFidelity(sites, *r.baseColor, exemplar, r.atlas.fields, 1024, ctx.threads);
+      r.measures.fidelity = measureSurfaceFidelity(sites, *r.baseColor, exemplar, r.atlas.fields, 1024, ctx);
       detail += ", scale within 15 % on " + format(100 * r.measures.scale->fractionWithin) + " % of the surface, fidelity " +
                 format(r.measures.fidelity->fidelity);
     }

@@ -12,11 +12,11 @@
 // unsynthesized texels.
 
 #include "atlas/generate_atlas.h"
-#include "render/surface_measures.h"
 #include "geometry/mesh.h"
 #include "geometry/tangent_field.h"
 #include "render/image/context.h"
 #include "render/image/image.h"
+#include "render/surface_measures.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"

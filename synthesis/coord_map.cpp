@@ -20,14 +20,14 @@ std::string lowerExtension(const fs::path& path) {
 }
 } // namespace
 
-Image applyCoords(const CoordMap& coords, const Image& source, int threads) {
+Image applyCoords(const CoordMap& coords, const Image& source, const Context& ctx) {
   if (source.width != coords.exemplarWidth || source.height != coords.exemplarHeight)
     throw Error("map is " + std::to_string(source.width) + "x" + std::to_string(source.height) +
                 " but the exemplar is " + std::to_string(coords.exemplarWidth) + "x" +
                 std::to_string(coords.exemplarHeight) + " (companion maps must match the exemplar)");
   Image out(coords.width, coords.height, source.channels, source.format);
   const size_t bytes = size_t(source.channels) * sizeof(float);
-  parallelFor(0, coords.height, threads, [&](int r0, int r1) {
+  parallelFor(0, coords.height, ctx, [&](int r0, int r1) {
     for (int y = r0; y < r1; ++y)
       for (int x = 0; x < coords.width; ++x) {
         const uint32_t c = coords.at(x, y);

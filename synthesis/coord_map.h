@@ -3,6 +3,7 @@
 // The coordinate map: what parallel synthesis produces. Each output texel stores the exemplar
 // pixel it shows, so colours (and companion maps: normals, roughness, height) are a lookup.
 
+#include "render/image/context.h"
 #include "render/image/image.h"
 
 #include <cstdint>
@@ -28,7 +29,7 @@ struct CoordMap {
 
 /// Colours (or any companion map of the exemplar's size) looked up through the coordinates.
 /// The result has `source`'s channels and format. Throws texfab::Error if the sizes differ.
-Image applyCoords(const CoordMap& coords, const Image& source, int threads = 0);
+Image applyCoords(const CoordMap& coords, const Image& source, const Context& ctx = {});
 
 /// Writes the map as an image: EXR holds u, v as floats; PNG/TIFF hold them as 16-bit integers
 /// (R = u, G = v, B = 0). Other extensions are refused.

@@ -196,7 +196,7 @@ std::vector<int8_t> runtimeNeighborhoods(const std::vector<int8_t>& appearance, 
 // exemplar, so that a few dozen places remain to choose from) and the spread distance grows to
 // match. Without this, coarse levels found no candidate outside the pixel's own blur footprint.
 std::vector<uint32_t> coherenceCandidates(const std::vector<int8_t>& appearance, int w, int h, int spacing,
-                                          const AnalysisOptions& options, int threads) {
+                                          const AnalysisOptions& options, const Context& ctx) {
   const int n = w * h;
   const int stride = std::max(1, std::min(spacing, std::min(w, h) / 8));
   AppearanceCloud cloud;
@@ -214,7 +214,7 @@ std::vector<uint32_t> coherenceCandidates(const std::vector<int8_t>& appearance,
   const auto query = std::min(sites.size(), size_t(options.searchNeighbors) + 1);
 
   std::vector<uint32_t> out(size_t(n) * size_t(options.k));
-  parallelFor(0, n, threads, [&](int begin, int end) {
+  parallelFor(0, n, ctx, [&](int begin, int end) {
     std::vector<uint32_t> index(query);
     std::vector<float> dist(query), point(kAppearanceDims);
     std::vector<std::pair<float, uint32_t>> ranked;
@@ -333,7 +333,7 @@ void validateExemplarSize(const Image& exemplar) {
                 ", larger than the supported 4096x4096 (exemplars are small pictures: 64 to 512 pixels)");
 }
 
-ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, int threads) {
+ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, const Context& ctx) {
   options.validate();
   validateExemplarSize(exemplar);
   const int w = exemplar.width, h = exemplar.height;
@@ -375,13 +375,13 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
   analysis.levels.resize(stack.size());
   const int finest = int(stack.size()) - 1;
   // Levels are independent: analyse them in parallel, each writing its own slot.
-  parallelFor(0, int(stack.size()), threads, [&](int begin, int end) {
+  parallelFor(0, int(stack.size()), ctx, [&](int begin, int end) {
     for (int l = begin; l < end; ++l) {
       AnalysisLevel& level = analysis.levels[size_t(l)];
       level.spacing = 1 << (finest - l);
       level.appearance = appearanceVectors(stack[size_t(l)], level.spacing);
       level.neighborhood = runtimeNeighborhoods(level.appearance, w, h, level.spacing);
-      level.candidates = coherenceCandidates(level.appearance, w, h, level.spacing, options, threads);
+      level.candidates = coherenceCandidates(level.appearance, w, h, level.spacing, options, ctx);
     }
   });
   return analysis;
@@ -444,11 +444,11 @@ std::optional<ExemplarAnalysis> readAnalysis(const fs::path& path, uint64_t expe
 }
 
 ExemplarAnalysis analyzeExemplarCached(const Image& exemplar, const AnalysisOptions& options,
-                                       const fs::path& cacheDir, int threads, bool* fromCache) {
+                                       const fs::path& cacheDir, const Context& ctx, bool* fromCache) {
   options.validate();
   return loadOrCompute(
       cacheDir, analysisKey(exemplar, options), ".analysis", readAnalysis,
-      [&] { return analyzeExemplar(exemplar, options, threads); }, writeAnalysis, fromCache);
+      [&] { return analyzeExemplar(exemplar, options, ctx); }, writeAnalysis, fromCache);
 }
 
 } // namespace texfab::synthesis

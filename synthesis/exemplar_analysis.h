@@ -19,6 +19,7 @@
 //   * k-nearest neighbors are searched among the 8-D appearance vectors (a k-d tree, exact),
 //     not among the 32-D runtime neighborhoods (the 8-D vector already encodes a 5x5 neighborhood).
 
+#include "render/image/context.h"
 #include "render/image/image.h"
 
 #include <cstdint>
@@ -88,8 +89,8 @@ Image featureDistance(const Image& exemplar);
 void validateExemplarSize(const Image& exemplar);
 
 /// Analyses `exemplar` (at least kMinExemplarSide pixels per side). Pure: the result depends only
-/// on the pixels and the options, never on `threads` (0 = all cores).
-ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, int threads = 0);
+/// on the pixels and the options, never on the context.
+ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options, const Context& ctx = {});
 
 /// The cache key of (exemplar pixels, options).
 uint64_t analysisKey(const Image& exemplar, const AnalysisOptions& options);
@@ -98,7 +99,7 @@ uint64_t analysisKey(const Image& exemplar, const AnalysisOptions& options);
 /// otherwise analyses and stores it (a cache that cannot be written is skipped, not an error).
 /// `fromCache` tells which happened.
 ExemplarAnalysis analyzeExemplarCached(const Image& exemplar, const AnalysisOptions& options,
-                                       const std::filesystem::path& cacheDir, int threads = 0,
+                                       const std::filesystem::path& cacheDir, const Context& ctx = {},
                                        bool* fromCache = nullptr);
 
 /// The default cache folder: $TEXFAB_CACHE_DIR, else $XDG_CACHE_HOME/texfab, else ~/.cache/texfab.

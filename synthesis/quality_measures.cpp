@@ -46,7 +46,7 @@ double pearson(const std::vector<float>& lum, int w, int h, int dx, int dy) {
 
 } // namespace
 
-double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, int threads) {
+double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx) {
   const int r = radius, side = 2 * r + 1;
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
   const int c = colourChannelCount(exemplar);
@@ -69,7 +69,7 @@ double patchFidelity(std::span<const float> patches, const Image& exemplar, int 
 
   const size_t count = patches.size() / size_t(dims);
   std::vector<double> nearest(count);
-  parallelFor(0, int(count), threads, [&](int begin, int end) {
+  parallelFor(0, int(count), ctx, [&](int begin, int end) {
     std::vector<uint8_t> q(size_t(dims), 0);
     for (int s = begin; s < end; ++s) {
       for (int d = 0; d < dims; ++d) q[size_t(d)] = quantize(patches[size_t(s) * size_t(dims) + size_t(d)]);
@@ -95,7 +95,7 @@ double patchFidelity(std::span<const float> patches, const Image& exemplar, int 
   return std::accumulate(nearest.begin(), nearest.end(), 0.0) / double(nearest.size());
 }
 
-double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, int threads) {
+double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, const Context& ctx) {
   const int r = options.radius, side = 2 * r + 1;
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
   if (image.width < side || image.height < side)
@@ -117,7 +117,7 @@ double neighborhoodFidelity(const Image& image, const Image& exemplar, const Fid
           const float* p = image.pixel(x + i, y + j);
           patches.insert(patches.end(), p, p + c);
         }
-  return patchFidelity(patches, exemplar, r, threads);
+  return patchFidelity(patches, exemplar, r, ctx);
 }
 
 double histogramDistance(const Image& image, const Image& exemplar) {
@@ -179,9 +179,9 @@ double shiftedSelfCorrelation(const Image& image, int dx, int dy) {
 }
 
 QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
-                             const FidelityOptions& fidelity, int threads) {
+                             const FidelityOptions& fidelity, const Context& ctx) {
   QualityReport report;
-  report.fidelity = neighborhoodFidelity(image, exemplar, fidelity, threads);
+  report.fidelity = neighborhoodFidelity(image, exemplar, fidelity, ctx);
   report.histogramDistance = histogramDistance(image, exemplar);
   if (image.width > exemplar.width && image.height > exemplar.height)
     report.shiftedCorrelation = shiftedSelfCorrelation(image, exemplar.width, exemplar.height);

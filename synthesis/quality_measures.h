@@ -5,6 +5,7 @@
 // synthesis (noise, verbatim tiling, one region copied everywhere) lacks. Colour measures use the
 // first three channels (or the grey channel); alpha is ignored. All values are deterministic.
 
+#include "render/image/context.h"
 #include "render/image/image.h"
 #include "synthesis/coord_map.h"
 
@@ -22,12 +23,12 @@ struct FidelityOptions {
 /// to the nearest exemplar neighborhood (toroidal), found by exact search. Lower is better.
 /// Output neighborhoods must lie inside the image; the image needs 2*radius+1 texels per side.
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options = {},
-                            int threads = 0);
+                            const Context& ctx = {});
 
 /// Fidelity of neighborhoods gathered elsewhere (e.g. resampled from a surface texture in
 /// exemplar space): `patches` holds (2*radius+1)^2 neighborhoods of the exemplar's colour channels
 /// (3, or 1 for grey), row-major, channels interleaved, values in [0,1]. Same measure as above.
-double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, int threads = 0);
+double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx = {});
 
 /// Histogram distance: the largest per-channel earth mover's distance between the value
 /// histograms (256 bins over [0,1]) of the image and the exemplar, in value units. 0 = identical.
@@ -54,6 +55,6 @@ struct QualityReport {
   std::optional<double> coverage;
 };
 QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
-                             const FidelityOptions& fidelity = {}, int threads = 0);
+                             const FidelityOptions& fidelity = {}, const Context& ctx = {});
 
 } // namespace texfab::synthesis

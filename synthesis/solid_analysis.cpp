@@ -102,7 +102,7 @@ struct Triple {  // relative to the exemplar it belongs to: the pixel, then next
 // ties to the smaller index (an exact search, like the paper's ANN with no approximation). Brute
 // force as blocks of a float matrix product: exact, since every term is an integer below 2^24.
 std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const std::vector<int32_t>& points, int n,
-                                    int s, int threads) {
+                                    int s, const Context& ctx) {
   using Rows = Eigen::Matrix<float, Eigen::Dynamic, kStripDims, Eigen::RowMajor>;
   Rows p(n, kStripDims), q(n, kStripDims);
   for (int i = 0; i < n; ++i)
@@ -113,7 +113,7 @@ std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const s
   const Eigen::VectorXf pn = p.rowwise().squaredNorm();
   std::vector<uint32_t> out(size_t(n) * size_t(s));
   constexpr int kBlock = 32;
-  parallelFor(0, (n + kBlock - 1) / kBlock, threads, [&](int b0, int b1) {
+  parallelFor(0, (n + kBlock - 1) / kBlock, ctx, [&](int b0, int b1) {
     Eigen::MatrixXf dot;
     std::vector<uint64_t> heap;
     heap.reserve(size_t(s));
@@ -154,12 +154,12 @@ std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const s
 // §4.1: in every pixel of exemplar `self`, the `kept` triples of least crossbar error built from
 // the S best strips of the next and previous exemplars.
 std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strips& next, const Strips& prev, int n,
-                                                 const SolidAnalysisOptions& o, int threads) {
+                                                 const SolidAnalysisOptions& o, const Context& ctx) {
   const size_t s = std::min<size_t>(size_t(o.strips), size_t(n));
-  const std::vector<uint32_t> nearestNext = nearestStrips(self.cols, next.rows, n, int(s), threads);
-  const std::vector<uint32_t> nearestPrev = nearestStrips(self.rows, prev.cols, n, int(s), threads);
+  const std::vector<uint32_t> nearestNext = nearestStrips(self.cols, next.rows, n, int(s), ctx);
+  const std::vector<uint32_t> nearestPrev = nearestStrips(self.rows, prev.cols, n, int(s), ctx);
   std::vector<std::vector<Triple>> out(static_cast<size_t>(n));
-  parallelFor(0, n, threads, [&](int begin, int end) {
+  parallelFor(0, n, ctx, [&](int begin, int end) {
     std::vector<int32_t> d1(s), d2(s);
     std::vector<Triple> all;
     all.reserve(s * s);
@@ -214,7 +214,7 @@ std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strip
 
 // §4.2: keep a triple only if, for each foreign coordinate, a candidate of a 4-neighbor pixel has
 // that coordinate one tap (h) away. Iterates until no pixel has more than 12 candidates.
-void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int spacing, int iterations, int threads) {
+void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int spacing, int iterations, const Context& ctx) {
   const int n = w * h;
   auto stepsOf = [&](uint32_t a, uint32_t* out) {
     const int u = int(a % uint32_t(w)), v = int(a / uint32_t(w));
@@ -231,7 +231,7 @@ void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int s
     std::vector<size_t> offsets(size_t(n) + 1, 0);
     for (int p = 0; p < n; ++p) offsets[size_t(p) + 1] = offsets[size_t(p)] + sets[size_t(p)].size();
     std::vector<uint32_t> qsFlat(offsets.back()), rsFlat(offsets.back());
-    parallelFor(0, n, threads, [&](int begin, int end) {
+    parallelFor(0, n, ctx, [&](int begin, int end) {
       for (int p = begin; p < end; ++p) {
         size_t i = offsets[size_t(p)];
         for (const Triple& t : sets[size_t(p)]) {
@@ -243,7 +243,7 @@ void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int s
       }
     }, 256);
     std::vector<std::vector<Triple>> next(static_cast<size_t>(n));
-    parallelFor(0, n, threads, [&](int begin, int end) {
+    parallelFor(0, n, ctx, [&](int begin, int end) {
       for (int p = begin; p < end; ++p) {
         const int u = p % w, v = p / w;
         const int neighbors[4] = {v * w + wrap(u + spacing, w), v * w + wrap(u - spacing, w),
@@ -429,7 +429,7 @@ uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, con
 }
 
 SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ezIn, const SolidAnalysisOptions& options,
-                           int threads) {
+                           const Context& ctx) {
   const auto started = std::chrono::steady_clock::now();
   options.validate();
   validateSolidExemplars(exIn, eyIn, ezIn);
@@ -455,7 +455,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   options2d.searchNeighbors = std::max(options2d.searchNeighbors, options.candidates2d);
   for (int e = 0; e < distinct; ++e) {
     stacks[size_t(e)] = gaussianStack(*inputs[e]);
-    analyses2d[size_t(e)] = analyzeExemplar(*inputs[e], options2d, threads);
+    analyses2d[size_t(e)] = analyzeExemplar(*inputs[e], options2d, ctx);
   }
   auto src = [&](int e) { return shared ? 0 : e; };
 
@@ -484,7 +484,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
     for (int e = 0; e < distinct; ++e) {
       const Strips& next = strips[size_t(src((e + 1) % 3))];
       const Strips& prev = strips[size_t(src((e + 2) % 3))];
-      std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, options, threads);
+      std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, options, ctx);
       if (finest) {
         double kept = 0, best = 0;
         for (const auto& s : sets) {
@@ -494,7 +494,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
         a.stats.meanCandidatesBeforeFilter += kept / n / distinct;
         a.stats.meanBestCrossbarError += best / n / distinct;
       }
-      coherenceFilter(sets, w, h, level.spacing, options.coherenceIterations, threads);
+      coherenceFilter(sets, w, h, level.spacing, options.coherenceIterations, ctx);
       if (finest) {
         double kept = 0;
         for (const auto& s : sets) kept += double(s.size());
@@ -543,7 +543,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
       level.descriptors2d[size_t(e)].resize(size_t(n) * kSolid2dDims);
       level.descriptors3d[size_t(e)].resize(size_t(n) * kSolidMaxCandidates * size_t(level.dims));
     }
-    parallelFor(0, n, threads, [&](int begin, int end) {
+    parallelFor(0, n, ctx, [&](int begin, int end) {
       int32_t values[kSolidCrossVoxels * 3];
       for (int p = begin; p < end; ++p)
         for (int e = 0; e < 3; ++e) {
@@ -706,12 +706,12 @@ std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t ex
 }
 
 SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
-                                 const fs::path& cacheDir, int threads, bool* fromCache) {
+                                 const fs::path& cacheDir, const Context& ctx, bool* fromCache) {
   options.validate();
   validateSolidExemplars(ex, ey, ez);
   return loadOrCompute(
       cacheDir, solidAnalysisKey(ex, ey, ez, options), ".solid", readSolidAnalysis,
-      [&] { return analyzeSolid(ex, ey, ez, options, threads); }, writeSolidAnalysis, fromCache);
+      [&] { return analyzeSolid(ex, ey, ez, options, ctx); }, writeSolidAnalysis, fromCache);
 }
 
 } // namespace texfab::synthesis

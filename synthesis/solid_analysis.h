@@ -29,6 +29,7 @@
 //   * 2-D neighborhoods for the first search step are PCA-projected 5x5 neighborhoods (8 dims);
 //     2-D candidate sets are the k-coherence sets of synthesis/exemplar_analysis.
 
+#include "render/image/context.h"
 #include "render/image/image.h"
 
 #include <array>
@@ -123,17 +124,17 @@ const std::array<std::array<int, 3>, kSolidCrossVoxels>& solidCrossOffsets();
 void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez,
                             const std::array<std::string, 3>& names = {"x exemplar", "y exemplar", "z exemplar"});
 
-/// The precomputation. Pure: depends only on the pixels and options, never on `threads`.
+/// The precomputation. Pure: depends only on the pixels and options, never on the context.
 /// Passing the same image three times shares the candidate computation.
 SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
-                           int threads = 0);
+                           const Context& ctx = {});
 
 uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options);
 
 /// Through the on-disk cache `cacheDir/<key>.solid` (see analyzeExemplarCached).
 SolidAnalysis analyzeSolidCached(const Image& ex, const Image& ey, const Image& ez,
                                  const SolidAnalysisOptions& options, const std::filesystem::path& cacheDir,
-                                 int threads = 0, bool* fromCache = nullptr);
+                                 const Context& ctx = {}, bool* fromCache = nullptr);
 
 void writeSolidAnalysis(const SolidAnalysis& analysis, const std::filesystem::path& path);
 std::optional<SolidAnalysis> readSolidAnalysis(const std::filesystem::path& path, uint64_t expectedKey);

@@ -79,7 +79,7 @@ int firstSynthesisLevel(int levelCount, const SynthesisOptions& options) {
 }
 
 SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& window,
-                             const SynthesisOptions& options, int threads) {
+                             const SynthesisOptions& options, const Context& ctx) {
   options.validate();
   if (window.width <= 0 || window.height <= 0 || window.width > kMaxImageSide || window.height > kMaxImageSide)
     throw Error("output size " + std::to_string(window.width) + "x" + std::to_string(window.height) +
@@ -118,18 +118,18 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
     current.assign(size_t(grid.width) * size_t(grid.height), 0);
 
     if (l == first) {
-      parallelFor(0, grid.height, threads, [&](int r0, int r1) {
+      parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
         cpu::initKernel(current.data(), grid, spacing, analysis.width, analysis.height, periodX, periodY, r0, r1);
       }, kRowGrain);
     } else {
       const LevelGrid& parentGrid = padded[size_t(l) - 1];
-      parallelFor(0, grid.height, threads, [&](int r0, int r1) {
+      parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
         cpu::upsampleKernel(previous.data(), parentGrid, current.data(), grid, spacing, analysis.width,
                             analysis.height, r0, r1);
       }, kRowGrain);
     }
     const auto amplitude256 = int64_t(std::lrint(double(jitter[size_t(l)]) * spacing * 256.0));
-    parallelFor(0, grid.height, threads, [&](int r0, int r1) {
+    parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
       cpu::jitterKernel(current.data(), grid, options.seed, l, amplitude256, periodX, periodY, analysis.width,
                         analysis.height, r0, r1);
     }, kRowGrain);
@@ -143,7 +143,7 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
       for (int cy = 0; cy < options.interleave; ++cy)
         for (int cx = 0; cx < options.interleave; ++cx) {
           ++inset;
-          parallelFor(inset, grid.height - inset, threads, [&](int r0, int r1) {
+          parallelFor(inset, grid.height - inset, ctx, [&](int r0, int r1) {
             cpu::correctKernel(current.data(), scratch.data(), grid, tables, options.interleave, cx, cy, inset,
                                grid.width - inset, r0, r1);
           }, kRowGrain);

@@ -16,6 +16,7 @@
 // order of work changes a value. The padding each level needs is the dependency closure of the
 // correction sub-passes (one texel each) and of upsampling, computed per window, not guessed.
 
+#include "render/image/context.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 
@@ -70,6 +71,6 @@ struct SynthesisResult {
 
 /// Synthesizes the exemplar coordinates of `window` (at most kMaxImageSide per side).
 SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& window,
-                             const SynthesisOptions& options, int threads = 0);
+                             const SynthesisOptions& options, const Context& ctx = {});
 
 } // namespace texfab::synthesis

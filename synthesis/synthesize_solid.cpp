@@ -185,9 +185,8 @@ struct Engine {
   const SolidAnalysis& a;
   const SolidSynthesisOptions& o;
   SolidLevelCache* cache;
-  int threads;
+  const Context& ctx;
   std::vector<SolidLevelStats>& stats;
-  const SolidLevelCallback& onLevel;
   std::vector<Mask> masks = std::vector<Mask>(a.levels.size());
   std::vector<Finals> finals = std::vector<Finals>(a.levels.size());
   size_t peakBytes = 0;  // masks + finals + step values held at once (diagnostics)
@@ -225,7 +224,7 @@ struct Engine {
       }
       for (size_t b = 0; b < active.size(); b += kBatch) {
         const size_t e = std::min(active.size(), b + kBatch);
-        parallelFor(int(b), int(e), threads, [&](int k0, int k1) {
+        parallelFor(int(b), int(e), ctx, [&](int k0, int k1) {
           for (int k = k0; k < k1; ++k) spread(m, active[size_t(k)], t, grids.data() + size_t(k - int(b)) * kGatheredVoxels);
         });
         for (size_t k = b; k < e; ++k) merge(m, m.keys[active[k]], grids.data() + (k - b) * kGatheredVoxels);
@@ -505,7 +504,7 @@ struct Engine {
           freeList.pop_back();
         }
         peakBytes = std::max(peakBytes, storeBytes() + pool.size() * sizeof(uint32_t) * kChunkVoxels * 5);
-        parallelFor(int(b), int(e), threads, [&](int k0, int k1) {
+        parallelFor(int(b), int(e), ctx, [&](int k0, int k1) {
           thread_local std::unique_ptr<Gathered> scratch;
           if (!scratch) scratch = std::make_unique<Gathered>();
           for (int k = k0; k < k1; ++k) {
@@ -569,6 +568,7 @@ struct Engine {
 
   // masks[top] holds the request (last = T); emit as in synthesizeLevel.
   template <class Emit> void run(const Emit& emit) {
+    Stage maskStage(ctx, "masks");
     for (int li = top(); li >= 0; --li) {
       const auto started = Clock::now();
       if (li < top()) seedFromChild(li);
@@ -576,9 +576,12 @@ struct Engine {
       stats[size_t(li)].seconds += since(started);
       peakBytes = std::max(peakBytes, storeBytes());
     }
+    maskStage.finish();
     for (int li = 0; li <= top(); ++li) {
+      Stage levelStage(ctx, "level " + std::to_string(li + 1) + "/" + std::to_string(top() + 1));
       if (masks[size_t(li)].size()) synthesizeLevel(li, emit);
-      if (onLevel) onLevel(stats[size_t(li)], li + 1, top() + 1);
+      const SolidLevelStats& st = stats[size_t(li)];
+      levelStage.finish(std::to_string(st.voxels) + " voxels, " + std::to_string(st.corrections) + " corrections");
       masks[size_t(li)].release();
       if (li > 0) finals[size_t(li) - 1].release();
     }
@@ -671,15 +674,14 @@ void SolidLevelCache::insert(const Key& key, std::shared_ptr<const Brick> brick)
 }
 
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
-                                     const SolidSynthesisOptions& o, SolidLevelCache* cache, int threads,
-                                     const SolidLevelCallback& onLevel) {
+                                     const SolidSynthesisOptions& o, SolidLevelCache* cache, const Context& ctx) {
   prepare(a, o, cache);
   for (const Voxel& v : voxels) validatePosition(v.x, v.y, v.z);
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
   if (voxels.empty()) return result;
-  Engine engine{a, o, cache, threads, result.levels, onLevel};
+  Engine engine{a, o, cache, ctx, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
   // The requested voxels, grouped by finest chunk (counting sort).
@@ -718,7 +720,7 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
 }
 
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& box, const SolidSynthesisOptions& o,
-                                        SolidLevelCache* cache, int threads, const SolidLevelCallback& onLevel) {
+                                        SolidLevelCache* cache, const Context& ctx) {
   prepare(a, o, cache);
   if (box.nx < 1 || box.ny < 1 || box.nz < 1)
     throw Error("voxel box " + std::to_string(box.nx) + "x" + std::to_string(box.ny) + "x" + std::to_string(box.nz) +
@@ -728,7 +730,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(size_t(box.count()));
-  Engine engine{a, o, cache, threads, result.levels, onLevel};
+  Engine engine{a, o, cache, ctx, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
   const int64_t lo[3] = {box.x, box.y, box.z}, hi[3] = {box.x + box.nx, box.y + box.ny, box.z + box.nz};
@@ -789,7 +791,7 @@ void solidColors(std::span<const Triple> triples, const Image& ex, const Image& 
 DependencyChain dependencyChainSize(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   DependencyChain chain;
   const Voxel origin{};
-  const SolidSynthesisResult r = synthesizeSolid(a, std::span<const Voxel>(&origin, 1), o, nullptr, 1);
+  const SolidSynthesisResult r = synthesizeSolid(a, std::span<const Voxel>(&origin, 1), o, nullptr, Context{.threads = 1});
   for (const auto& l : r.levels) chain.exactPerLevel.push_back(l.voxels);
   chain.exact = r.voxelsSynthesized();
 

@@ -32,6 +32,7 @@
 //     small measured loss, documented at the option;
 //   * the volume has no size and nothing wraps: only exemplar coordinates wrap.
 
+#include "render/image/context.h"
 #include "render/image/image.h"
 #include "synthesis/solid_analysis.h"
 
@@ -144,20 +145,18 @@ private:
   std::map<Key, std::pair<std::shared_ptr<const Brick>, std::list<Key>::iterator>> bricks_;
 };
 
-/// Called as each level is done (progress of long requests): its figures, its number (1 =
-/// coarsest) and the number of levels.
-using SolidLevelCallback = std::function<void(const SolidLevelStats& level, int number, int levels)>;
-
 /// Triples of the given finest-level voxels (any set: shell, plane, box, scattered; duplicates
 /// allowed). `cache` may be null (nothing kept between requests).
+/// Reports its stages through ctx: "masks" (the dependency chains, fine to coarse), then one per
+/// level, "level k/n" coarsest first, with the voxels synthesized and corrected.
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
                                      const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
-                                     int threads = 0, const SolidLevelCallback& onLevel = {});
+                                     const Context& ctx = {});
 
 /// Triples of every voxel of `box`, x fastest, then y, then z.
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& analysis, const VoxelBox& box,
                                         const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
-                                        int threads = 0, const SolidLevelCallback& onLevel = {});
+                                        const Context& ctx = {});
 
 /// Colour of each triple: the mean of E_x, E_y and E_z at its three coordinates (first three
 /// channels, or grey). `channels` is 3, or 1 when all three exemplars are grey. Values are

@@ -20,8 +20,8 @@ namespace {
 constexpr int kSiteGrain = 4096;
 
 template <class Fn>
-void forSites(size_t count, int threads, Fn&& fn) {
-  parallelFor(0, int((count + kSiteGrain - 1) / kSiteGrain), threads, [&](int b, int e) {
+void forSites(size_t count, const Context& ctx, Fn&& fn) {
+  parallelFor(0, int((count + kSiteGrain - 1) / kSiteGrain), ctx, [&](int b, int e) {
     fn(size_t(b) * kSiteGrain, std::min(count, size_t(e) * kSiteGrain));
   });
 }
@@ -54,7 +54,7 @@ int stackLevelForAtlasLevel(const ExemplarAnalysis& analysis, int atlasLevel, do
 }
 
 SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const SurfaceDomain& domain,
-                                         const SurfaceSynthesisOptions& options, int threads) {
+                                         const SurfaceSynthesisOptions& options, const Context& ctx) {
   options.validate();
   if (analysis.levels.empty()) throw Error("exemplar analysis is empty");
   if (domain.levels.empty() || domain.levels[0].size() == 0) throw Error("the surface has no texels to synthesize");
@@ -85,15 +85,15 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
     const AnalysisLevel& al = analysis.levels[size_t(l)];
     current.assign(level.size(), 0);
     if (a == top)
-      forSites(level.size(), threads, [&](size_t b, size_t e) {
+      forSites(level.size(), ctx, [&](size_t b, size_t e) {
         cpu::initSurfaceKernel(level, current.data(), analysis.width, analysis.height, b, e);
       });
     else
-      forSites(level.size(), threads, [&](size_t b, size_t e) {
+      forSites(level.size(), ctx, [&](size_t b, size_t e) {
         cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), analysis.width, analysis.height, b, e);
       });
     const auto amplitude256 = int64_t(std::lrint(double(jitter[size_t(l)]) * al.spacing * 256.0));
-    forSites(level.size(), threads, [&](size_t b, size_t e) {
+    forSites(level.size(), ctx, [&](size_t b, size_t e) {
       cpu::jitterSurfaceKernel(level, current.data(), options.seed, a, amplitude256, analysis.width, analysis.height,
                                b, e);
     });
@@ -103,7 +103,7 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
     scratch.resize(current.size());
     for (int pass = 0; pass < (options.correct ? options.passes : 0); ++pass)
       for (int cls = 0; cls < 4; ++cls) {
-        forSites(level.size(), threads, [&](size_t b, size_t e) {
+        forSites(level.size(), ctx, [&](size_t b, size_t e) {
           cpu::correctSurfaceKernel(level, current.data(), scratch.data(), tables, cls, b, e);
         });
         current.swap(scratch);

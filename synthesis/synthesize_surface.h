@@ -21,6 +21,7 @@
 // Determinism: every coordinate is a pure function of (analysis, domain, options); the thread
 // count never changes a value (each kernel reads one buffer and writes another).
 
+#include "render/image/context.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/synthesize_2d.h"
 
@@ -89,6 +90,6 @@ double medianPixelsPerTexel(const SurfaceLevel& level);
 int stackLevelForAtlasLevel(const ExemplarAnalysis& analysis, int atlasLevel, double pixelsPerTexel);
 
 SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const SurfaceDomain& domain,
-                                         const SurfaceSynthesisOptions& options, int threads = 0);
+                                         const SurfaceSynthesisOptions& options, const Context& ctx = {});
 
 } // namespace texfab::synthesis

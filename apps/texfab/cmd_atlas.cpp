@@ -96,11 +96,11 @@ void writeDebugImages(const fs::path& dir, const geometry::Mesh& mesh, const atl
 
 void runAtlas(const AtlasArgs& args) {
   Progress progress("texfab atlas", args.quiet);
+  Context ctx{.threads = args.threads};
   // Everything checkable is checked before reading the model.
   geometry::meshFormatOf(args.output);
   const auto [width, height] = parseSize(args.resolution, "--resolution");
   atlas::GenerateAtlasOptions options;
-  options.threads = args.threads;
   options.pack.width = width;
   options.pack.height = height;
   options.pack.gutter = args.gutter;
@@ -146,7 +146,7 @@ void runAtlas(const AtlasArgs& args) {
                   std::to_string(mesh.triangleCount()) + " triangles");
 
   progress.start("atlas");
-  atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, options);
+  atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, options, ctx);
   const atlas::AtlasReport& r = result.report;
   progress.finish(std::to_string(r.charts) + " charts, utilization " + std::to_string(r.utilization) + ", L2 stretch " +
                   std::to_string(r.l2Stretch) + ", max " + std::to_string(r.maxStretch));
@@ -160,12 +160,12 @@ void runAtlas(const AtlasArgs& args) {
 
   progress.start("jacobians");
   const double textureScale = args.textureScale > 0 ? args.textureScale : result.atlas.texelsPerUnit;
-  const auto jacobians = atlas::computeJacobians(mesh, result.atlas, result.fields, field, textureScale, args.threads);
+  const auto jacobians = atlas::computeJacobians(mesh, result.atlas, result.fields, field, textureScale, ctx);
   progress.finish();
 
   progress.start("indirection");
   const atlas::IndirectionMap indirection = atlas::buildIndirectionMap(mesh, result.adjacency, result.atlas, result.fields,
-                                                                       indirectionOptions, args.threads);
+                                                                       indirectionOptions, ctx);
   progress.finish(std::to_string(indirection.targets.size()) + " border texels, " +
                   std::to_string(indirection.seamCrossings) + " seam crossings");
 

@@ -62,6 +62,7 @@ fs::path turntableName(const fs::path& output, int index) {
 
 void runRender(const RenderArgs& args) {
   Progress progress("texfab render", args.quiet);
+  Context ctx{.threads = args.threads};
   render::RenderOptions options;
   const auto [w, h] = parseSize(args.size, "--size");
   options.width = w;
@@ -71,7 +72,6 @@ void runRender(const RenderArgs& args) {
   options.elevationDegrees = args.elevation;
   options.fovYDegrees = args.fov;
   options.aoSamples = args.ao;
-  options.threads = args.threads;
   options.transparentBackground = !parseBackground(args.background, options.background);
   if (args.spp < 1 || args.spp > 4096) throw Error("--spp must be 1..4096");
   if (args.ao < 0 || args.ao > 64) throw Error("--ao must be 0..64");
@@ -90,7 +90,7 @@ void runRender(const RenderArgs& args) {
   for (int i = 0; i < views; ++i) {
     progress.start("render");
     if (args.turntable > 0) options.azimuthDegrees = args.azimuth + 360.0f * float(i) / float(views);
-    images.push_back(renderer.render(options));
+    images.push_back(renderer.render(options, ctx));
     progress.finish(std::to_string(w) + "x" + std::to_string(h) + ", " + std::to_string(args.spp) + " spp, azimuth " +
                     std::to_string(int(std::lround(options.azimuthDegrees))));
   }

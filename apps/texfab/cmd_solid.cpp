@@ -109,6 +109,7 @@ Image loadExemplar(const std::string& path) {
 void runSolid(const SolidArgs& args) {
   using namespace synthesis;
   Progress progress("texfab solid", args.quiet);
+  Context ctx{.threads = args.threads};
 
   // Validate everything before any work: one mode, its parameters, the outputs.
   const int modes = (args.volume != 0) + !args.plane.empty() + !args.points.empty();
@@ -195,10 +196,10 @@ void runSolid(const SolidArgs& args) {
   bool cached = false;
   const SolidAnalysisOptions analysisOptions;
   const SolidAnalysis analysis =
-      args.noCache ? analyzeSolid(ex, ey, ez, analysisOptions, args.threads)
+      args.noCache ? analyzeSolid(ex, ey, ez, analysisOptions, ctx)
                    : analyzeSolidCached(ex, ey, ez, analysisOptions,
                                         args.cacheDir.empty() ? defaultCacheDir() : fs::path(args.cacheDir),
-                                        args.threads, &cached);
+                                        ctx, &cached);
   progress.finish(cached ? "(cached)" : std::to_string(analysis.levels.size()) + " levels" +
                                             (analysis.shared ? ", candidates shared" : ""));
 
@@ -247,7 +248,7 @@ void runSolid(const SolidArgs& args) {
         // levels cost more than they save (measured: a 64^3 volume synthesizes 7.9 instead of
         // 6.1 voxels per voxel through it).
         const SolidSynthesisResult r =
-            synthesizeSolidBox(analysis, box, options, n > 128 ? &cache : nullptr, args.threads);
+            synthesizeSolidBox(analysis, box, options, n > 128 ? &cache : nullptr, ctx);
         accumulate(r);
         std::vector<float> colours;
         solidColors(r.triples, ex, ey, ez, colours);
@@ -299,7 +300,7 @@ void runSolid(const SolidArgs& args) {
         for (int a = 0; a < 3; ++a) p[size_t(a)] = origin[size_t(a)] + (i + 0.5) * u[size_t(a)] + (j + 0.5) * v[size_t(a)];
         voxels[size_t(j) * width + size_t(i)] = voxelAt(p, args.scale);
       }
-    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, args.threads);
+    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, ctx);
     accumulate(r);
     requested = int64_t(voxels.size());
     std::vector<float> colours;
@@ -314,7 +315,7 @@ void runSolid(const SolidArgs& args) {
     progress.start("synthesis");
     std::vector<Voxel> voxels;
     for (const Vec3& p : points) voxels.push_back(voxelAt(p, args.scale));
-    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, args.threads);
+    const SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, nullptr, ctx);
     accumulate(r);
     requested = int64_t(voxels.size());
     std::vector<float> colours;

@@ -37,7 +37,7 @@ void runStats(const StatsArgs& args) {
   }
   FidelityOptions fidelity;
   fidelity.samples = args.samples;
-  const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, fidelity, args.threads);
+  const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, fidelity, Context{.threads = args.threads});
 
   std::printf("fidelity             %.4f   (7x7 RMS distance to the nearest exemplar neighborhood; lower is better)\n",
               q.fidelity);

@@ -44,6 +44,7 @@ struct Companion {
 void runSynth(const SynthArgs& args) {
   using namespace synthesis;
   Progress progress("texfab synth", args.quiet);
+  Context ctx{.threads = args.threads};
 
   // Everything that can be checked before the work is checked first: a bad argument never costs
   // a synthesis, and a failure never leaves some outputs written and others not.
@@ -114,10 +115,10 @@ void runSynth(const SynthArgs& args) {
   progress.start("analysis");
   bool cached = false;
   const ExemplarAnalysis analysis =
-      args.noCache ? analyzeExemplar(exemplar, analysisOptions, args.threads)
+      args.noCache ? analyzeExemplar(exemplar, analysisOptions, ctx)
                    : analyzeExemplarCached(exemplar, analysisOptions,
                                            args.cacheDir.empty() ? defaultCacheDir() : fs::path(args.cacheDir),
-                                           args.threads, &cached);
+                                           ctx, &cached);
   progress.finish(cached ? "(cached)" : std::to_string(analysis.levels.size()) + " levels");
 
   if (const int first = firstSynthesisLevel(int(analysis.levels.size()), options); first > 0) {
@@ -129,19 +130,19 @@ void runSynth(const SynthArgs& args) {
   }
 
   progress.start("synthesis");
-  const SynthesisResult result = synthesize2d(analysis, window, options, args.threads);
+  const SynthesisResult result = synthesize2d(analysis, window, options, ctx);
   progress.finish(std::to_string(window.width) + "x" + std::to_string(window.height));
 
   progress.start("resolve");
-  const Image colours = applyCoords(result.coords, exemplar, args.threads);
+  const Image colours = applyCoords(result.coords, exemplar, ctx);
   std::vector<Image> applied;
-  for (const Companion& c : companions) applied.push_back(applyCoords(result.coords, c.map, args.threads));
+  for (const Companion& c : companions) applied.push_back(applyCoords(result.coords, c.map, ctx));
   progress.finish();
 
   nlohmann::json report;
   if (!args.report.empty()) {
     progress.start("measures");
-    const QualityReport q = measureQuality(colours, exemplar, &result.coords, {}, args.threads);
+    const QualityReport q = measureQuality(colours, exemplar, &result.coords, {}, ctx);
     report["measures"] = {{"fidelity", q.fidelity},
                           {"histogram_distance", q.histogramDistance},
                           {"shifted_correlation", q.shiftedCorrelation},

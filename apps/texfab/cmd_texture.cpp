@@ -77,6 +77,7 @@ fs::path siblingPath(const fs::path& output, const std::string& suffix, const st
 
 void runTexture(const TextureArgs& args) {
   Progress progress("texfab texture", args.quiet);
+  Context ctx{.threads = args.threads};
   // Everything checkable is checked before any work.
   geometry::meshFormatOf(args.output);
   render::TextureMeshOptions options;
@@ -123,7 +124,6 @@ void runTexture(const TextureArgs& args) {
   if (!args.preview.empty()) {
     checkImageWritable(args.preview);
     std::tie(previewOptions.width, previewOptions.height) = parseSize(args.previewSize, "--preview-size");
-    previewOptions.threads = args.threads;
   }
 
   progress.start("load");
@@ -148,14 +148,14 @@ void runTexture(const TextureArgs& args) {
   std::optional<synthesis::SolidAnalysis> solidAnalysis;
   if (options.mode == render::TextureMode::Surface) {
     const synthesis::AnalysisOptions analysisOptions;
-    analysis = args.noCache ? synthesis::analyzeExemplar(exemplar, analysisOptions, args.threads)
-                            : synthesis::analyzeExemplarCached(exemplar, analysisOptions, cacheDir, args.threads, &cached);
+    analysis = args.noCache ? synthesis::analyzeExemplar(exemplar, analysisOptions, ctx)
+                            : synthesis::analyzeExemplarCached(exemplar, analysisOptions, cacheDir, ctx, &cached);
   } else {
     const synthesis::SolidAnalysisOptions analysisOptions;
     solidAnalysis = args.noCache
-                        ? synthesis::analyzeSolid(exemplar, exemplar, exemplar, analysisOptions, args.threads)
+                        ? synthesis::analyzeSolid(exemplar, exemplar, exemplar, analysisOptions, ctx)
                         : synthesis::analyzeSolidCached(exemplar, exemplar, exemplar, analysisOptions, cacheDir,
-                                                        args.threads, &cached);
+                                                        ctx, &cached);
   }
   progress.finish(cached ? "(cached)" : "");
 
@@ -165,7 +165,6 @@ void runTexture(const TextureArgs& args) {
 
   ex.analysis = analysis ? &*analysis : nullptr;
   ex.solidAnalysis = solidAnalysis ? &*solidAnalysis : nullptr;
-  Context ctx{.threads = args.threads};
   ctx.progress = [&](const ProgressEvent& e) {
     if (e.kind == ProgressEvent::Kind::End) progress.record(std::string(e.stage), e.seconds, std::string(e.detail));
   };
@@ -188,7 +187,7 @@ void runTexture(const TextureArgs& args) {
   if (!args.preview.empty()) {
     progress.start("preview");
     const render::PreviewRenderer renderer(result.mesh);
-    writeImage(renderer.render(previewOptions), args.preview);
+    writeImage(renderer.render(previewOptions, ctx), args.preview);
     progress.finish(args.preview);
   }
 

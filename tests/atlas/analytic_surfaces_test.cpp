@@ -14,7 +14,6 @@ namespace {
 GenerateAtlasOptions smallAtlas(int size = 256) {
   GenerateAtlasOptions o;
   o.pack.width = o.pack.height = size;
-  o.threads = 1;
   return o;
 }
 
@@ -58,7 +57,7 @@ TEST(AnalyticSurfaces, PlaneIsOneUndistortedChartWithKnownJacobian) {
   fo.direction = {1, 0, 0};
   const geometry::TangentField field = geometry::computeTangentField(plane, fo);
   for (const auto& t : field.tangents) EXPECT_NEAR(t.x(), 1.0f, 1e-4f);
-  const auto jac = computeJacobians(plane, r.atlas, r.fields, field, r.atlas.texelsPerUnit, 1);
+  const auto jac = computeJacobians(plane, r.atlas, r.fields, field, r.atlas.texelsPerUnit, Context{.threads = 1});
   int checked = 0;
   for (int y = 0; y < jac.height; ++y)
     for (int x = 0; x < jac.width; ++x) {
@@ -117,7 +116,7 @@ TEST(AnalyticSurfaces, OpenCylinderIsCutIntoDisksWithoutStretch) {
   fo.direction = {0, 0, 1};
   const geometry::TangentField field = geometry::computeTangentField(cyl, fo);
   EXPECT_TRUE(field.singularTriangles.empty());
-  const auto jac = computeJacobians(cyl, r.atlas, r.fields, field, r.atlas.texelsPerUnit, 1);
+  const auto jac = computeJacobians(cyl, r.atlas, r.fields, field, r.atlas.texelsPerUnit, Context{.threads = 1});
   double worst = 0;
   for (int y = 0; y < jac.height; ++y)
     for (int x = 0; x < jac.width; ++x)

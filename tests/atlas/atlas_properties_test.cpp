@@ -27,10 +27,9 @@ geometry::Mesh loadOrSkip(const std::string& name) {
   const geometry::Mesh var = loadOrSkip(name);                                  \
   if (var.triangleCount() == 0) GTEST_SKIP() << name << " absent (run models/fetch)"
 
-GenerateAtlasOptions options(int size, int threads) {
+GenerateAtlasOptions options(int size) {
   GenerateAtlasOptions o;
   o.pack.width = o.pack.height = size;
-  o.threads = threads;
   return o;
 }
 
@@ -81,7 +80,7 @@ TEST(AtlasOnCgalMeshes, CowElephantEightAndCamel) {
   for (const char* name : {"cow.off", "elephant.off", "eight.off", "camel.off"}) {
     SCOPED_TRACE(name);
     LOAD_OR_SKIP(mesh, name);
-    const GenerateAtlasResult r = generateAtlas(mesh, options(1024, 0));
+    const GenerateAtlasResult r = generateAtlas(mesh, options(1024));
     checkAtlas(mesh, r, 4);
     EXPECT_GT(r.report.utilization, 0.45);
   }
@@ -89,15 +88,15 @@ TEST(AtlasOnCgalMeshes, CowElephantEightAndCamel) {
 
 TEST(AtlasOnCgalMeshes, SameAtlasWhateverTheThreadCount) {
   LOAD_OR_SKIP(mesh, "elephant.off");
-  const GenerateAtlasResult a = generateAtlas(mesh, options(512, 1));
-  const GenerateAtlasResult b = generateAtlas(mesh, options(512, 2));
+  const GenerateAtlasResult a = generateAtlas(mesh, options(512), Context{.threads = 1});
+  const GenerateAtlasResult b = generateAtlas(mesh, options(512), Context{.threads = 2});
   ASSERT_EQ(a.atlas.faceChart, b.atlas.faceChart);
   ASSERT_EQ(a.atlas.texelUvs.size(), b.atlas.texelUvs.size());
   EXPECT_EQ(0, std::memcmp(a.atlas.texelUvs.data(), b.atlas.texelUvs.data(), a.atlas.texelUvs.size() * sizeof(Eigen::Vector2f)));
   EXPECT_EQ(0, std::memcmp(a.fields.samples.values.data(), b.fields.samples.values.data(),
                            a.fields.samples.values.size() * sizeof(SurfaceSample)));
-  const IndirectionMap ia = buildIndirectionMap(mesh, a.adjacency, a.atlas, a.fields, {}, 1);
-  const IndirectionMap ib = buildIndirectionMap(mesh, b.adjacency, b.atlas, b.fields, {}, 2);
+  const IndirectionMap ia = buildIndirectionMap(mesh, a.adjacency, a.atlas, a.fields, {}, Context{.threads = 1});
+  const IndirectionMap ib = buildIndirectionMap(mesh, b.adjacency, b.atlas, b.fields, {}, Context{.threads = 2});
   ASSERT_EQ(ia.targets.size(), ib.targets.size());
   EXPECT_EQ(0, std::memcmp(ia.targets.data(), ib.targets.data(), ia.targets.size() * sizeof(ia.targets[0])));
 }
@@ -106,10 +105,10 @@ TEST(AtlasOnCgalMeshes, CuttingChartsForPackingKeepsUvsAndDisks) {
   // Box Cutter-style cuts (cut_charts.h): the pieces keep their chart-local UVs (so stretch and
   // flips are unchanged), are disks, and the atlas packs tighter for a modest seam increase.
   LOAD_OR_SKIP(mesh, "camel.off");
-  GenerateAtlasOptions whole = options(1024, 0);
+  GenerateAtlasOptions whole = options(1024);
   whole.cut.enabled = false;
   const GenerateAtlasResult a = generateAtlas(mesh, whole);
-  const GenerateAtlasResult b = generateAtlas(mesh, options(1024, 0));
+  const GenerateAtlasResult b = generateAtlas(mesh, options(1024));
   EXPECT_EQ(a.report.cut.cuts, 0u);
   EXPECT_GT(b.report.cut.cuts, 0u);
   EXPECT_GT(b.report.charts, a.report.charts);
@@ -128,12 +127,12 @@ TEST(AtlasOnCgalMeshes, CuttingChartsForPackingKeepsUvsAndDisks) {
 
 TEST(AtlasOnCgalMeshes, PackingIsRerunnableWithOtherOptions) {
   LOAD_OR_SKIP(mesh, "cow.off");
-  GenerateAtlasResult r = generateAtlas(mesh, options(512, 0));
+  GenerateAtlasResult r = generateAtlas(mesh, options(512));
   PackChartsOptions pack;
   pack.width = 1024;
   pack.height = 256;
   pack.gutter = 8;
-  packCharts(mesh, r.atlas, pack, 0);
+  packCharts(mesh, r.atlas, pack, Context{.threads = 0});
   const AtlasFields fields = rasterizeAtlas(mesh, r.atlas);
   EXPECT_EQ(fields.overlappingTexels, 0u);
   EXPECT_EQ(fields.samples.width, 1024);
@@ -151,8 +150,8 @@ Eigen::Vector3d surfacePoint(const geometry::Mesh& mesh, const Atlas& atlas, uin
 
 TEST(AtlasOnCgalMeshes, IndirectionWalksAreContinuousAcrossSeams) {
   LOAD_OR_SKIP(mesh, "cow.off");
-  const GenerateAtlasResult r = generateAtlas(mesh, options(1024, 0));
-  const IndirectionMap map = buildIndirectionMap(mesh, r.adjacency, r.atlas, r.fields, {}, 0);
+  const GenerateAtlasResult r = generateAtlas(mesh, options(1024));
+  const IndirectionMap map = buildIndirectionMap(mesh, r.adjacency, r.atlas, r.fields, {}, Context{.threads = 0});
   ASSERT_GT(map.seamCrossings, 0u);
   const auto& s = r.fields.samples;
   std::vector<std::pair<int, int>> starts;
@@ -229,19 +228,19 @@ TEST(AtlasBadInput, RepairsAndNeverOverlaps) {
   m.positions.push_back({0.5f, 0.5f, 1.0f});
   m.triangles.push_back({0, 1, uint32_t(m.positions.size() - 1)}); // fin on edge 0-1: non-manifold
   m.positions.push_back({9, 9, 9});                // isolated
-  const GenerateAtlasResult r = generateAtlas(m, options(256, 0));
+  const GenerateAtlasResult r = generateAtlas(m, options(256));
   EXPECT_EQ(r.report.flippedTriangles, 0u);
   EXPECT_EQ(r.report.overlappingTexels, 0u);
   EXPECT_GE(r.adjacency.degenerateCount, 1u);
   EXPECT_GE(r.adjacency.nonManifoldEdges + r.adjacency.inconsistentEdges, 1u);
   EXPECT_FALSE(r.report.repairs.empty());
-  const IndirectionMap map = buildIndirectionMap(m, r.adjacency, r.atlas, r.fields, {}, 0);
+  const IndirectionMap map = buildIndirectionMap(m, r.adjacency, r.atlas, r.fields, {}, Context{.threads = 0});
   EXPECT_GT(map.boundaryStops, 0u);
 }
 
 TEST(AtlasBadInput, TooManyChartsForTheResolutionIsRefused) {
   const geometry::Mesh sphere = test::makeSphere(64, 32);
-  GenerateAtlasOptions o = options(16, 1);
+  GenerateAtlasOptions o = options(16);
   o.segment.maxNormalDeviationDegrees = 1; // one chart per triangle or so
   EXPECT_THROW(generateAtlas(sphere, o), Error);
 }

@@ -54,7 +54,7 @@ void checkInsideAgainstWindingNumber(const Mesh& mesh, const std::string& name, 
   const EmbreeScene scene(mesh);
   ASSERT_TRUE(scene.watertight()) << name;
   const auto points = randomPoints(scene.bounds(), n, 17);
-  const auto inside = scene.inside(points, 0);
+  const auto inside = scene.inside(points, Context{.threads = 0});
   int compared = 0, disagree = 0, insideCount = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const double w = windingNumber(mesh, points[i]);
@@ -86,7 +86,7 @@ TEST(EmbreeScene, RayHitsReportTriangleBarycentricsAndDistance) {
   EXPECT_TRUE(scene.occluded({{0, 0, 5}, {0, 0, -1}}));
   EXPECT_FALSE(scene.occluded({{0, 0, 5}, {0, 0, -1}, 0.0f, 3.5f}));
   std::vector<Ray> rays(100, Ray{{0, 0, 5}, {0, 0, -1}});
-  for (const RayHit& h : scene.intersect(rays, 2)) EXPECT_NEAR(h.distance, 4.0f, 1e-5f);
+  for (const RayHit& h : scene.intersect(rays, Context{.threads = 2})) EXPECT_NEAR(h.distance, 4.0f, 1e-5f);
 }
 
 TEST(EmbreeScene, InsideOfCubeAndOpenMeshesAreReported) {
@@ -130,7 +130,7 @@ TEST(EmbreeScene, ClosestPointMatchesBruteForce) {
   const Mesh mesh = readMesh(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/meshes/knot1.off");
   const EmbreeScene scene(mesh);
   const auto points = randomPoints(scene.bounds(), 200, 5);
-  const auto closest = scene.closestPoints(points, 2);
+  const auto closest = scene.closestPoints(points, Context{.threads = 2});
   for (size_t i = 0; i < points.size(); ++i) {
     ASSERT_TRUE(closest[i].found);
     EXPECT_NEAR(closest[i].distance, bruteDistance(mesh, points[i]), 1e-5);

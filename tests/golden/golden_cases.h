@@ -71,17 +71,17 @@ inline const Image& marble32() {
 }
 
 inline const synthesis::SolidAnalysis& solidAnalysis32() {
-  static const synthesis::SolidAnalysis a = synthesis::analyzeSolid(marble32(), marble32(), marble32(), {}, 2);
+  static const synthesis::SolidAnalysis a = synthesis::analyzeSolid(marble32(), marble32(), marble32(), {}, Context{.threads = 2});
   return a;
 }
 
 /// A 2-D window away from the origin, bundled brick, seed 7.
 inline uint64_t window2d() {
   const Image exemplar = readImage(bundled("exemplars/brick.png"));
-  const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(exemplar, {}, 2);
+  const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(exemplar, {}, Context{.threads = 2});
   synthesis::SynthesisOptions options;
   options.seed = 7;
-  const synthesis::SynthesisResult r = synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, 2);
+  const synthesis::SynthesisResult r = synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, Context{.threads = 2});
   return hashOf(r.coords.coords);
 }
 
@@ -90,7 +90,7 @@ inline uint64_t solidVolume() {
   synthesis::SolidSynthesisOptions options;
   options.seed = 3;
   const synthesis::SolidSynthesisResult r =
-      synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, 2);
+      synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, Context{.threads = 2});
   std::vector<uint32_t> flat;
   for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
   std::vector<float> colours;
@@ -106,7 +106,7 @@ inline uint64_t solidPlane() {
       const double x = 3 + 0.8 * i - 0.3 * j, y = -5 + 0.5 * i + 0.7 * j, z = 11 + 0.3 * i + 0.6 * j;
       voxels.push_back({int64_t(std::floor(x)), int64_t(std::floor(y)), int64_t(std::floor(z))});
     }
-  const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, 2);
+  const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, Context{.threads = 2});
   std::vector<uint32_t> flat;
   for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
   return hashOf(flat);
@@ -126,7 +126,7 @@ inline uint64_t atlasTexelUvs() {
 inline render::TextureMeshResult textureElephant(render::TextureMode mode) {
   static const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
   static const Image brick = readImage(bundled("exemplars/brick.png"));
-  static const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(brick, {}, 2);
+  static const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(brick, {}, Context{.threads = 2});
   render::TextureExemplar ex;
   ex.color = mode == render::TextureMode::Solid ? &marble32() : &brick;
   ex.analysis = &analysis;

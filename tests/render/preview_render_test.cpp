@@ -80,7 +80,6 @@ RenderOptions frontView(int size) {
   o.elevationDegrees = 0;
   o.samplesPerPixel = 4;
   o.transparentBackground = true;
-  o.threads = 2;
   return o;
 }
 
@@ -112,9 +111,8 @@ TEST(PreviewRenderer, DeterministicAcrossThreadCounts) {
   RenderOptions o = frontView(64);
   o.azimuthDegrees = 25;
   o.elevationDegrees = 35;
-  const Image a = renderer.render(o);
-  o.threads = 1;
-  const Image b = renderer.render(o);
+  const Image a = renderer.render(o, Context{.threads = 2});
+  const Image b = renderer.render(o, Context{.threads = 1});
   EXPECT_EQ(a.pixels, b.pixels);
 }
 

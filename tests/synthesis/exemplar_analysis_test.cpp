@@ -90,8 +90,8 @@ TEST(ExemplarAnalysis, CandidatesAreNearestNeighborsInAppearanceSpace) {
 
 TEST(ExemplarAnalysis, IndependentOfThreadCount) {
   const Image image = test::noiseImage(33, 29);
-  const ExemplarAnalysis one = analyzeExemplar(image, {}, 1);
-  const ExemplarAnalysis two = analyzeExemplar(image, {}, 2);
+  const ExemplarAnalysis one = analyzeExemplar(image, {}, Context{.threads = 1});
+  const ExemplarAnalysis two = analyzeExemplar(image, {}, Context{.threads = 2});
   ASSERT_EQ(one.levels.size(), two.levels.size());
   for (size_t l = 0; l < one.levels.size(); ++l) {
     EXPECT_EQ(one.levels[l].appearance, two.levels[l].appearance);
@@ -103,9 +103,9 @@ TEST(ExemplarAnalysis, CacheRoundTripAndSecondRunHitsCache) {
   TempDir dir;
   const Image image = test::noiseImage(24, 24);
   bool cached = true;
-  const ExemplarAnalysis first = analyzeExemplarCached(image, {}, dir.path(), 0, &cached);
+  const ExemplarAnalysis first = analyzeExemplarCached(image, {}, dir.path(), Context{.threads = 0}, &cached);
   EXPECT_FALSE(cached);
-  const ExemplarAnalysis second = analyzeExemplarCached(image, {}, dir.path(), 0, &cached);
+  const ExemplarAnalysis second = analyzeExemplarCached(image, {}, dir.path(), Context{.threads = 0}, &cached);
   EXPECT_TRUE(cached);
   EXPECT_EQ(first.key, second.key);
   ASSERT_EQ(first.levels.size(), second.levels.size());
@@ -133,7 +133,7 @@ TEST(ExemplarAnalysis, DamagedCacheIsRecomputedNotTrusted) {
   EXPECT_FALSE(readAnalysis(file, fresh.key).has_value());
   EXPECT_FALSE(readAnalysis(dir / "missing.analysis", fresh.key).has_value());
   bool cached = true;
-  const ExemplarAnalysis again = analyzeExemplarCached(image, {}, dir.path(), 0, &cached);
+  const ExemplarAnalysis again = analyzeExemplarCached(image, {}, dir.path(), Context{.threads = 0}, &cached);
   EXPECT_FALSE(cached);
   EXPECT_EQ(again.levels.back().candidates, fresh.levels.back().candidates);
   EXPECT_TRUE(readAnalysis(file, fresh.key).has_value());  // rewritten whole

@@ -35,7 +35,7 @@ Image marble(int side, int x0 = 0, int y0 = 0) {
 const SolidAnalysis& analysis32() {
   static const SolidAnalysis a = [] {
     const Image e = marble(32, 40, 24);
-    return analyzeSolid(e, e, e, {}, 2);
+    return analyzeSolid(e, e, e, {}, Context{.threads = 2});
   }();
   return a;
 }
@@ -126,9 +126,9 @@ TEST(SolidAnalysis, SecondRunComesFromTheCache) {
   SolidAnalysisOptions o;
   o.strips = 16;
   bool cached = true;
-  const SolidAnalysis first = analyzeSolidCached(e, e, e, o, dir.path(), 2, &cached);
+  const SolidAnalysis first = analyzeSolidCached(e, e, e, o, dir.path(), Context{.threads = 2}, &cached);
   EXPECT_FALSE(cached);
-  const SolidAnalysis second = analyzeSolidCached(e, e, e, o, dir.path(), 1, &cached);
+  const SolidAnalysis second = analyzeSolidCached(e, e, e, o, dir.path(), Context{.threads = 1}, &cached);
   EXPECT_TRUE(cached);
   ASSERT_EQ(first.levels.size(), second.levels.size());
   for (size_t l = 0; l < first.levels.size(); ++l)
@@ -142,7 +142,7 @@ TEST(SolidAnalysis, SecondRunComesFromTheCache) {
   // A damaged cache file is recomputed, not trusted.
   for (const auto& f : std::filesystem::directory_iterator(dir.path())) std::filesystem::resize_file(f.path(), 100);
   o.strips = 16;
-  analyzeSolidCached(e, e, e, o, dir.path(), 2, &cached);
+  analyzeSolidCached(e, e, e, o, dir.path(), Context{.threads = 2}, &cached);
   EXPECT_FALSE(cached);
 }
 
@@ -166,18 +166,18 @@ TEST(SolidSynthesis, AnySubsetAgreesWithTheBox) {
   SolidSynthesisOptions o;
   o.seed = 77;
   const VoxelBox box{-13, 5, -9, 22, 18, 14};
-  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, 2);
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
   ASSERT_EQ(whole.triples.size(), size_t(box.count()));
 
   // The same box again, one thread, through a cache: identical.
   SolidLevelCache cache;
-  EXPECT_EQ(synthesizeSolidBox(a, box, o, &cache, 1).triples, whole.triples);
+  EXPECT_EQ(synthesizeSolidBox(a, box, o, &cache, Context{.threads = 1}).triples, whole.triples);
 
   // An axis-aligned plane of the box as its own request.
   std::vector<Voxel> plane;
   for (int y = 0; y < box.ny; ++y)
     for (int x = 0; x < box.nx; ++x) plane.push_back({box.x + x, box.y + y, box.z + 6});
-  const SolidSynthesisResult planeResult = synthesizeSolid(a, plane, o, nullptr, 2);
+  const SolidSynthesisResult planeResult = synthesizeSolid(a, plane, o, nullptr, Context{.threads = 2});
   for (size_t i = 0; i < plane.size(); ++i) ASSERT_EQ(planeResult.triples[i], fromBox(whole, box, plane[i])) << i;
 
   // An oblique plane through the box.
@@ -187,7 +187,7 @@ TEST(SolidSynthesis, AnySubsetAgreesWithTheBox) {
       const double px = box.x + 1 + i * 0.9, py = box.y + 2 + i * 0.3 + j * 0.7, pz = box.z + 1 + i * 0.25 + j * 0.6;
       oblique.push_back({int64_t(std::floor(px)), int64_t(std::floor(py)), int64_t(std::floor(pz))});
     }
-  const SolidSynthesisResult obliqueResult = synthesizeSolid(a, oblique, o, &cache, 2);
+  const SolidSynthesisResult obliqueResult = synthesizeSolid(a, oblique, o, &cache, Context{.threads = 2});
   for (size_t i = 0; i < oblique.size(); ++i) ASSERT_EQ(obliqueResult.triples[i], fromBox(whole, box, oblique[i])) << i;
 
   // Random overlapping subsets (with duplicates), shuffled, on 1 or 2 threads, with and without
@@ -199,13 +199,13 @@ TEST(SolidSynthesis, AnySubsetAgreesWithTheBox) {
     std::vector<Voxel> subset;
     const uint32_t count = 1 + next(trial == 0 ? 1 : 300);
     for (uint32_t i = 0; i < count; ++i) subset.push_back(all[next(uint32_t(all.size()))]);
-    const SolidSynthesisResult r = synthesizeSolid(a, subset, o, trial % 2 ? &cache : nullptr, 1 + trial % 2);
+    const SolidSynthesisResult r = synthesizeSolid(a, subset, o, trial % 2 ? &cache : nullptr, Context{.threads = 1 + trial % 2});
     for (size_t i = 0; i < subset.size(); ++i)
       ASSERT_EQ(r.triples[i], fromBox(whole, box, subset[i])) << "trial " << trial << " voxel " << i;
   }
   // The box's voxels in reverse order, in one request spanning two tiles of the engine.
   std::vector<Voxel> reversed(all.rbegin(), all.rend());
-  const SolidSynthesisResult r = synthesizeSolid(a, reversed, o, nullptr, 2);
+  const SolidSynthesisResult r = synthesizeSolid(a, reversed, o, nullptr, Context{.threads = 2});
   for (size_t i = 0; i < reversed.size(); ++i) ASSERT_EQ(r.triples[i], fromBox(whole, box, reversed[i]));
 }
 
@@ -214,11 +214,11 @@ TEST(SolidSynthesis, SubPassesAreDeterministicToo) {
   SolidSynthesisOptions o;
   o.interleave = 2;  // the paper's 8 sub-passes per pass (the default is Jacobi passes)
   const VoxelBox box{100, -40, 7, 20, 16, 12};
-  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, 2);
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
   const std::vector<Voxel> all = boxVoxels(box);
   std::vector<Voxel> every7;
   for (size_t i = 0; i < all.size(); i += 7) every7.push_back(all[i]);
-  const SolidSynthesisResult r = synthesizeSolid(a, every7, o, nullptr, 1);
+  const SolidSynthesisResult r = synthesizeSolid(a, every7, o, nullptr, Context{.threads = 1});
   for (size_t i = 0; i < every7.size(); ++i) ASSERT_EQ(r.triples[i], fromBox(whole, box, every7[i]));
 }
 
@@ -227,16 +227,16 @@ TEST(SolidSynthesis, FarAwayAndAcrossTileBordersNothingWraps) {
   const SolidSynthesisOptions o;
   // A box straddling the engine's 128-voxel tiles and the origin, far from the origin too.
   for (const VoxelBox& box : {VoxelBox{120, -6, 124, 12, 10, 8}, VoxelBox{1000000, -777777, 50000, 8, 8, 8}}) {
-    const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, 2);
+    const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
     const std::vector<Voxel> all = boxVoxels(box);
     std::vector<Voxel> half(all.begin(), all.begin() + std::ptrdiff_t(all.size() / 2));
-    const SolidSynthesisResult r = synthesizeSolid(a, half, o, nullptr, 2);
+    const SolidSynthesisResult r = synthesizeSolid(a, half, o, nullptr, Context{.threads = 2});
     for (size_t i = 0; i < half.size(); ++i) ASSERT_EQ(r.triples[i], whole.triples[i]);
   }
   // Volumes 32 voxels apart (the exemplar's period at the finest level) differ: no wrap.
-  const SolidSynthesisResult p = synthesizeSolidBox(a, {0, 0, 0, 8, 8, 1}, o, nullptr, 2);
-  const SolidSynthesisResult q = synthesizeSolidBox(a, {32, 0, 0, 8, 8, 1}, o, nullptr, 2);
-  const SolidSynthesisResult s = synthesizeSolidBox(a, {0, 0, 32, 8, 8, 1}, o, nullptr, 2);
+  const SolidSynthesisResult p = synthesizeSolidBox(a, {0, 0, 0, 8, 8, 1}, o, nullptr, Context{.threads = 2});
+  const SolidSynthesisResult q = synthesizeSolidBox(a, {32, 0, 0, 8, 8, 1}, o, nullptr, Context{.threads = 2});
+  const SolidSynthesisResult s = synthesizeSolidBox(a, {0, 0, 32, 8, 8, 1}, o, nullptr, Context{.threads = 2});
   EXPECT_NE(p.triples, q.triples);
   EXPECT_NE(p.triples, s.triples);
 }
@@ -245,16 +245,16 @@ TEST(SolidSynthesis, SeedIsTheOnlySourceOfVariation) {
   const SolidAnalysis& a = analysis32();
   SolidSynthesisOptions o;
   const VoxelBox box{0, 0, 0, 10, 10, 4};
-  const auto r1 = synthesizeSolidBox(a, box, o, nullptr, 2);
-  EXPECT_EQ(synthesizeSolidBox(a, box, o, nullptr, 1).triples, r1.triples);
+  const auto r1 = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
+  EXPECT_EQ(synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 1}).triples, r1.triples);
   o.seed = 2;
-  EXPECT_NE(synthesizeSolidBox(a, box, o, nullptr, 2).triples, r1.triples);
+  EXPECT_NE(synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2}).triples, r1.triples);
   // A cache bound to seed 1 is not used for seed 2 (it clears itself).
   SolidLevelCache cache;
   o.seed = 1;
-  EXPECT_EQ(synthesizeSolidBox(a, box, o, &cache, 2).triples, r1.triples);
+  EXPECT_EQ(synthesizeSolidBox(a, box, o, &cache, Context{.threads = 2}).triples, r1.triples);
   o.seed = 2;
-  EXPECT_NE(synthesizeSolidBox(a, box, o, &cache, 2).triples, r1.triples);
+  EXPECT_NE(synthesizeSolidBox(a, box, o, &cache, Context{.threads = 2}).triples, r1.triples);
 }
 
 TEST(SolidSynthesis, CacheStaysWithinItsBoundAndSavesWork) {
@@ -262,8 +262,8 @@ TEST(SolidSynthesis, CacheStaysWithinItsBoundAndSavesWork) {
   const SolidSynthesisOptions o;
   SolidLevelCache cache(size_t(2) << 20);
   const VoxelBox first{0, 0, 0, 24, 24, 1};
-  const auto cold = synthesizeSolidBox(a, first, o, &cache, 2);
-  const auto warm = synthesizeSolidBox(a, {0, 0, 1, 24, 24, 1}, o, &cache, 2);
+  const auto cold = synthesizeSolidBox(a, first, o, &cache, Context{.threads = 2});
+  const auto warm = synthesizeSolidBox(a, {0, 0, 1, 24, 24, 1}, o, &cache, Context{.threads = 2});
   EXPECT_LE(cache.bytes(), cache.maxBytes());
   EXPECT_GT(cache.hits(), 0);
   // The second plane only synthesized the finest level.
@@ -279,7 +279,7 @@ TEST(SolidSynthesis, DependencyChainOfOneVoxel) {
   SolidAnalysisOptions ao;
   ao.levels = 3;
   ao.strips = 16;
-  const SolidAnalysis a = analyzeSolid(e, e, e, ao, 2);
+  const SolidAnalysis a = analyzeSolid(e, e, e, ao, Context{.threads = 2});
   ASSERT_EQ(a.levels.size(), 3u);
   SolidSynthesisOptions jacobi;  // the paper's 2 passes at every level
   jacobi.interleave = 1;
@@ -311,14 +311,14 @@ TEST(SolidSynthesis, DependencyChainOfOneVoxel) {
 // extrusion.
 TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
   const Image e = marble(64);
-  const SolidAnalysis a = analyzeSolid(e, e, e, {}, 2);
+  const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
   const int n = 64;
   // Both schedules: Jacobi passes (the default) and the paper's 8 sub-passes per pass.
   for (int interleave : {1, 2}) {
   SolidSynthesisOptions so;
   so.interleave = interleave;
   std::printf("[ solid    ] interleave %d (%d sub-passes per pass)\n", interleave, so.subpasses());
-  const SolidSynthesisResult r = synthesizeSolidBox(a, {0, 0, 0, n, n, n}, so, nullptr, 2);
+  const SolidSynthesisResult r = synthesizeSolidBox(a, {0, 0, 0, n, n, n}, so, nullptr, Context{.threads = 2});
   std::vector<float> colours;
   solidColors(r.triples, e, e, e, colours);
   const int ch = solidColorChannels(e, e, e);
@@ -369,9 +369,9 @@ TEST(SolidSynthesis, SimdAndPortableKernelsAgree) {
     o.interleave = interleave;
     o.seed = 9;
     const VoxelBox box{-7, 3, 40, 12, 10, 6};
-    const SolidSynthesisResult simd = synthesizeSolidBox(a, box, o, nullptr, 2);
+    const SolidSynthesisResult simd = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
     cpu::solidAllowSimd(false);
-    const SolidSynthesisResult portable = synthesizeSolidBox(a, box, o, nullptr, 2);
+    const SolidSynthesisResult portable = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
     cpu::solidAllowSimd(true);
     EXPECT_EQ(simd.triples, portable.triples) << "interleave " << interleave;
   }
@@ -384,9 +384,9 @@ TEST(SolidSynthesis, ManyTilesWithoutCacheAgreeWithSingleTiles) {
   const SolidSynthesisOptions o;
   std::vector<Voxel> scattered;
   for (int i = 0; i < 40; ++i) scattered.push_back({int64_t(i) * 61 - 900, int64_t(i % 7) * 130 - 200, int64_t(i % 3) * 127});
-  const SolidSynthesisResult together = synthesizeSolid(a, scattered, o, nullptr, 2);
+  const SolidSynthesisResult together = synthesizeSolid(a, scattered, o, nullptr, Context{.threads = 2});
   for (size_t i = 0; i < scattered.size(); i += 3) {
-    const SolidSynthesisResult alone = synthesizeSolid(a, std::span<const Voxel>(&scattered[i], 1), o, nullptr, 1);
+    const SolidSynthesisResult alone = synthesizeSolid(a, std::span<const Voxel>(&scattered[i], 1), o, nullptr, Context{.threads = 1});
     ASSERT_EQ(alone.triples[0], together.triples[i]) << i;
   }
 }
@@ -399,18 +399,19 @@ TEST(SolidSynthesis, EachLevelIsSynthesizedOnceOverTheUnionOfTheChains) {
   const SolidAnalysis& a = analysis32();
   const SolidSynthesisOptions o;
   const std::vector<Voxel> seeds{{15, -1, 31}, {16, 0, 32}, {16, -1, 31}, {-17, 40, 3}, {20, 2, 30}, {900, -33, 64}};
-  std::vector<int> reported;  // the progress callback: each level once, coarsest first
+  std::vector<std::string> reported;  // the progress: the masks, then each level once, coarsest first
   std::vector<Voxel> request = seeds;  // a duplicate is computed once and counted once
   request.push_back(seeds[1]);
-  const SolidSynthesisResult r = synthesizeSolid(a, request, o, nullptr, 2, [&](const SolidLevelStats& l, int number, int levels) {
-    EXPECT_EQ(levels, int(a.levels.size()));
-    EXPECT_EQ(l.stackLevel, a.levels[size_t(number) - 1].stackLevel);
-    reported.push_back(number);
-  });
+  Context ctx{.threads = 2};
+  ctx.progress = [&](const ProgressEvent& e) {
+    if (e.kind == ProgressEvent::Kind::End) reported.emplace_back(e.stage);
+  };
+  const SolidSynthesisResult r = synthesizeSolid(a, request, o, nullptr, ctx);
   EXPECT_EQ(r.distinctVoxels, int64_t(seeds.size()));
   EXPECT_EQ(r.triples[seeds.size()], r.triples[1]);
-  std::vector<int> expectedOrder(a.levels.size());
-  std::iota(expectedOrder.begin(), expectedOrder.end(), 1);
+  std::vector<std::string> expectedOrder{"masks"};
+  for (size_t l = 1; l <= a.levels.size(); ++l)
+    expectedOrder.push_back("level " + std::to_string(l) + "/" + std::to_string(a.levels.size()));
   EXPECT_EQ(reported, expectedOrder);
   std::set<std::array<int64_t, 3>> mask;
   for (const Voxel& v : seeds) mask.insert({v.x, v.y, v.z});
@@ -439,12 +440,12 @@ TEST(SolidSynthesis, CacheServesOverlappingRequestsInPart) {
   const SolidAnalysis& a = analysis32();
   const SolidSynthesisOptions o;
   SolidLevelCache cache;
-  synthesizeSolidBox(a, {0, 0, 0, 20, 20, 1}, o, &cache, 2);
+  synthesizeSolidBox(a, {0, 0, 0, 20, 20, 1}, o, &cache, Context{.threads = 2});
   const size_t bytes = cache.bytes();
   EXPECT_GT(bytes, 0u);
   const VoxelBox shifted{9, 5, 0, 20, 20, 1};
-  const SolidSynthesisResult cold = synthesizeSolidBox(a, shifted, o, nullptr, 2);
-  const SolidSynthesisResult warm = synthesizeSolidBox(a, shifted, o, &cache, 2);
+  const SolidSynthesisResult cold = synthesizeSolidBox(a, shifted, o, nullptr, Context{.threads = 2});
+  const SolidSynthesisResult warm = synthesizeSolidBox(a, shifted, o, &cache, Context{.threads = 2});
   EXPECT_EQ(warm.triples, cold.triples);
   const auto coarse = [](const SolidSynthesisResult& r) { return r.voxelsSynthesized() - r.levels.back().voxels; };
   EXPECT_GT(coarse(warm), 0);                // part of its coarse chain was not cached
@@ -452,9 +453,9 @@ TEST(SolidSynthesis, CacheServesOverlappingRequestsInPart) {
   EXPECT_EQ(warm.levels.back().voxels, cold.levels.back().voxels);  // the finest level is never cached
   EXPECT_GT(cache.bytes(), bytes);           // what it computed was added
   // A third request inside the union of the first two needs no coarse work at all.
-  const SolidSynthesisResult inside = synthesizeSolidBox(a, {5, 3, 0, 12, 12, 1}, o, &cache, 1);
+  const SolidSynthesisResult inside = synthesizeSolidBox(a, {5, 3, 0, 12, 12, 1}, o, &cache, Context{.threads = 1});
   EXPECT_EQ(coarse(inside), 0);
-  EXPECT_EQ(inside.triples, synthesizeSolidBox(a, {5, 3, 0, 12, 12, 1}, o, nullptr, 2).triples);
+  EXPECT_EQ(inside.triples, synthesizeSolidBox(a, {5, 3, 0, 12, 12, 1}, o, nullptr, Context{.threads = 2}).triples);
 }
 
 TEST(SolidSynthesis, NonSquareNonPowerOfTwoExemplars) {
@@ -465,10 +466,10 @@ TEST(SolidSynthesis, NonSquareNonPowerOfTwoExemplars) {
       for (int c = 0; c < 3; ++c) e.at(x, y, c) = crop.at(x, y, crop.channels >= 3 ? c : 0);
   SolidAnalysisOptions ao;
   ao.strips = 24;
-  const SolidAnalysis a = analyzeSolid(e, e, e, ao, 2);
+  const SolidAnalysis a = analyzeSolid(e, e, e, ao, Context{.threads = 2});
   EXPECT_EQ(a.levels.back().stackLevel, 6);  // ceil(log2(40))
   const VoxelBox box{-5, 3, 11, 12, 9, 7};
-  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, {}, nullptr, 2);
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, {}, nullptr, Context{.threads = 2});
   for (const Triple& t : whole.triples) {
     EXPECT_LT(coordU(t[0]), 40u);
     EXPECT_LT(coordV(t[0]), 24u);
@@ -477,7 +478,7 @@ TEST(SolidSynthesis, NonSquareNonPowerOfTwoExemplars) {
   }
   const std::vector<Voxel> all = boxVoxels(box);
   std::vector<Voxel> some(all.begin() + 100, all.begin() + 160);
-  const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, 1);
+  const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, Context{.threads = 1});
   for (size_t i = 0; i < some.size(); ++i) EXPECT_EQ(r.triples[i], fromBox(whole, box, some[i]));
 }
 
@@ -485,7 +486,7 @@ TEST(SolidSynthesis, ThreeDifferentExemplars) {
   const Image ex = marble(16, 0, 0), ey = marble(16, 50, 20), ez = marble(16, 90, 100);
   SolidAnalysisOptions ao;
   ao.strips = 16;
-  const SolidAnalysis a = analyzeSolid(ex, ey, ez, ao, 2);
+  const SolidAnalysis a = analyzeSolid(ex, ey, ez, ao, Context{.threads = 2});
   EXPECT_FALSE(a.shared);
   const SolidLevel& f = a.levels.back();
   EXPECT_NE(f.colors[0], f.colors[1]);
@@ -494,10 +495,10 @@ TEST(SolidSynthesis, ThreeDifferentExemplars) {
     for (int p = 0; p < 16 * 16; ++p)
       ASSERT_EQ(f.triples[size_t(e)][size_t(p) * kSolidMaxCandidates * 3 + size_t(e)], packCoord(uint32_t(p % 16), uint32_t(p / 16)));
   const VoxelBox box{3, -4, 2, 9, 8, 7};
-  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, {}, nullptr, 2);
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, {}, nullptr, Context{.threads = 2});
   const std::vector<Voxel> all = boxVoxels(box);
   std::vector<Voxel> some(all.begin() + 200, all.begin() + 260);
-  const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, 1);
+  const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, Context{.threads = 1});
   for (size_t i = 0; i < some.size(); ++i) EXPECT_EQ(r.triples[i], fromBox(whole, box, some[i]));
   std::vector<float> colours;
   solidColors(whole.triples, ex, ey, ez, colours);

@@ -45,9 +45,9 @@ TEST(Synthesize2d, WindowsAgreeWithAnyLargerWindowAcrossThreadsAndRuns) {
   SynthesisOptions options;
   options.seed = 1234;
   const Window outer{-150, -77, 300, 260};
-  const CoordMap big = synthesize2d(a, outer, options, 2).coords;
+  const CoordMap big = synthesize2d(a, outer, options, Context{.threads = 2}).coords;
   // The same outer window again, on one thread: identical.
-  EXPECT_EQ(synthesize2d(a, outer, options, 1).coords.coords, big.coords);
+  EXPECT_EQ(synthesize2d(a, outer, options, Context{.threads = 1}).coords.coords, big.coords);
 
   uint32_t state = 99;
   auto next = [&](int range) { state = pcgHash(state); return int(state % uint32_t(range)); };
@@ -57,7 +57,7 @@ TEST(Synthesize2d, WindowsAgreeWithAnyLargerWindowAcrossThreadsAndRuns) {
     SCOPED_TRACE("window " + std::to_string(inner.x) + "," + std::to_string(inner.y) + "," + std::to_string(w) +
                  "x" + std::to_string(h));
     const int threads = 1 + trial % 2;
-    EXPECT_EQ(synthesize2d(a, inner, options, threads).coords.coords, crop(big, outer, inner));
+    EXPECT_EQ(synthesize2d(a, inner, options, Context{.threads = threads}).coords.coords, crop(big, outer, inner));
   }
 }
 
@@ -65,8 +65,8 @@ TEST(Synthesize2d, DistantWindowsAreDeterministicToo) {
   const ExemplarAnalysis& a = analysis48();
   const Window far{-1000000007, 2000000011, 40, 30};
   const Window farInner{far.x + 13, far.y + 7, 9, 11};
-  const CoordMap big = synthesize2d(a, far, {}, 2).coords;
-  EXPECT_EQ(synthesize2d(a, farInner, {}, 1).coords.coords, crop(big, far, farInner));
+  const CoordMap big = synthesize2d(a, far, {}, Context{.threads = 2}).coords;
+  EXPECT_EQ(synthesize2d(a, farInner, {}, Context{.threads = 1}).coords.coords, crop(big, far, farInner));
 }
 
 TEST(Synthesize2d, InterleaveAndPassesKeepWindowDeterminism) {
@@ -78,8 +78,8 @@ TEST(Synthesize2d, InterleaveAndPassesKeepWindowDeterminism) {
       options.passes = passes;
       const Window outer{-20, 5, 120, 90};
       const Window inner{17, 31, 23, 19};
-      EXPECT_EQ(synthesize2d(a, inner, options, 2).coords.coords,
-                crop(synthesize2d(a, outer, options, 1).coords, outer, inner))
+      EXPECT_EQ(synthesize2d(a, inner, options, Context{.threads = 2}).coords.coords,
+                crop(synthesize2d(a, outer, options, Context{.threads = 1}).coords, outer, inner))
           << "interleave " << interleave << " passes " << passes;
     }
 }
