@@ -32,6 +32,33 @@ int64_t cover(double extent, double pitch) {
 
 } // namespace
 
+UpAxis parseUpAxis(const std::string& text) {
+  static const std::pair<const char*, UpAxis> names[] = {{"x", UpAxis::X},     {"y", UpAxis::Y},     {"z", UpAxis::Z},
+                                                         {"-x", UpAxis::NegX}, {"-y", UpAxis::NegY}, {"-z", UpAxis::NegZ}};
+  for (const auto& [name, axis] : names)
+    if (text == name) return axis;
+  throw Error("up axis must be x, y, z, -x, -y or -z, got '" + text + "'");
+}
+
+namespace {
+
+// Rows are the print axes in model coordinates: a proper rotation taking `up` to +z whose first row
+// (the print's x) is a positive model axis.
+Eigen::Matrix3d rotationFor(UpAxis up) {
+  Eigen::Matrix3d r;
+  switch (up) {
+  case UpAxis::Z: r << 1, 0, 0, 0, 1, 0, 0, 0, 1; break;
+  case UpAxis::NegZ: r << 1, 0, 0, 0, -1, 0, 0, 0, -1; break;
+  case UpAxis::Y: r << 1, 0, 0, 0, 0, -1, 0, 1, 0; break;
+  case UpAxis::NegY: r << 1, 0, 0, 0, 0, 1, 0, -1, 0; break;
+  case UpAxis::X: r << 0, 1, 0, 0, 0, 1, 1, 0, 0; break;
+  case UpAxis::NegX: r << 0, 1, 0, 0, 0, -1, -1, 0, 0; break;
+  }
+  return r;
+}
+
+} // namespace
+
 void PrintGridOptions::validate() const {
   if (mmPerUnit == 0) requireRange(heightMm, 0, 1e4, "print height (mm)");
   else requireRange(mmPerUnit, 0, 1e6, "scale (mm per model unit)");
@@ -42,12 +69,15 @@ void PrintGridOptions::validate() const {
 
 PrintGrid printGrid(const BoundingBox& box, const PrintGridOptions& o) {
   o.validate();
-  const Eigen::Vector3d lo = box.min.cast<double>(), hi = box.max.cast<double>();
+  PrintGrid g;
+  g.rotation = rotationFor(o.up);
+  g.modelAxisOfX = g.rotation(0, 0) != 0 ? 0 : 1;
+  const Eigen::Vector3d a = g.rotation * box.min.cast<double>(), b = g.rotation * box.max.cast<double>();
+  const Eigen::Vector3d lo = a.cwiseMin(b), hi = a.cwiseMax(b);
   const Eigen::Vector3d extent = hi - lo;
   if (!extent.allFinite() || !(extent.minCoeff() > 0))
     throw Error("the model is flat or empty (bounding box " + number(extent.x()) + " x " + number(extent.y()) + " x " +
                 number(extent.z()) + "): nothing to print");
-  PrintGrid g;
   g.mmPerUnit = o.mmPerUnit > 0 ? o.mmPerUnit : o.heightMm / extent.z();
   g.pitchMm = {25.4 / o.dpiX, 25.4 / o.dpiY, o.layerMm};
   g.pitch = g.pitchMm / g.mmPerUnit;

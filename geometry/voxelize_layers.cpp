@@ -14,6 +14,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 namespace texfab::geometry {
@@ -25,7 +26,12 @@ constexpr int kChunkLayers = 16;  // layers sharing one list of candidate triang
 using Vec3 = Eigen::Vector3d;
 
 struct Bounds {
-  double zmin, zmax, ymin, ymax;
+  double xmin, xmax, ymin, ymax, zmin, zmax;
+};
+
+// Where a row's scanline enters and leaves the solid (mm): both points lie on the surface.
+struct Run {
+  double enter, leave;
 };
 
 // A segment of the layer's contour crossing a row of voxel centres.
@@ -50,23 +56,32 @@ Vec3 cutEdge(const Vec3& p, const Vec3& q, double z) {
 
 // ---- shell geometry ------------------------------------------------------------------------------
 
-// A triangle prepared for distance queries: unit edge directions and lengths, unit normal, and
-// the in-plane normals of its edges pointing inwards.
+// A triangle prepared for distance queries along rows (lines parallel to x): unit edge directions
+// and lengths, unit normal, in-plane edge normals pointing inwards, and the reciprocals the
+// interval computations divide by.
 struct TriangleFrame {
   Vec3 v[3], d[3], inward[3], normal;
   double length[3];
-  bool flat;  // zero area: no slab, only the capsules
+  double invDx[3], invA[3];    // 1 / d.x (0 if d.x = 0), 1 / (1 - d.x^2) (0 if an edge runs along x)
+  double invNx, invInwardX[3]; // the same for the slab's planes
+  bool flat;                   // zero area: no slab, only the capsules
 
   TriangleFrame(const Vec3& a, const Vec3& b, const Vec3& c) : v{a, b, c} {
+    auto inverse = [](double x) { return x != 0 ? 1.0 / x : 0.0; };
+    const Vec3 n = (b - a).cross(c - a);
+    flat = !(n.norm() > 0);
+    normal = flat ? Vec3::Zero() : Vec3(n.normalized());
+    invNx = inverse(normal.x());
     for (int k = 0; k < 3; ++k) {
       const Vec3 e = v[(k + 1) % 3] - v[k];
       length[k] = e.norm();
       d[k] = length[k] > 0 ? Vec3(e / length[k]) : Vec3::Zero();
+      inward[k] = normal.cross(d[k]);
+      invDx[k] = inverse(d[k].x());
+      const double across = 1 - d[k].x() * d[k].x();
+      invA[k] = across > 1e-12 ? 1.0 / across : 0.0;
+      invInwardX[k] = inverse(inward[k].x());
     }
-    const Vec3 n = (b - a).cross(c - a);
-    flat = !(n.norm() > 0);
-    normal = flat ? Vec3::Zero() : Vec3(n.normalized());
-    for (int k = 0; k < 3; ++k) inward[k] = normal.cross(d[k]);
   }
 };
 
@@ -80,13 +95,14 @@ struct Hull {
   }
 };
 
-// Narrows [lo, hi] to the x where lower < alpha * x + beta < upper.
-void clipLinear(double alpha, double beta, double lower, double upper, double& lo, double& hi) {
+// Narrows [lo, hi] to the x where lower < alpha * x + beta < upper (invAlpha = 1 / alpha, or 0
+// when alpha is 0).
+void clipLinear(double alpha, double invAlpha, double beta, double lower, double upper, double& lo, double& hi) {
   if (alpha == 0) {
     if (!(beta > lower && beta < upper)) hi = lo - 1;
     return;
   }
-  double a = (lower - beta) / alpha, b = (upper - beta) / alpha;
+  double a = (lower - beta) * invAlpha, b = (upper - beta) * invAlpha;
   if (a > b) std::swap(a, b);
   lo = std::max(lo, a);
   hi = std::min(hi, b);
@@ -96,6 +112,7 @@ void clipLinear(double alpha, double beta, double lower, double upper, double& l
 // The triangle swept by a ball is convex and is the union of its slab (points projecting into the
 // triangle, |height| < s) and the capsules around its edges, so the interval is the hull of theirs.
 Hull nearInterval(const TriangleFrame& f, double y, double z, double s) {
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
   Hull hull;
   const double s2 = s * s;
   for (int k = 0; k < 3; ++k) {
@@ -106,29 +123,29 @@ Hull nearInterval(const TriangleFrame& f, double y, double z, double s) {
     // Cylinder around the edge's line: A tau^2 - 2 dx m tau + C < 0 with tau = x - v.x, clipped to
     // the slab 0 < dx tau + m < length.
     const Vec3& d = f.d[k];
-    const double m = d.y() * eta + d.z() * zeta, a = 1 - d.x() * d.x();
+    const double m = d.y() * eta + d.z() * zeta;
     const double c = eta * eta + zeta * zeta - m * m - s2;
-    double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
-    if (a > 1e-12) {
-      const double disc = d.x() * d.x() * m * m - a * c;
+    double lo = -kInfinity, hi = kInfinity;
+    if (f.invA[k] > 0) {
+      const double disc = d.x() * d.x() * m * m - (1 - d.x() * d.x()) * c;
       if (disc <= 0) continue;
-      lo = (d.x() * m - std::sqrt(disc)) / a;
-      hi = (d.x() * m + std::sqrt(disc)) / a;
+      const double root = std::sqrt(disc);
+      lo = (d.x() * m - root) * f.invA[k];
+      hi = (d.x() * m + root) * f.invA[k];
     } else if (c >= 0) {
       continue;
     }
-    clipLinear(d.x(), m, 0, f.length[k], lo, hi);
+    clipLinear(d.x(), f.invDx[k], m, 0, f.length[k], lo, hi);
     hull.add(v.x() + lo, v.x() + hi);
   }
   if (!f.flat) {
     const Vec3& n = f.normal;
-    double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+    double lo = -kInfinity, hi = kInfinity;
     const Vec3& a = f.v[0];
-    clipLinear(n.x(), n.y() * (y - a.y()) + n.z() * (z - a.z()) - n.x() * a.x(), -s, s, lo, hi);
-    for (int k = 0; k < 3; ++k) {
+    clipLinear(n.x(), f.invNx, n.y() * (y - a.y()) + n.z() * (z - a.z()) - n.x() * a.x(), -s, s, lo, hi);
+    for (int k = 0; k < 3 && lo < hi; ++k) {
       const Vec3 &e = f.inward[k], &v = f.v[k];
-      clipLinear(e.x(), e.y() * (y - v.y()) + e.z() * (z - v.z()) - e.x() * v.x(), 0,
-                 std::numeric_limits<double>::infinity(), lo, hi);
+      clipLinear(e.x(), f.invInwardX[k], e.y() * (y - v.y()) + e.z() * (z - v.z()) - e.x() * v.x(), 0, kInfinity, lo, hi);
     }
     hull.add(lo, hi);
   }
@@ -175,9 +192,10 @@ struct LayerVoxelizer::Impl {
 
   void cutLayer(std::span<const uint32_t> candidates, double z, std::vector<Crossing>& out) const;
   void cutTriangle(const std::array<uint32_t, 3>& t, double z, std::vector<Crossing>& out) const;
-  LayerSpans fill(std::vector<Crossing>& crossings, int layer) const;
-  void markShell(std::span<const uint32_t> candidates, double z, const LayerSpans& inside, std::vector<uint64_t>& bits,
-                 int64_t words) const;
+  LayerSpans fill(std::vector<Crossing>& crossings, int layer, std::vector<Run>& runs) const;
+  void markRunEnds(const LayerSpans& inside, const std::vector<Run>& runs, std::vector<uint64_t>& bits, int64_t words) const;
+  void markShell(std::span<const uint32_t> candidates, double z, const LayerSpans& inside, const std::vector<Run>& runs,
+                 std::vector<uint64_t>& bits, int64_t words) const;
   static void splitSpans(LayerSpans& spans, const std::vector<uint64_t>& bits, int64_t words);
 };
 
@@ -201,13 +219,13 @@ void LayerVoxelizer::Impl::load(const Mesh& mesh) {
   report.triangles = welded.triangles.size();
   positions.resize(welded.positions.size());
   for (size_t i = 0; i < positions.size(); ++i)
-    positions[i] = (welded.positions[i].cast<double>() - grid.origin) * grid.mmPerUnit;
+    positions[i] = (grid.rotation * welded.positions[i].cast<double>() - grid.origin) * grid.mmPerUnit;
   triangles = std::move(welded.triangles);
   bounds.resize(triangles.size());
   for (size_t t = 0; t < triangles.size(); ++t) {
     const Vec3 &a = positions[triangles[t][0]], &b = positions[triangles[t][1]], &c = positions[triangles[t][2]];
-    bounds[t] = {std::min({a.z(), b.z(), c.z()}), std::max({a.z(), b.z(), c.z()}), std::min({a.y(), b.y(), c.y()}),
-                 std::max({a.y(), b.y(), c.y()})};
+    bounds[t] = {std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()}), std::min({a.y(), b.y(), c.y()}),
+                 std::max({a.y(), b.y(), c.y()}), std::min({a.z(), b.z(), c.z()}), std::max({a.z(), b.z(), c.z()})};
   }
 }
 
@@ -311,8 +329,9 @@ void LayerVoxelizer::Impl::cutLayer(std::span<const uint32_t> candidates, double
     if (bounds[t].zmin <= z && z <= bounds[t].zmax) cutTriangle(triangles[t], z, out);
 }
 
-// Inside spans per image row from the crossings (sorted here by row, then x).
-LayerSpans LayerVoxelizer::Impl::fill(std::vector<Crossing>& crossings, int layer) const {
+// Inside spans per image row from the crossings (sorted here by row, then x), and for each span
+// the run of the scanline it comes from.
+LayerSpans LayerVoxelizer::Impl::fill(std::vector<Crossing>& crossings, int layer, std::vector<Run>& runs) const {
   std::sort(crossings.begin(), crossings.end(), [](const Crossing& a, const Crossing& b) {
     return a.row != b.row ? a.row > b.row : a.x != b.x ? a.x < b.x : a.winding < b.winding;  // image rows: top first
   });
@@ -333,7 +352,10 @@ LayerSpans LayerVoxelizer::Impl::fill(std::vector<Crossing>& crossings, int laye
       if (before != 0 && winding == 0) {
         const int64_t b = std::max<int64_t>(0, ceilIndex(start, px));
         const int64_t e = std::min<int64_t>(grid.width, ceilIndex(crossings[i].x, px));
-        if (b < e) out.spans.push_back({int32_t(b), int32_t(e), false});
+        if (b < e) {
+          out.spans.push_back({int32_t(b), int32_t(e), false});
+          runs.push_back({start, crossings[i].x});
+        }
       }
     }
   }
@@ -343,24 +365,56 @@ LayerSpans LayerVoxelizer::Impl::fill(std::vector<Crossing>& crossings, int laye
 
 // ---- shell: voxels near the surface ----------------------------------------------------------------
 
+// Voxels nearer than the shell to where their row enters or leaves the solid: those points lie on
+// the surface, so these voxels are shell without looking at triangles.
+void LayerVoxelizer::Impl::markRunEnds(const LayerSpans& inside, const std::vector<Run>& runs, std::vector<uint64_t>& bits,
+                                       int64_t words) const {
+  const double s = options.shellMm, px = grid.pitchMm.x();
+  for (int r = 0; r < inside.rows(); ++r)
+    for (uint32_t i = inside.rowStart[size_t(r)]; i < inside.rowStart[size_t(r) + 1]; ++i) {
+      const VoxelSpan& span = inside.spans[i];
+      uint64_t* row = bits.data() + size_t(r) * size_t(words);
+      const int64_t enterEnd = std::min<int64_t>(span.end, ceilIndex(runs[i].enter + s, px));
+      const int64_t leaveBegin = std::max<int64_t>(std::max<int64_t>(span.begin, enterEnd), ceilIndex(runs[i].leave - s, px));
+      setBits(row, span.begin, enterEnd);
+      setBits(row, leaveBegin, span.end);
+    }
+}
+
+// The other voxels of the shell: for each triangle within the shell distance of the layer, the
+// interval of each row it reaches, where that row's voxels are farther than the shell from both
+// ends of their run (markRunEnds did the rest). Rows and triangles that cannot reach such voxels
+// are skipped by bounds first.
 void LayerVoxelizer::Impl::markShell(std::span<const uint32_t> candidates, double z, const LayerSpans& inside,
-                                     std::vector<uint64_t>& bits, int64_t words) const {
+                                     const std::vector<Run>& runs, std::vector<uint64_t>& bits, int64_t words) const {
   const double s = options.shellMm, px = grid.pitchMm.x(), py = grid.pitchMm.y();
   for (uint32_t t : candidates) {
     const Bounds& b = bounds[t];
-    if (!(b.zmin - s < z && z < b.zmax + s)) continue;
-    const TriangleFrame frame(positions[triangles[t][0]], positions[triangles[t][1]], positions[triangles[t][2]]);
-    const int64_t jFirst = std::max<int64_t>(0, ceilIndex(b.ymin - s, py));
-    const int64_t jLast = std::min<int64_t>(grid.height - 1, ceilIndex(b.ymax + s, py));
+    const double dz = std::max({0.0, b.zmin - z, z - b.zmax}), hz2 = s * s - dz * dz;
+    if (hz2 <= 0) continue;
+    const double hz = std::sqrt(hz2);
+    const int64_t jFirst = std::max<int64_t>(0, ceilIndex(b.ymin - hz, py));
+    const int64_t jLast = std::min<int64_t>(grid.height - 1, ceilIndex(b.ymax + hz, py));
+    std::optional<TriangleFrame> frame;
     for (int64_t j = jFirst; j <= jLast; ++j) {
+      const double y = rowY(j), dy = std::max({0.0, b.ymin - y, y - b.ymax}), h2 = hz2 - dy * dy;
+      if (h2 <= 0) continue;
+      const double h = std::sqrt(h2), reachLo = b.xmin - h, reachHi = b.xmax + h;
       const int r = grid.height - 1 - int(j);
-      const std::span<const VoxelSpan> row = inside.row(r);
-      if (row.empty()) continue;
-      const Hull h = nearInterval(frame, rowY(j), z, s);
-      if (!(h.lo < h.hi)) continue;
-      const int64_t begin = std::max<int64_t>(row.front().begin, ceilIndex(h.lo, px));
-      const int64_t end = std::min<int64_t>(row.back().end, ceilIndex(h.hi, px));
-      if (begin < end) setBits(bits.data() + size_t(r) * size_t(words), begin, end);
+      const uint32_t first = inside.rowStart[size_t(r)], last = inside.rowStart[size_t(r) + 1];
+      bool reaches = false;
+      for (uint32_t i = first; i < last && !reaches; ++i)
+        reaches = runs[i].enter + s < reachHi && reachLo < runs[i].leave - s && runs[i].enter + s < runs[i].leave - s;
+      if (!reaches) continue;
+      if (!frame) frame.emplace(positions[triangles[t][0]], positions[triangles[t][1]], positions[triangles[t][2]]);
+      const Hull near = nearInterval(*frame, y, z, s);
+      if (!(near.lo < near.hi)) continue;
+      for (uint32_t i = first; i < last; ++i) {
+        const VoxelSpan& span = inside.spans[i];
+        const int64_t lo = std::max<int64_t>(span.begin, ceilIndex(std::max(near.lo, runs[i].enter + s), px));
+        const int64_t hi = std::min<int64_t>(span.end, ceilIndex(std::min(near.hi, runs[i].leave - s), px));
+        if (lo < hi) setBits(bits.data() + size_t(r) * size_t(words), lo, hi);
+      }
     }
   }
 }
@@ -394,10 +448,12 @@ LayerSpans LayerVoxelizer::voxelize(int layer) const {
   const std::span<const uint32_t> candidates = s.chunks[size_t(layer / kChunkLayers)];
   std::vector<Crossing> crossings;
   s.cutLayer(candidates, z, crossings);
-  LayerSpans spans = s.fill(crossings, layer);
+  std::vector<Run> runs;
+  LayerSpans spans = s.fill(crossings, layer, runs);
   const int64_t words = (s.grid.width + 63) / 64;
   std::vector<uint64_t> bits(size_t(words) * size_t(s.grid.height), 0);
-  s.markShell(candidates, z, spans, bits, words);
+  s.markRunEnds(spans, runs, bits, words);
+  s.markShell(candidates, z, spans, runs, bits, words);
   Impl::splitSpans(spans, bits, words);
   return spans;
 }

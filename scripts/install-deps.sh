@@ -9,10 +9,14 @@ packages=(
   # images, threads, maths, command line, reports
   libopenimageio-dev openimageio-tools libtbb-dev libeigen3-dev nlohmann-json3-dev libcli11-dev
   libnanoflann-dev
-  # meshes: glTF, Draco, Embree, halfedge structures, CGAL (and its data set)
-  libtinygltf-dev libdraco-dev draco libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
+  # meshes: glTF, Draco, 3MF, Embree, halfedge structures, CGAL (and its data set)
+  libtinygltf-dev libdraco-dev draco lib3mf-dev libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
+  # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest)
+  zlib1g-dev libssl-dev
   # tests and benchmarks; real clients that check our outputs
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm
+  # a real single-node Slurm for the distributed slicing test (started by the test, not as services)
+  slurmctld slurmd slurm-client munge python3
   # test data: GIMP's patterns (marble, granite, brick, wood, ...)
   gimp-data
 )

@@ -22,5 +22,7 @@ Command addConvertCommand(CLI::App& root);
 Command addRenderCommand(CLI::App& root);
 Command addAtlasCommand(CLI::App& root);
 Command addTextureCommand(CLI::App& root);
+Command addSliceCommand(CLI::App& root);
+Command addMergeSlicesCommand(CLI::App& root);
 
 } // namespace texfab::cli

@@ -22,7 +22,8 @@ int main(int argc, char** argv) {
   std::vector<cli::Command> commands{cli::addSynthCommand(app), cli::addStatsCommand(app), cli::addSolidCommand(app),
                                      cli::addInfoCommand(app), cli::addConvertCommand(app),
                                      cli::addRenderCommand(app), cli::addAtlasCommand(app),
-                                     cli::addTextureCommand(app)};
+                                     cli::addTextureCommand(app),
+                                     cli::addSliceCommand(app), cli::addMergeSlicesCommand(app)};
 
   try {
     app.parse(argc, argv);

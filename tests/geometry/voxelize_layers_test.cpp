@@ -2,6 +2,7 @@
 // Voxelization by layers: volumes of known solids within the discretization bound, the shell's
 // thickness measured on a layer, agreement with Embree's ray-parity inside test and closest
 // points on real meshes, and refusals of open meshes and bad grids.
+#include "geometry/close_holes.h"
 #include "geometry/embree_scene.h"
 #include "geometry/mesh_io.h"
 #include "geometry/print_grid.h"
@@ -171,6 +172,33 @@ TEST(VoxelizeLayers, RefusesOpenAndFlippedMeshes) {
     soup.triangles.push_back({b, b + 1, b + 2});
   }
   EXPECT_EQ(LayerVoxelizer(soup, grid).report().weldedVertices, 36u - 8u);
+}
+
+TEST(CloseHoles, ClosesSimpleHolesAndLeavesTheRest) {
+  // A box missing one triangle, and a sphere missing a ring of triangles: closed by fans, and
+  // the volume is the closed solid's.
+  Mesh box = makeBox({0, 0, 0}, {2, 2, 2});
+  box.triangles.pop_back();
+  CloseHolesReport r = closeHoles(box);
+  EXPECT_EQ(r.holes, 1u);
+  EXPECT_EQ(r.boundaryEdges, 3u);
+  EXPECT_TRUE(r.closed);
+  EXPECT_NEAR(meshVolume(box), 8.0, 1e-5);
+  Mesh sphere = makeIcoSphere(1.0f, 3);
+  const double full = meshVolume(sphere);
+  sphere.triangles.erase(sphere.triangles.begin() + 40, sphere.triangles.begin() + 44);
+  r = closeHoles(sphere);
+  EXPECT_TRUE(r.closed);
+  EXPECT_NEAR(meshVolume(sphere), full, 1e-3);
+  const LayerVoxelizer v(sphere, gridFor(sphere, 0.1));  // accepted now
+  // A vertex shared by two holes is not a simple loop: left open.
+  Mesh bowtie = makeBox({0, 0, 0}, {1, 1, 1});
+  bowtie.triangles.erase(bowtie.triangles.begin() + 8, bowtie.triangles.begin() + 10);  // -z face
+  bowtie.triangles.erase(bowtie.triangles.begin() + 0, bowtie.triangles.begin() + 1);   // a -x triangle
+  const size_t before = bowtie.triangles.size();
+  r = closeHoles(bowtie);
+  EXPECT_FALSE(r.closed);
+  EXPECT_EQ(bowtie.triangles.size(), before);
 }
 
 TEST(PrintGrid, RefusesBadOptions) {

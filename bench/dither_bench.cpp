@@ -1,0 +1,178 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The dither's quality, measured (issue 16): a 192 x 96 x 128 block of shell voxels at the J750's
+// pitch (600 x 300 dpi, 0.027 mm) coloured three ways (the solid texture of the bundled marble,
+// a smooth ramp through the printable colours, a flat colour), dithered to CMYKW by
+//   blue-noise   the 3-D ordered dither texfab uses (position-based: shards are exact),
+//   fs-layer     Floyd-Steinberg within each layer (the baseline the issue names; also exact),
+//   white-noise  thresholds from a hash (the bad baseline: no structure, all noise).
+// Measures, in linear RGB:
+//   block_err    mean over 16^3 blocks of |mean dithered colour - mean target colour| (Euclidean);
+//   block_max    the worst block;
+//   seen_xy      RMS of (dithered - target) low-passed by the eye at a reading distance (Gaussian,
+//                sigma 0.1 mm: ~1 arc minute at 30 cm) in a layer: visible structure in a layer;
+//   seen_xz      the same on a vertical section (what a side wall shows: rows of many layers).
+// Run: build/bench/dither_bench --benchmark_counters_tabular=true
+#include "bench/bench_support.h"
+#include "render/blue_noise.h"
+#include "render/dither_layer.h"
+#include "render/mip_pyramid.h"
+#include "render/mix_materials.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/synthesize_solid.h"
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+namespace {
+using namespace texfab;
+using namespace texfab::render;
+
+constexpr int kW = 192, kH = 96, kL = 128;  // voxels
+const Eigen::Vector3d kPitch(25.4 / 600, 25.4 / 300, 0.027);
+
+size_t at(int x, int y, int z) { return (size_t(z) * kH + size_t(y)) * kW + size_t(x); }
+
+// Target colours (linear RGB, 3 per voxel).
+std::vector<float> target(int kind) {
+  std::vector<float> c(3 * size_t(kW) * kH * kL);
+  if (kind == 0) {  // the solid texture of the marble, 10 exemplar pixels per mm
+    const Image marble = bench::marbleExemplar(128);
+    const synthesis::SolidAnalysis a = synthesis::analyzeSolidCached(marble, marble, marble, {}, synthesis::defaultCacheDir());
+    const double scale = 10.0;
+    const synthesis::VoxelBox box{0, 0, 0, int(kW * kPitch.x() * scale) + 1, int(kH * kPitch.y() * scale) + 1,
+                                  int(kL * kPitch.z() * scale) + 1};
+    const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolidBox(a, box, {});
+    std::vector<float> colours;
+    synthesis::solidColors(r.triples, marble, marble, marble, colours);
+    const size_t channels = size_t(synthesis::solidColorChannels(marble, marble, marble));
+    for (int z = 0; z < kL; ++z)
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+          const int sx = int((x + 0.5) * kPitch.x() * scale), sy = int((y + 0.5) * kPitch.y() * scale),
+                    sz = int((z + 0.5) * kPitch.z() * scale);
+          const size_t s = (size_t(sz) * size_t(box.ny) + size_t(sy)) * size_t(box.nx) + size_t(sx);
+          for (size_t k = 0; k < 3; ++k) c[3 * at(x, y, z) + k] = srgbToLinear(colours[channels * s + std::min(k, channels - 1)]);
+        }
+  } else {
+    for (int z = 0; z < kL; ++z)
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+          const float u = float(x) / kW, v = float(y) / kH, w = float(z) / kL;
+          const float rgb[3] = {kind == 1 ? 0.15f + 0.8f * u : 0.5f, kind == 1 ? 0.2f + 0.6f * v : 0.3f,
+                                kind == 1 ? 0.9f - 0.7f * w : 0.2f};
+          for (int k = 0; k < 3; ++k) c[3 * at(x, y, z) + size_t(k)] = rgb[k];
+        }
+  }
+  return c;
+}
+
+uint32_t hashVoxel(int x, int y, int z) {
+  uint64_t h = (uint64_t(uint32_t(x)) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(uint32_t(y)) * 0xC2B2AE3D27D4EB4Full) ^
+               (uint64_t(uint32_t(z)) * 0x165667B19E3779F9ull);
+  h ^= h >> 31;
+  h *= 0xBF58476D1CE4E5B9ull;
+  return uint32_t(h >> 32);
+}
+
+// The dithered colours (linear RGB of the chosen materials).
+std::vector<float> dither(const std::vector<float>& colours, int method, const MaterialMixer& mixer) {
+  const BlueNoiseVolume noise = blueNoiseVolume(32, kPitch);
+  std::vector<float> out(colours.size());
+  const geometry::VoxelSpan span{0, kW, true};
+  std::vector<float> rgba(4 * size_t(kW));
+  std::vector<uint8_t> row(kW);
+  for (int z = 0; z < kL; ++z) {
+    LayerDitherer ditherer(mixer, method == 1 ? DitherMode::FloydSteinberg : DitherMode::BlueNoise, &noise, z, kW);
+    for (int y = kH - 1; y >= 0; --y) {
+      for (int x = 0; x < kW; ++x) {
+        for (int k = 0; k < 3; ++k) rgba[4 * size_t(x) + size_t(k)] = colours[3 * at(x, y, z) + size_t(k)];
+        rgba[4 * size_t(x) + 3] = 1;
+      }
+      if (method == 2)
+        for (int x = 0; x < kW; ++x) row[size_t(x)] = uint8_t(mixer.pick(&rgba[4 * size_t(x)], (hashVoxel(x, y, z) + 0.5f) / 4294967296.0f) + 1);
+      else
+        ditherer.ditherRow(y, {&span, 1}, rgba.data(), row.data());
+      for (int x = 0; x < kW; ++x)
+        for (int k = 0; k < 3; ++k) out[3 * at(x, y, z) + size_t(k)] = mixer.linearColor(row[size_t(x)] - 1)[size_t(k)];
+    }
+  }
+  return out;
+}
+
+// RMS of the difference low-passed in a plane (xy of layer kL/2, or xz of row kH/2), sigma in mm.
+double seen(const std::vector<float>& a, const std::vector<float>& b, bool vertical, double sigmaMm) {
+  const int w = kW, h = vertical ? kL : kH;
+  const double sx = sigmaMm / kPitch.x(), sy = sigmaMm / (vertical ? kPitch.z() : kPitch.y());
+  std::vector<double> diff(size_t(w) * size_t(h) * 3);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const size_t v = vertical ? at(i, kH / 2, j) : at(i, j, kL / 2);
+        diff[(size_t(j) * size_t(w) + size_t(i)) * 3 + size_t(k)] = double(a[3 * v + size_t(k)]) - b[3 * v + size_t(k)];
+      }
+  auto blur = [&](double sigma, bool alongX) {
+    const int r = int(std::ceil(3 * sigma));
+    std::vector<double> out(diff.size(), 0.0);
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i) {
+        double wsum = 0;
+        for (int t = -r; t <= r; ++t) {
+          const int ii = alongX ? i + t : i, jj = alongX ? j : j + t;
+          if (ii < 0 || ii >= w || jj < 0 || jj >= h) continue;
+          const double g = std::exp(-0.5 * t * t / (sigma * sigma));
+          wsum += g;
+          for (int k = 0; k < 3; ++k) out[(size_t(j) * size_t(w) + size_t(i)) * 3 + size_t(k)] += g * diff[(size_t(jj) * size_t(w) + size_t(ii)) * 3 + size_t(k)];
+        }
+        for (int k = 0; k < 3; ++k) out[(size_t(j) * size_t(w) + size_t(i)) * 3 + size_t(k)] /= wsum;
+      }
+    diff = std::move(out);
+  };
+  blur(sx, true);
+  blur(sy, false);
+  double sum = 0;
+  for (double d : diff) sum += d * d;
+  return std::sqrt(sum / double(diff.size()));
+}
+
+void BM_Dither(benchmark::State& state) {
+  const MaterialMixer mixer({{"C", {0, 255, 255, 255}}, {"M", {255, 0, 255, 255}}, {"Y", {255, 255, 0, 255}},
+                             {"K", {0, 0, 0, 255}}, {"W", {255, 255, 255, 255}}});
+  const std::vector<float> colours = target(int(state.range(0)));
+  std::vector<float> printable(colours.size());  // what the materials can reproduce: the measures' reference
+  for (size_t i = 0; i < colours.size(); i += 3) {
+    const std::array<float, 3> c = mixer.reproduced(&colours[i]);
+    std::copy(c.begin(), c.end(), &printable[i]);
+  }
+  std::vector<float> dithered;
+  for (auto _ : state) dithered = dither(colours, int(state.range(1)), mixer);
+  double sum = 0, worst = 0;
+  int blocks = 0;
+  for (int bz = 0; bz + 16 <= kL; bz += 16)
+    for (int by = 0; by + 16 <= kH; by += 16)
+      for (int bx = 0; bx + 16 <= kW; bx += 16, ++blocks) {
+        double d[3] = {0, 0, 0};
+        for (int z = bz; z < bz + 16; ++z)
+          for (int y = by; y < by + 16; ++y)
+            for (int x = bx; x < bx + 16; ++x)
+              for (int k = 0; k < 3; ++k) d[k] += double(dithered[3 * at(x, y, z) + size_t(k)]) - printable[3 * at(x, y, z) + size_t(k)];
+        const double e = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / 4096.0;
+        sum += e;
+        worst = std::max(worst, e);
+      }
+  state.counters["block_err"] = sum / blocks;
+  state.counters["block_max"] = worst;
+  state.counters["seen_xy"] = seen(dithered, printable, false, 0.1);
+  state.counters["seen_xz"] = seen(dithered, printable, true, 0.1);
+}
+BENCHMARK(BM_Dither)
+    ->ArgNames({"target", "method"})
+    ->ArgsProduct({{0, 1, 2}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+} // namespace
+
+BENCHMARK_MAIN();
