@@ -33,17 +33,29 @@ struct Tap {
 class VoidsAndClusters {
 public:
   VoidsAndClusters(int size, const Eigen::Vector3d& pitch) : s_(size), b_(size >= 16 ? 8 : size) {
-    const double mean = std::cbrt(pitch.x() * pitch.y() * pitch.z());
-    const Eigen::Vector3d unit = pitch / mean;
+    // Three energies: within the layer (2-D distances in the layer's mean spacing), within the
+    // column (distances in layers), and a quarter of the 3-D one (distances in the mean voxel
+    // spacing) between different layers. Each layer alone and each column alone is then blue, and
+    // the volume stays even across layers.
+    auto weight = [](double d2) {
+      const double f = 1.0 + d2 / (2 * kSigma * kSigma);
+      return int64_t(16777216.0 / (f * f));
+    };
+    const Eigen::Vector3d layerUnit(pitch.x() / std::sqrt(pitch.x() * pitch.y()), pitch.y() / std::sqrt(pitch.x() * pitch.y()), 1);
+    const Eigen::Vector3d volumeUnit = pitch / std::cbrt(pitch.x() * pitch.y() * pitch.z());
     int reach[3];
-    for (int a = 0; a < 3; ++a) reach[a] = std::min((size - 1) / 2, int(std::floor(kRadius / unit[a])));
+    for (int a = 0; a < 3; ++a)
+      reach[a] = std::min((size - 1) / 2, int(std::floor(kRadius / std::min(layerUnit[a], volumeUnit[a]))));
     for (int dz = -reach[2]; dz <= reach[2]; ++dz)
       for (int dy = -reach[1]; dy <= reach[1]; ++dy)
         for (int dx = -reach[0]; dx <= reach[0]; ++dx) {
-          const double d2 = std::pow(dx * unit.x(), 2) + std::pow(dy * unit.y(), 2) + std::pow(dz * unit.z(), 2);
-          if (d2 > kRadius * kRadius) continue;
-          const double f = 1.0 + d2 / (2 * kSigma * kSigma);
-          taps_.push_back({dx, dy, dz, int64_t(16777216.0 / (f * f))});
+          int64_t w = 0;
+          const Eigen::Vector3d d(dx, dy, dz);
+          if (const double d2 = d.cwiseProduct(layerUnit).squaredNorm(); (dz == 0 || (dx == 0 && dy == 0)) && d2 <= kRadius * kRadius)
+            w += weight(d2);
+          if (const double d2 = d.cwiseProduct(volumeUnit).squaredNorm(); dz != 0 && d2 <= kRadius * kRadius)
+            w += weight(d2) / 4;
+          if (w > 0) taps_.push_back({dx, dy, dz, w});
         }
     const size_t n = size_t(size) * size_t(size) * size_t(size);
     ones_.assign(n, 0);

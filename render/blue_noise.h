@@ -9,7 +9,11 @@
 //   1993 (initial pattern, its relaxation by moving the tightest cluster to the largest void, then
 //   ranks by removing clusters and filling voids).
 // Deviations: in 3-D, with distances measured in millimetres (voxels are anisotropic, e.g.
-//   0.042 x 0.085 x 0.027 mm) so the pattern is isotropic in the print; the energy filter is the
+//   0.042 x 0.085 x 0.027 mm); the energy of a cell sums three filters: over its layer (2-D),
+//   over its column (1-D), and a quarter of the 3-D filter over other layers, so that every layer
+//   alone is blue, not only the volume (a slice of 3-D blue noise is nearly white in 2-D; the
+//   separate layer and column energies follow spatiotemporal blue noise, A. Wolfe et al., EGSR
+//   2022, §3); the energy filter is the
 //   rational kernel (1 + d^2 / (2 s^2))^-2, evaluated in double and rounded to 32-bit integers,
 //   instead of a Gaussian, so the array is bit-identical on every platform (no libm); the
 //   initial pattern comes from a counter-based hash; ties go to the lowest cell index; the third

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <random>
 
@@ -163,28 +164,34 @@ TEST(BlueNoise, IsAPermutationSpreadEvenlyAndRepeatable) {
   std::sort(sorted.begin(), sorted.end());
   for (uint32_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i);
   EXPECT_EQ(blueNoiseVolume(16, pitch).rank, a.rank);
-  // The 10 % lowest thresholds: spread evenly, the counts in 4^3 blocks vary much less than for
-  // white noise (binomial: sd = sqrt(64 * 0.1 * 0.9) = 2.4).
-  auto blockSpread = [](auto&& isSet) {
+  // The 10 % lowest thresholds: spread evenly, the counts in blocks vary much less than for white
+  // noise, in the volume (4^3 blocks) and within each layer (4 x 4 blocks of every layer).
+  auto blockSpread = [](auto&& isSet, int blockZ, int layers) {
     double sum = 0, sum2 = 0;
-    for (int bz = 0; bz < 4; ++bz)
-      for (int by = 0; by < 4; ++by)
-        for (int bx = 0; bx < 4; ++bx) {
+    int blocks = 0;
+    for (int bz = 0; bz < layers; bz += blockZ)
+      for (int by = 0; by < 16; by += 4)
+        for (int bx = 0; bx < 16; bx += 4, ++blocks) {
           int n = 0;
-          for (int z = 0; z < 4; ++z)
-            for (int y = 0; y < 4; ++y)
-              for (int x = 0; x < 4; ++x) n += isSet(bx * 4 + x, by * 4 + y, bz * 4 + z);
+          for (int z = bz; z < bz + blockZ; ++z)
+            for (int y = by; y < by + 4; ++y)
+              for (int x = bx; x < bx + 4; ++x) n += isSet(x, y, z);
           sum += n;
           sum2 += double(n) * n;
         }
-    return std::sqrt(sum2 / 64 - (sum / 64) * (sum / 64));
+    return std::sqrt(sum2 / blocks - (sum / blocks) * (sum / blocks));
   };
   std::mt19937 rng(1);
   std::vector<uint8_t> white(4096);
   for (uint8_t& v : white) v = rng() % 10 == 0;
-  const double blue = blockSpread([&](int x, int y, int z) { return a.threshold(x, y, z) < 0.1f; });
-  const double noise = blockSpread([&](int x, int y, int z) { return white[size_t(x + 16 * (y + 16 * z))] != 0; });
-  EXPECT_LT(blue, 0.5 * noise) << "blue " << blue << ", white " << noise;
+  auto blueSet = [&](int x, int y, int z) { return a.threshold(x, y, z) < 0.1f; };
+  auto whiteSet = [&](int x, int y, int z) { return white[size_t(x + 16 * (y + 16 * z))] != 0; };
+  const double blue3 = blockSpread(blueSet, 4, 16), white3 = blockSpread(whiteSet, 4, 16);
+  const double blue2 = blockSpread(blueSet, 1, 16), white2 = blockSpread(whiteSet, 1, 16);
+  EXPECT_LT(blue3, 0.65 * white3) << "volume: blue " << blue3 << ", white " << white3;
+  EXPECT_LT(blue2, 0.65 * white2) << "layers: blue " << blue2 << ", white " << white2;
+  std::printf("spread of the 10 %% lowest: volume blue %.2f white %.2f; layers blue %.2f white %.2f\n", blue3, white3,
+              blue2, white2);
   EXPECT_NE(errorOf([&] { blueNoiseVolume(20, pitch); }).find("size"), std::string::npos);
 }
 
