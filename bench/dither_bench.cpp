@@ -14,9 +14,8 @@
 // Run: build/bench/dither_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
 #include "render/blue_noise.h"
-#include "render/dither_layer.h"
+#include "render/dither_measures.h"
 #include "render/mip_pyramid.h"
-#include "render/mix_materials.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
@@ -76,95 +75,37 @@ uint32_t hashVoxel(int x, int y, int z) {
   return uint32_t(h >> 32);
 }
 
-// The dithered colours (linear RGB of the chosen materials).
-std::vector<float> dither(const std::vector<float>& colours, int method, const MaterialMixer& mixer) {
-  const BlueNoiseVolume noise = blueNoiseVolume(32, kPitch);
+// White noise: each voxel's threshold from a hash of its position.
+std::vector<float> whiteNoise(const std::vector<float>& colours, const MaterialMixer& mixer) {
   std::vector<float> out(colours.size());
-  const geometry::VoxelSpan span{0, kW, true};
-  std::vector<float> rgba(4 * size_t(kW));
-  std::vector<uint8_t> row(kW);
-  for (int z = 0; z < kL; ++z) {
-    LayerDitherer ditherer(mixer, method == 1 ? DitherMode::FloydSteinberg : DitherMode::BlueNoise, &noise, z, kW);
-    for (int y = kH - 1; y >= 0; --y) {
+  for (int z = 0; z < kL; ++z)
+    for (int y = 0; y < kH; ++y)
       for (int x = 0; x < kW; ++x) {
-        for (int k = 0; k < 3; ++k) rgba[4 * size_t(x) + size_t(k)] = colours[3 * at(x, y, z) + size_t(k)];
-        rgba[4 * size_t(x) + 3] = 1;
+        const size_t v = 3 * at(x, y, z);
+        const float rgba[4] = {colours[v], colours[v + 1], colours[v + 2], 1.0f};
+        const std::array<float, 3>& c = mixer.linearColor(mixer.pick(rgba, (hashVoxel(x, y, z) + 0.5f) / 4294967296.0f));
+        std::copy(c.begin(), c.end(), &out[v]);
       }
-      if (method == 2)
-        for (int x = 0; x < kW; ++x) row[size_t(x)] = uint8_t(mixer.pick(&rgba[4 * size_t(x)], (hashVoxel(x, y, z) + 0.5f) / 4294967296.0f) + 1);
-      else
-        ditherer.ditherRow(y, {&span, 1}, rgba.data(), row.data());
-      for (int x = 0; x < kW; ++x)
-        for (int k = 0; k < 3; ++k) out[3 * at(x, y, z) + size_t(k)] = mixer.linearColor(row[size_t(x)] - 1)[size_t(k)];
-    }
-  }
   return out;
-}
-
-// RMS of the difference low-passed in a plane (xy of layer kL/2, or xz of row kH/2), sigma in mm.
-double seen(const std::vector<float>& a, const std::vector<float>& b, bool vertical, double sigmaMm) {
-  const int w = kW, h = vertical ? kL : kH;
-  const double sx = sigmaMm / kPitch.x(), sy = sigmaMm / (vertical ? kPitch.z() : kPitch.y());
-  std::vector<double> diff(size_t(w) * size_t(h) * 3);
-  for (int j = 0; j < h; ++j)
-    for (int i = 0; i < w; ++i)
-      for (int k = 0; k < 3; ++k) {
-        const size_t v = vertical ? at(i, kH / 2, j) : at(i, j, kL / 2);
-        diff[(size_t(j) * size_t(w) + size_t(i)) * 3 + size_t(k)] = double(a[3 * v + size_t(k)]) - b[3 * v + size_t(k)];
-      }
-  auto blur = [&](double sigma, bool alongX) {
-    const int r = int(std::ceil(3 * sigma));
-    std::vector<double> out(diff.size(), 0.0);
-    for (int j = 0; j < h; ++j)
-      for (int i = 0; i < w; ++i) {
-        double wsum = 0;
-        for (int t = -r; t <= r; ++t) {
-          const int ii = alongX ? i + t : i, jj = alongX ? j : j + t;
-          if (ii < 0 || ii >= w || jj < 0 || jj >= h) continue;
-          const double g = std::exp(-0.5 * t * t / (sigma * sigma));
-          wsum += g;
-          for (int k = 0; k < 3; ++k) out[(size_t(j) * size_t(w) + size_t(i)) * 3 + size_t(k)] += g * diff[(size_t(jj) * size_t(w) + size_t(ii)) * 3 + size_t(k)];
-        }
-        for (int k = 0; k < 3; ++k) out[(size_t(j) * size_t(w) + size_t(i)) * 3 + size_t(k)] /= wsum;
-      }
-    diff = std::move(out);
-  };
-  blur(sx, true);
-  blur(sy, false);
-  double sum = 0;
-  for (double d : diff) sum += d * d;
-  return std::sqrt(sum / double(diff.size()));
 }
 
 void BM_Dither(benchmark::State& state) {
   const MaterialMixer mixer({{"C", {0, 255, 255, 255}}, {"M", {255, 0, 255, 255}}, {"Y", {255, 255, 0, 255}},
                              {"K", {0, 0, 0, 255}}, {"W", {255, 255, 255, 255}}});
+  const DitherBox box{kW, kH, kL, kPitch};
   const std::vector<float> colours = target(int(state.range(0)));
-  std::vector<float> printable(colours.size());  // what the materials can reproduce: the measures' reference
-  for (size_t i = 0; i < colours.size(); i += 3) {
-    const std::array<float, 3> c = mixer.reproduced(&colours[i]);
-    std::copy(c.begin(), c.end(), &printable[i]);
-  }
+  const std::vector<float> printable = reproducedColors(colours, mixer);  // the measures' reference
+  const BlueNoiseVolume noise = blueNoiseVolume(32, kPitch);
+  const int method = int(state.range(1));
   std::vector<float> dithered;
-  for (auto _ : state) dithered = dither(colours, int(state.range(1)), mixer);
-  double sum = 0, worst = 0;
-  int blocks = 0;
-  for (int bz = 0; bz + 16 <= kL; bz += 16)
-    for (int by = 0; by + 16 <= kH; by += 16)
-      for (int bx = 0; bx + 16 <= kW; bx += 16, ++blocks) {
-        double d[3] = {0, 0, 0};
-        for (int z = bz; z < bz + 16; ++z)
-          for (int y = by; y < by + 16; ++y)
-            for (int x = bx; x < bx + 16; ++x)
-              for (int k = 0; k < 3; ++k) d[k] += double(dithered[3 * at(x, y, z) + size_t(k)]) - printable[3 * at(x, y, z) + size_t(k)];
-        const double e = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / 4096.0;
-        sum += e;
-        worst = std::max(worst, e);
-      }
-  state.counters["block_err"] = sum / blocks;
-  state.counters["block_max"] = worst;
-  state.counters["seen_xy"] = seen(dithered, printable, false, 0.1);
-  state.counters["seen_xz"] = seen(dithered, printable, true, 0.1);
+  for (auto _ : state)
+    dithered = method == 2 ? whiteNoise(colours, mixer)
+                           : ditherBox(box, colours, mixer, method == 1 ? DitherMode::FloydSteinberg : DitherMode::BlueNoise, &noise);
+  const BlockColorError blocks = blockColorError(box, dithered, printable);
+  state.counters["block_err"] = blocks.mean;
+  state.counters["block_max"] = blocks.worst;
+  state.counters["seen_xy"] = visibleError(box, dithered, printable, false, kL / 2);
+  state.counters["seen_xz"] = visibleError(box, dithered, printable, true, kH / 2);
 }
 BENCHMARK(BM_Dither)
     ->ArgNames({"target", "method"})

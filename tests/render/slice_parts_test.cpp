@@ -2,6 +2,7 @@
 // The parts of the slice job: the run-length PNG encoder read back by OpenImageIO and zlib, the
 // materials file, the material mixer reproducing colours, and the blue-noise array's spread.
 #include "render/blue_noise.h"
+#include "render/dither_measures.h"
 #include "render/image/error.h"
 #include "render/image/image_io.h"
 #include "render/mip_pyramid.h"
@@ -155,6 +156,50 @@ TEST(MaterialMixer, ReproducesColoursInsideTheGamut) {
   int clear = 0;
   for (int i = 0; i < 1000; ++i) clear += mixer.pick(half, (float(i) + 0.5f) / 1000.0f) == 5;
   EXPECT_EQ(clear, 750);
+}
+
+// The dither the slice job uses (3-D blue noise, a function of position) against in-layer
+// Floyd-Steinberg (the baseline) and white-noise thresholds, on a 64 x 48 x 64 block of shell voxels
+// at 600 x 300 dpi and 0.027 mm, CMYKW, for a flat colour and a ramp through the printable colours.
+TEST(DitherQuality, BlueNoiseBeatsTheBaselinesWhereTheyAreWeak) {
+  const MaterialMixer mixer({{"C", {0, 255, 255, 255}}, {"M", {255, 0, 255, 255}}, {"Y", {255, 255, 0, 255}},
+                             {"K", {0, 0, 0, 255}}, {"W", {255, 255, 255, 255}}});
+  const DitherBox box{64, 48, 64, {25.4 / 600, 25.4 / 300, 0.027}};
+  const BlueNoiseVolume noise = blueNoiseVolume(32, box.pitchMm);
+  for (int ramp = 0; ramp < 2; ++ramp) {
+    std::vector<float> target(3 * box.voxels());
+    for (int z = 0; z < box.layers; ++z)
+      for (int y = 0; y < box.height; ++y)
+        for (int x = 0; x < box.width; ++x) {
+          const size_t v = 3 * ((size_t(z) * size_t(box.height) + size_t(y)) * size_t(box.width) + size_t(x));
+          const float u = float(x) / float(box.width), w = float(y) / float(box.height), t = float(z) / float(box.layers);
+          target[v] = ramp ? 0.15f + 0.8f * u : 0.5f;
+          target[v + 1] = ramp ? 0.2f + 0.6f * w : 0.3f;
+          target[v + 2] = ramp ? 0.9f - 0.7f * t : 0.2f;
+        }
+    const std::vector<float> reference = reproducedColors(target, mixer);
+    const std::vector<float> blue = ditherBox(box, target, mixer, DitherMode::BlueNoise, &noise);
+    const std::vector<float> fs = ditherBox(box, target, mixer, DitherMode::FloydSteinberg, nullptr);
+    std::vector<float> white(target.size());
+    uint64_t state = 1;
+    for (size_t v = 0; v < target.size(); v += 3) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      const float rgba[4] = {target[v], target[v + 1], target[v + 2], 1.0f};
+      const std::array<float, 3>& c = mixer.linearColor(mixer.pick(rgba, float(state >> 40) / 16777216.0f));
+      std::copy(c.begin(), c.end(), &white[v]);
+    }
+    const BlockColorError blueBlocks = blockColorError(box, blue, reference), fsBlocks = blockColorError(box, fs, reference);
+    const double blueXy = visibleError(box, blue, reference, false, 32), whiteXy = visibleError(box, white, reference, false, 32);
+    const double blueXz = visibleError(box, blue, reference, true, 24), fsXz = visibleError(box, fs, reference, true, 24);
+    std::printf("%s: 16^3 blocks blue %.4f (worst %.4f) FS %.4f (worst %.4f); in a layer blue %.4f white %.4f; "
+                "side section blue %.4f FS %.4f\n",
+                ramp ? "ramp" : "flat", blueBlocks.mean, blueBlocks.worst, fsBlocks.mean, fsBlocks.worst, blueXy, whiteXy,
+                blueXz, fsXz);
+    EXPECT_LT(blueBlocks.mean, fsBlocks.mean);    // regions average to their colour better
+    EXPECT_LT(blueBlocks.worst, 0.02);            // and no block is far off
+    EXPECT_LT(blueXz, 0.7 * fsXz);                // FS's layers are uncorrelated: a side wall shows it
+    EXPECT_LT(blueXy, 0.6 * whiteXy);             // a layer alone is blue, not white
+  }
 }
 
 TEST(BlueNoise, IsAPermutationSpreadEvenlyAndRepeatable) {
