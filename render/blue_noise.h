@@ -40,7 +40,7 @@ struct BlueNoiseVolume {
 };
 
 /// The array for cells of `pitch` (any unit; only ratios matter). `size` in [4, 64]. Takes about
-/// 0.2 s at size 32 on one core.
+/// 0.5 s of CPU at size 32.
 BlueNoiseVolume blueNoiseVolume(int size, const Eigen::Vector3d& pitch);
 
 } // namespace texfab::render

@@ -6,6 +6,7 @@
 #include "render/image/image_io.h"
 #include "render/slice_writer.h"
 #include "tests/geometry/solid_meshes.h"
+#include "tests/golden/golden_cases.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>
@@ -17,7 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 using texfab::test::TempDir;
 
-const fs::path kSource(TEXFAB_SOURCE_DIR);
 
 std::string readText(const fs::path& p) {
   std::ifstream in(p);
@@ -72,7 +72,8 @@ TEST(CliSlice, WritesLayersManifestPreviewAndReport) {
 TEST(CliSlice, ShardsMergeIntoTheFullRun) {
   TempDir dir;
   const fs::path model = sphereModel(dir);
-  const std::string common = quoted(model) + kSmall + " -e " + quoted(kSource / "models/exemplars/marble.png") +
+  texfab::writeImage(texfab::golden::marble32(), dir / "marble32.png");  // a small exemplar: a fast analysis
+  const std::string common = quoted(model) + kSmall + " -e " + quoted(dir / "marble32.png") +
                              " --feature-size 2 --cache-dir " + quoted(dir / "cache");
   ASSERT_EQ(slice(common + " -o " + quoted(dir / "full") + " --threads 2"), 0);
   for (int i = 0; i < 3; ++i)
