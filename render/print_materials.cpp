@@ -66,7 +66,7 @@ std::string hexColor(const Rgba8& c) {
 std::vector<PrintMaterial> defaultPrintMaterials() {
   return {{"VeroCyan", {0, 255, 255, 255}, 1.0},  {"VeroMagenta", {255, 0, 255, 255}, 1.0},
           {"VeroYellow", {255, 255, 0, 255}, 1.0}, {"VeroBlack", {0, 0, 0, 255}, 1.0},
-          {"VeroWhite", {255, 255, 255, 255}, 1.0}, {"VeroClear", {255, 255, 255, 255}, 0.0}};
+          {"VeroWhite", {255, 255, 255, 255}, 1.0}, {"VeroClear", {224, 240, 240, 255}, 0.0}};
 }
 
 void validatePrintMaterials(const std::vector<PrintMaterial>& materials, const std::string& source) {

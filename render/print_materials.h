@@ -27,7 +27,9 @@ struct PrintMaterial {
 /// Largest number of materials (palette index 0 is empty space).
 inline constexpr size_t kMaxPrintMaterials = 255;
 
-/// VeroCyan, VeroMagenta, VeroYellow, VeroBlack, VeroWhite (pure colours), VeroClear (opacity 0).
+/// VeroCyan, VeroMagenta, VeroYellow, VeroBlack, VeroWhite (pure colours), VeroClear (opacity 0,
+/// #E0F0F0: a translucent material's colour only names it in the images, and Voxel Print tells
+/// materials apart by colour, so it differs from VeroWhite's).
 std::vector<PrintMaterial> defaultPrintMaterials();
 
 /// Reads a materials file. Throws texfab::Error naming the file and the entry at fault.

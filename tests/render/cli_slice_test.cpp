@@ -18,7 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 using texfab::test::TempDir;
 
-
 std::string readText(const fs::path& p) {
   std::ifstream in(p);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -158,7 +157,7 @@ TEST(CliSlice, AFullDiskLeavesNoOutput) {
   // does; the run must stop with one line and leave neither layers nor a manifest.
   TempDir dir;
   const std::string command = "bash -c \"trap '' XFSZ; ulimit -f 1; '" + std::string(TEXFAB_CLI) + "' slice " +
-                              quoted(sphereModel(dir)) + kSmall + " --dither none -o " + quoted(dir / "out") +
+                              quoted(sphereModel(dir)) + kSmall + " --format voxelprint -o " + quoted(dir / "out") +
                               "\" 2>" + quoted(dir / "err.txt");
   EXPECT_EQ(texfab::test::run(command), 2);
   const std::string err = readText(dir / "err.txt");
