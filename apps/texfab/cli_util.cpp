@@ -6,7 +6,6 @@
 #include "render/image/image_io.h"
 
 #include <sys/resource.h>
-#include <unistd.h>
 
 #include <charconv>
 #include <cstdio>
@@ -68,43 +67,6 @@ void Progress::record(const std::string& stage, double seconds, const std::strin
 
 void Progress::note(const std::string& message) const {
   if (!quiet_) std::fprintf(stderr, "%s: %s\n", command_.c_str(), message.c_str());
-}
-
-ProgressBar::ProgressBar(std::string command, std::string unit, int64_t total, bool quiet)
-    : command_(std::move(command)), unit_(std::move(unit)), total_(total), quiet_(quiet), terminal_(isatty(2) != 0),
-      started_(std::chrono::steady_clock::now()) {}
-
-void ProgressBar::update(double fraction) {
-  if (quiet_) return;
-  std::lock_guard lock(mutex_);
-  if (terminal_) draw(fraction, false);
-  else if (int(fraction * 10) > tenths_) {
-    tenths_ = int(fraction * 10);
-    draw(fraction, false);
-  }
-}
-
-void ProgressBar::finish() {
-  if (quiet_) return;
-  std::lock_guard lock(mutex_);
-  draw(1.0, true);
-}
-
-void ProgressBar::draw(double fraction, bool last) {
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-  const int64_t done = int64_t(fraction * double(total_) + 0.5);
-  const double rate = seconds > 0 ? double(done) / seconds : 0.0;
-  constexpr int kWidth = 30;
-  const int filled = int(fraction * kWidth);
-  std::string bar(size_t(filled), '#');
-  bar.resize(kWidth, '.');
-  char left[32] = "";
-  if (!last && rate > 0) std::snprintf(left, sizeof left, "  %.0f s left", double(total_ - done) / rate);
-  std::fprintf(stderr, "%s%s: [%s] %lld/%lld %s  %.1f %s/s%s%s", terminal_ ? "\r" : "", command_.c_str(), bar.c_str(),
-               (long long)done, (long long)total_, unit_.c_str(), rate, unit_.c_str(), left,
-               terminal_ && !last ? "\x1b[K" : "\n");
-  if (terminal_ && last) std::fprintf(stderr, "\x1b[K\n");
-  std::fflush(stderr);
 }
 
 double peakMemoryMiB() {

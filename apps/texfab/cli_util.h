@@ -5,7 +5,6 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
-#include <mutex>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -36,26 +35,6 @@ private:
   std::string stage_;
   std::chrono::steady_clock::time_point started_;
   nlohmann::json timings_ = nlohmann::json::object();
-};
-
-/// A progress bar on stderr for a long loop: on a terminal, one line redrawn in place,
-/// "texfab slice: [######......] 412/1000 layers  85.3 layers/s  7 s left"; elsewhere (logs, CI),
-/// a line at every tenth. Silent when quiet. update() is thread-safe.
-class ProgressBar {
-public:
-  ProgressBar(std::string command, std::string unit, int64_t total, bool quiet);
-  void update(double fraction);
-  /// Draws the final state and ends the line.
-  void finish();
-
-private:
-  void draw(double fraction, bool last);
-  std::string command_, unit_;
-  int64_t total_;
-  bool quiet_, terminal_;
-  int tenths_ = 0;
-  std::chrono::steady_clock::time_point started_;
-  std::mutex mutex_;
 };
 
 /// Peak resident memory of this process so far, in MiB.

@@ -17,8 +17,12 @@
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 namespace texfab::cli {
@@ -37,6 +41,44 @@ struct SliceArgs {
   std::string preview, report, cacheDir;
   int threads = 0;
   bool force = false, noCache = false, quiet = false;
+};
+
+// Layers written, on stderr: on a terminal one line redrawn in place
+// ("texfab slice: [######....] 412/1000 layers  85.3 layers/s  7 s left"), elsewhere a line per
+// tenth. Silent when quiet. update() is thread-safe.
+class LayerProgress {
+public:
+  LayerProgress(int64_t total, bool quiet) : total_(total), quiet_(quiet), terminal_(isatty(2) != 0) {}
+  void update(double fraction) {
+    std::lock_guard lock(mutex_);
+    if (quiet_ || (!terminal_ && int(fraction * 10) <= tenths_)) return;
+    tenths_ = int(fraction * 10);
+    draw(fraction, false);
+  }
+  void finish() {
+    std::lock_guard lock(mutex_);
+    if (!quiet_) draw(1.0, true);
+  }
+
+private:
+  void draw(double fraction, bool last) const {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    const int64_t done = int64_t(fraction * double(total_) + 0.5);
+    const double rate = seconds > 0 ? double(done) / seconds : 0.0;
+    std::string bar(size_t(fraction * 30), '#');
+    bar.resize(30, '.');
+    char left[32] = "";
+    if (!last && rate > 0) std::snprintf(left, sizeof left, "  %.0f s left", double(total_ - done) / rate);
+    std::fprintf(stderr, "%stexfab slice: [%s] %lld/%lld layers  %.1f layers/s%s%s", terminal_ ? "\r" : "", bar.c_str(),
+                 (long long)done, (long long)total_, rate, left, terminal_ ? "\x1b[K" : "");
+    if (last || !terminal_) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+  int64_t total_;
+  bool quiet_, terminal_;
+  int tenths_ = -1;
+  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  std::mutex mutex_;
 };
 
 // --layers A:B (B exclusive) or --shard I/K (the I-th of K near-equal ranges) into first, count.
@@ -182,7 +224,7 @@ void runSlice(const SliceArgs& a) {
   for (const std::string& repair : voxelizer.report().repairs) progress.note(repair);
   progress.finish();
 
-  ProgressBar bar("texfab slice", "layers", count, a.quiet);
+  LayerProgress bar(count, a.quiet);
   Context ctx{.threads = a.threads};
   ctx.progress = [&](const ProgressEvent& e) {
     if (e.kind == ProgressEvent::Kind::Advance && e.depth == 0 && e.stage == "slice") bar.update(e.fraction);
