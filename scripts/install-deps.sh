@@ -17,6 +17,9 @@ packages=(
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm
   # a real single-node Slurm for the distributed slicing test (started by the test, not as services)
   slurmctld slurmd slurm-client munge python3
+  # Vulkan compute (optional at build time): loader and headers, the GLSL compiler, Mesa's
+  # lavapipe (a CPU device, so the Vulkan tests run anywhere), the Khronos validation layer
+  libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers
   # test data: GIMP's patterns (marble, granite, brick, wood, ...)
   gimp-data
 )

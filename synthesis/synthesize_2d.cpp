@@ -5,7 +5,11 @@
 #include "render/image/error.h"
 #include "render/image/image_io.h"
 #include "render/image/parallel.h"
+#include "synthesis/backend.h"
 #include "synthesis/cpu/synthesis_kernels.h"
+#if TEXFAB_HAS_VULKAN
+#include "synthesis/vulkan/synthesis_kernels.h"
+#endif
 
 #include <algorithm>
 #include <bit>
@@ -36,6 +40,189 @@ LevelGrid parentOf(const LevelGrid& g) {
 cpu::LevelTables tablesOf(const ExemplarAnalysis& a, int level) {
   const AnalysisLevel& l = a.levels[size_t(level)];
   return {a.width, a.height, l.spacing, a.k, l.appearance.data(), l.neighborhood.data(), l.candidates.data()};
+}
+
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// What synthesize2d derives before running a kernel: the levels it synthesizes, the padded
+// rectangle each computes (the dependency closure of the window), and each level's parameters.
+struct Plan {
+  Window window;
+  int first = 0, finest = 0;
+  int subpasses = 0;              // correction sub-passes per level (each insets by one texel)
+  std::vector<LevelGrid> padded;  // per level
+  std::vector<float> jitter;      // per level
+
+  int spacing(int l) const { return 1 << (finest - l); }
+  int64_t period(int p, int l) const { return p > 0 ? p >> (finest - l) : 0; }
+  int64_t amplitude256(int l) const {
+    return int64_t(std::lrint(double(jitter[size_t(l)]) * spacing(l) * 256.0));
+  }
+  const LevelGrid& grid(int l) const { return padded[size_t(l)]; }
+};
+
+Plan planFor(const ExemplarAnalysis& analysis, const Window& window, const SynthesisOptions& options) {
+  Plan p;
+  p.window = window;
+  p.finest = analysis.finestLevel();
+  p.first = firstSynthesisLevel(p.finest + 1, options);
+  p.jitter = options.jitter.empty() ? defaultJitter(p.finest + 1) : options.jitter;
+  p.jitter.resize(size_t(p.finest + 1), p.jitter.back());
+  // Skipped coarse levels hand their variation to the first synthesized one, so that a tile too
+  // small for the whole stack is still randomized rather than a plain tiling.
+  p.jitter[size_t(p.first)] = *std::max_element(p.jitter.begin(), p.jitter.begin() + p.first + 1);
+  p.subpasses = options.correct ? options.passes * options.interleave * options.interleave : 0;
+  // Backward: the rectangle each level must produce (valid) and the padded one it computes.
+  p.padded.resize(size_t(p.finest + 1));
+  LevelGrid valid{window.x, window.y, window.width, window.height};
+  for (int l = p.finest; l >= p.first; --l) {
+    p.padded[size_t(l)] = expand(valid, p.subpasses);
+    valid = parentOf(p.padded[size_t(l)]);
+  }
+  return p;
+}
+
+// Calls fn(classX, classY, inset) for each correction sub-pass of a level, in order. Each reads the
+// last one's output over a rectangle one texel smaller on every side (inset from the padded grid),
+// so the texels it writes depend only on valid texels.
+template <class Fn> void forSubpasses(const SynthesisOptions& options, Fn&& fn) {
+  int inset = 0;
+  for (int pass = 0; pass < (options.correct ? options.passes : 0); ++pass)
+    for (int cy = 0; cy < options.interleave; ++cy)
+      for (int cx = 0; cx < options.interleave; ++cx) fn(cx, cy, ++inset);
+}
+
+// The finest padded level on the CPU.
+std::vector<uint32_t> synthesizeOnCpu(const ExemplarAnalysis& analysis, const Plan& plan,
+                                      const SynthesisOptions& options, const Context& ctx,
+                                      std::vector<LevelStats>& stats) {
+  const int ew = analysis.width, eh = analysis.height;
+  std::vector<uint32_t> previous, current, scratch;
+  for (int l = plan.first; l <= plan.finest; ++l) {
+    const auto start = Clock::now();
+    const LevelGrid& grid = plan.grid(l);
+    const int spacing = plan.spacing(l);
+    const int64_t periodX = plan.period(options.periodX, l), periodY = plan.period(options.periodY, l);
+    const auto rows = [&](auto&& kernel) { parallelFor(0, grid.height, ctx, kernel, kRowGrain); };
+    current.assign(size_t(grid.width) * size_t(grid.height), 0);
+    if (l == plan.first)
+      rows([&](int r0, int r1) { cpu::initKernel(current.data(), grid, spacing, ew, eh, periodX, periodY, r0, r1); });
+    else
+      rows([&](int r0, int r1) {
+        cpu::upsampleKernel(previous.data(), plan.grid(l - 1), current.data(), grid, spacing, ew, eh, r0, r1);
+      });
+    rows([&](int r0, int r1) {
+      cpu::jitterKernel(current.data(), grid, options.seed, l, plan.amplitude256(l), periodX, periodY, ew, eh, r0, r1);
+    });
+    const cpu::LevelTables tables = tablesOf(analysis, l);
+    scratch.assign(current.size(), 0);
+    forSubpasses(options, [&](int cx, int cy, int inset) {
+      parallelFor(inset, grid.height - inset, ctx, [&](int r0, int r1) {
+        cpu::correctKernel(current.data(), scratch.data(), grid, tables, options.interleave, cx, cy, inset,
+                           grid.width - inset, r0, r1);
+      }, kRowGrain);
+      current.swap(scratch);
+    });
+    previous.swap(current);
+    stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
+  }
+  return previous;
+}
+
+#if TEXFAB_HAS_VULKAN
+// Whether every level of the plan fits one binding of the device.
+bool fitsDevice(const Plan& plan, const vulkan::Device& device) {
+  for (int l = plan.first; l <= plan.finest; ++l)
+    if (uint64_t(plan.grid(l).width) * uint64_t(plan.grid(l).height) * 4 > device.maxRangeBytes()) return false;
+  return true;
+}
+
+// The same on a Vulkan device: the levels stay on the device, one submit per level.
+std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const ExemplarAnalysis& analysis, const Plan& plan,
+                                         const SynthesisOptions& options, const Context& ctx,
+                                         std::vector<LevelStats>& stats) {
+  const int ew = analysis.width, eh = analysis.height;
+  vulkan::Commands commands(device);
+  vulkan::Buffer previous, current, scratch;
+  for (int l = plan.first; l <= plan.finest; ++l) {
+    const auto start = Clock::now();
+    const LevelGrid& grid = plan.grid(l);
+    const int spacing = plan.spacing(l);
+    const int64_t periodX = plan.period(options.periodX, l), periodY = plan.period(options.periodY, l);
+    current = vulkan::levelBuffer(device, grid);
+    scratch = vulkan::levelBuffer(device, grid);
+    const vulkan::LevelTables tables = vulkan::uploadTables(commands, tablesOf(analysis, l));
+    if (l == plan.first) vulkan::initKernel(commands, current, grid, spacing, ew, eh, periodX, periodY);
+    else vulkan::upsampleKernel(commands, previous, plan.grid(l - 1), current, grid, spacing, ew, eh);
+    vulkan::jitterKernel(commands, current, grid, options.seed, l, plan.amplitude256(l), periodX, periodY, ew, eh);
+    forSubpasses(options, [&](int cx, int cy, int inset) {
+      vulkan::correctKernel(commands, current, scratch, grid, tables, options.interleave, cx, cy, inset,
+                            grid.width - inset, inset, grid.height - inset);
+      std::swap(current, scratch);
+    });
+    commands.submit(ctx);
+    previous = std::move(current);
+    stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
+  }
+  std::vector<uint32_t> finest(size_t(plan.grid(plan.finest).width) * size_t(plan.grid(plan.finest).height));
+  commands.download(previous, 0, finest.data(), finest.size() * 4);
+  commands.submit(ctx);
+  return finest;
+}
+#endif
+
+// The window out of the finest padded level, where it sits `subpasses` texels inside.
+void cropWindow(const Plan& plan, const std::vector<uint32_t>& finest, CoordMap& out, int x0, int y0) {
+  const LevelGrid& grid = plan.grid(plan.finest);
+  for (int y = 0; y < plan.window.height; ++y)
+    std::copy_n(finest.begin() + std::ptrdiff_t(size_t(y + plan.subpasses) * size_t(grid.width) + size_t(plan.subpasses)),
+                plan.window.width, out.coords.begin() + std::ptrdiff_t(size_t(y0 + y) * size_t(out.width) + size_t(x0)));
+}
+
+// Synthesizes `window` into `out` at (x0, y0), on the device when there is one. A window whose
+// levels exceed the device's binding range is split in two (a window equals the same texels of
+// any larger one, so tiles join without seams).
+void synthesizeWindow(const ExemplarAnalysis& analysis, const Window& window, const SynthesisOptions& options,
+                      const Context& ctx, vulkan::Device* device, CoordMap& out, int x0, int y0,
+                      std::vector<LevelStats>& stats) {
+  const Plan plan = planFor(analysis, window, options);
+  std::vector<LevelStats> tile;
+#if TEXFAB_HAS_VULKAN
+  if (device && !fitsDevice(plan, *device)) {
+    if (window.width == 1 && window.height == 1) throw Error("the Vulkan device's binding range is too small");
+    Window a = window, b = window;
+    if (window.width >= window.height) {
+      a.width = window.width / 2;
+      b.x += a.width;
+      b.width -= a.width;
+      synthesizeWindow(analysis, a, options, ctx, device, out, x0, y0, stats);
+      synthesizeWindow(analysis, b, options, ctx, device, out, x0 + a.width, y0, stats);
+    } else {
+      a.height = window.height / 2;
+      b.y += a.height;
+      b.height -= a.height;
+      synthesizeWindow(analysis, a, options, ctx, device, out, x0, y0, stats);
+      synthesizeWindow(analysis, b, options, ctx, device, out, x0, y0 + a.height, stats);
+    }
+    return;
+  }
+  const std::vector<uint32_t> finest = device ? synthesizeOnDevice(*device, analysis, plan, options, ctx, tile)
+                                              : synthesizeOnCpu(analysis, plan, options, ctx, tile);
+#else
+  (void)device;
+  const std::vector<uint32_t> finest = synthesizeOnCpu(analysis, plan, options, ctx, tile);
+#endif
+  cropWindow(plan, finest, out, x0, y0);
+  // Tiles add up their levels.
+  if (stats.empty()) stats = tile;
+  else
+    for (size_t i = 0; i < stats.size() && i < tile.size(); ++i) {
+      stats[i].texels += tile[i].texels;
+      stats[i].seconds += tile[i].seconds;
+    }
 }
 
 } // namespace
@@ -88,83 +275,15 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
   if (std::abs(window.x) > kMaxPosition || std::abs(window.y) > kMaxPosition)
     throw Error("window position is out of range (|x|, |y| <= 2^40)");
   if (analysis.levels.empty()) throw Error("exemplar analysis is empty");
-
-  const int finest = analysis.finestLevel();
-  const int first = firstSynthesisLevel(finest + 1, options);
-  std::vector<float> jitter = options.jitter.empty() ? defaultJitter(finest + 1) : options.jitter;
-  jitter.resize(size_t(finest + 1), jitter.back());
-  // Skipped coarse levels hand their variation to the first synthesized one, so that a tile too
-  // small for the whole stack is still randomized rather than a plain tiling.
-  jitter[size_t(first)] = *std::max_element(jitter.begin(), jitter.begin() + first + 1);
-
-  const int subpasses = options.correct ? options.passes * options.interleave * options.interleave : 0;
-  // Backward: the rectangle each level must produce (valid[l]) and the padded one it computes.
-  std::vector<LevelGrid> valid(size_t(finest + 1)), padded(size_t(finest + 1));
-  valid[size_t(finest)] = {window.x, window.y, window.width, window.height};
-  for (int l = finest; l >= first; --l) {
-    padded[size_t(l)] = expand(valid[size_t(l)], subpasses);
-    if (l > first) valid[size_t(l) - 1] = parentOf(padded[size_t(l)]);
-  }
-
+  const auto device = deviceFor(ctx);
   SynthesisResult result;
-  std::vector<uint32_t> previous, current, scratch;
-  for (int l = first; l <= finest; ++l) {
-    const auto start = std::chrono::steady_clock::now();
-    const LevelGrid& grid = padded[size_t(l)];
-    const int shift = finest - l;
-    const int spacing = 1 << shift;
-    const int64_t periodX = options.periodX > 0 ? options.periodX >> shift : 0;
-    const int64_t periodY = options.periodY > 0 ? options.periodY >> shift : 0;
-    current.assign(size_t(grid.width) * size_t(grid.height), 0);
-
-    if (l == first) {
-      parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
-        cpu::initKernel(current.data(), grid, spacing, analysis.width, analysis.height, periodX, periodY, r0, r1);
-      }, kRowGrain);
-    } else {
-      const LevelGrid& parentGrid = padded[size_t(l) - 1];
-      parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
-        cpu::upsampleKernel(previous.data(), parentGrid, current.data(), grid, spacing, analysis.width,
-                            analysis.height, r0, r1);
-      }, kRowGrain);
-    }
-    const auto amplitude256 = int64_t(std::lrint(double(jitter[size_t(l)]) * spacing * 256.0));
-    parallelFor(0, grid.height, ctx, [&](int r0, int r1) {
-      cpu::jitterKernel(current.data(), grid, options.seed, l, amplitude256, periodX, periodY, analysis.width,
-                        analysis.height, r0, r1);
-    }, kRowGrain);
-
-    // Correction: each sub-pass reads `current` and writes `scratch` over a rectangle one texel
-    // smaller on every side than the last, so the texels it writes depend only on valid texels.
-    const cpu::LevelTables tables = tablesOf(analysis, l);
-    scratch.assign(current.size(), 0);
-    int inset = 0;
-    for (int pass = 0; pass < (options.correct ? options.passes : 0); ++pass)
-      for (int cy = 0; cy < options.interleave; ++cy)
-        for (int cx = 0; cx < options.interleave; ++cx) {
-          ++inset;
-          parallelFor(inset, grid.height - inset, ctx, [&](int r0, int r1) {
-            cpu::correctKernel(current.data(), scratch.data(), grid, tables, options.interleave, cx, cy, inset,
-                               grid.width - inset, r0, r1);
-          }, kRowGrain);
-          current.swap(scratch);
-        }
-    previous.swap(current);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.levels.push_back({l, int64_t(grid.width) * grid.height, seconds});
-  }
-
-  // `previous` holds the finest padded level; the window sits `subpasses` texels inside it.
-  const LevelGrid& grid = padded[size_t(finest)];
   CoordMap& out = result.coords;
   out.width = window.width;
   out.height = window.height;
   out.exemplarWidth = analysis.width;
   out.exemplarHeight = analysis.height;
   out.coords.resize(size_t(window.width) * size_t(window.height));
-  for (int y = 0; y < window.height; ++y)
-    std::copy_n(previous.begin() + std::ptrdiff_t(size_t(y + subpasses) * grid.width + size_t(subpasses)),
-                window.width, out.coords.begin() + std::ptrdiff_t(size_t(y) * window.width));
+  synthesizeWindow(analysis, window, options, ctx, device.get(), out, 0, 0, result.levels);
   return result;
 }
 

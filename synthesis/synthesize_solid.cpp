@@ -5,10 +5,14 @@
 
 #include "render/image/error.h"
 #include "render/image/parallel.h"
+#include "synthesis/backend.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/hash.h"
+#if TEXFAB_HAS_VULKAN
+#include "synthesis/vulkan/solid_level.h"
+#endif
 
 #include <algorithm>
 #include <climits>
@@ -187,6 +191,7 @@ struct Engine {
   SolidLevelCache* cache;
   const Context& ctx;
   std::vector<SolidLevelStats>& stats;
+  std::shared_ptr<vulkan::Device> device = deviceFor(ctx);  // null: the CPU
   std::vector<Mask> masks = std::vector<Mask>(a.levels.size());
   std::vector<Finals> finals = std::vector<Finals>(a.levels.size());
   size_t peakBytes = 0;  // masks + finals + step values held at once (diagnostics)
@@ -443,12 +448,41 @@ struct Engine {
         }
   }
 
-  // Synthesizes level li over its whole mask; emit(slot, triples) receives the final values of
-  // each chunk of the finest level.
+  // The final values of chunk `slot` of level li: to emit at the finest level; above it, its seeds
+  // (last = T: the voxels whose final values level li+1 reads) into the store block of each 8^3
+  // block holding one.
+  template <class Emit> void finishChunk(int li, uint32_t slot, const uint32_t* triples, const Emit& emit) {
+    if (li == top()) return emit(slot, triples);
+    const Mask& m = masks[size_t(li)];
+    const ChunkKey key = m.keys[slot];
+    const int8_t* last = m.at(slot);
+    const auto T = int8_t(steps(li));
+    for (int bz = 0; bz < kChunk; bz += kBlock)
+      for (int by = 0; by < kChunk; by += kBlock)
+        for (int bx = 0; bx < kChunk; bx += kBlock) {
+          uint32_t* fv = nullptr;
+          for (int z = 0; z < kBlock; ++z)
+            for (int y = 0; y < kBlock; ++y)
+              for (int x = 0; x < kBlock; ++x) {
+                const int v = ((bz + z) * kChunk + by + y) * kChunk + bx + x;
+                if (last[v] != T) continue;
+                if (!fv) {
+                  const int32_t fs = finals[size_t(li)].find({(key[0] * kChunk + bx) >> kBlockShift,
+                                                              (key[1] * kChunk + by) >> kBlockShift,
+                                                              (key[2] * kChunk + bz) >> kBlockShift});
+                  if (fs < 0) throw std::logic_error("lazy solid synthesis: final block missing");
+                  fv = finals[size_t(li)].at(uint32_t(fs));
+                }
+                std::copy_n(triples + v * 3, 3, fv + ((z * kBlock + y) * kBlock + x) * 3);
+              }
+        }
+  }
+
+  // Synthesizes level li over its whole mask (on the device when there is one); emit(slot,
+  // triples) receives the final values of each chunk of the finest level.
   template <class Emit> void synthesizeLevel(int li, const Emit& emit) {
     const auto started = Clock::now();
-    Mask& m = masks[size_t(li)];
-    const int T = steps(li);
+    const Mask& m = masks[size_t(li)];
     const size_t n = m.size();
     std::vector<int8_t> maxLast(n, -1);
     int64_t voxels = 0, corrections = 0;
@@ -461,6 +495,47 @@ struct Engine {
         corrections += c[v] > 0 ? (c[v] + subpasses - 1) / subpasses : 0;
       }
     }
+#if TEXFAB_HAS_VULKAN
+    if (device) synthesizeLevelOnDevice(li, emit);
+    else
+#endif
+      synthesizeLevelOnCpu(li, maxLast, emit);
+    if (cache && li < top()) fillCache(li);
+    SolidLevelStats& st = stats[size_t(li)];
+    st.voxels += voxels;
+    st.corrections += corrections;
+    st.seconds += since(started);
+  }
+
+#if TEXFAB_HAS_VULKAN
+  template <class Emit> void synthesizeLevelOnDevice(int li, const Emit& emit) {
+    const Mask& m = masks[size_t(li)];
+    vulkan::SolidLevelInput level;
+    level.keys = m.keys;
+    level.last = [&](uint32_t slot) { return m.at(slot); };
+    if (li > 0)
+      level.parents = [&](uint32_t slot) -> const uint32_t* {
+        const int32_t ps = finals[size_t(li) - 1].find(m.keys[slot]);  // the block of this chunk's parents
+        if (ps < 0) throw std::logic_error("lazy solid synthesis: parent values missing");
+        return finals[size_t(li) - 1].at(uint32_t(ps));
+      };
+    level.steps = steps(li);
+    level.interleave = o.interleave;
+    level.seed = o.seed;
+    level.jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
+    vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li)), level,
+                                 [&](uint32_t slot, const uint32_t* triples) { finishChunk(li, slot, triples, emit); },
+                                 ctx);
+  }
+#endif
+
+  // The CPU pipelines the level's z-layers of chunks: step t of layer j runs once step t-1 of
+  // layers j-1..j+1 is done, and a step's values are dropped as soon as the next step of both
+  // neighbouring layers has read them.
+  template <class Emit> void synthesizeLevelOnCpu(int li, const std::vector<int8_t>& maxLast, const Emit& emit) {
+    const Mask& m = masks[size_t(li)];
+    const int T = steps(li);
+    const size_t n = m.size();
     // Chunks in z-layers (then y, x: neighbours close in memory).
     std::vector<uint32_t> order(n);
     for (size_t s = 0; s < n; ++s) order[s] = uint32_t(s);
@@ -487,7 +562,6 @@ struct Engine {
       }
     };
     const int L = int(layers.size());
-    const auto TT = int8_t(T);
     for (int i = 0; i < L + T; ++i) {
       for (int t = 0; t <= T; ++t) {
         const int j = i - t;
@@ -514,34 +588,7 @@ struct Engine {
             ChunkValues& out = pool[size_t(ob)];
             if (t == 0) start(li, slot, tables, out);
             else correct(li, slot, t, bufferOf[size_t(t) - 1], pool, tables, *scratch, out);
-            if (t < T) continue;
-            if (li == top()) {
-              emit(slot, out.triples.get());
-            } else {
-              // Seeds (last = T) are the voxels whose final values level li+1 reads; each 8^3
-              // block of the chunk holding one has its store block.
-              const ChunkKey key = m.keys[slot];
-              const int8_t* last = m.at(slot);
-              for (int bz = 0; bz < kChunk; bz += kBlock)
-                for (int by = 0; by < kChunk; by += kBlock)
-                  for (int bx = 0; bx < kChunk; bx += kBlock) {
-                    uint32_t* fv = nullptr;
-                    for (int z = 0; z < kBlock; ++z)
-                      for (int y = 0; y < kBlock; ++y)
-                        for (int x = 0; x < kBlock; ++x) {
-                          const int v = ((bz + z) * kChunk + by + y) * kChunk + bx + x;
-                          if (last[v] != TT) continue;
-                          if (!fv) {
-                            const int32_t fs = finals[size_t(li)].find(
-                                {(key[0] * kChunk + bx) >> kBlockShift, (key[1] * kChunk + by) >> kBlockShift,
-                                 (key[2] * kChunk + bz) >> kBlockShift});
-                            if (fs < 0) throw std::logic_error("lazy solid synthesis: final block missing");
-                            fv = finals[size_t(li)].at(uint32_t(fs));
-                          }
-                          std::copy_n(out.triples.get() + v * 3, 3, fv + ((z * kBlock + y) * kBlock + x) * 3);
-                        }
-                  }
-            }
+            if (t == T) finishChunk(li, slot, out.triples.get(), emit);
           }
         });
         if (t == T) release(T, size_t(j));
@@ -552,11 +599,6 @@ struct Engine {
         if (j >= 0 && j < L) release(t - 1, size_t(j));
       }
     }
-    if (cache && li < top()) fillCache(li);
-    SolidLevelStats& st = stats[size_t(li)];
-    st.voxels += voxels;
-    st.corrections += corrections;
-    st.seconds += since(started);
   }
 
   std::vector<std::unique_ptr<Prepared>> preparedLevels = std::vector<std::unique_ptr<Prepared>>(a.levels.size());

@@ -5,7 +5,11 @@
 
 #include "render/image/error.h"
 #include "render/image/parallel.h"
+#include "synthesis/backend.h"
 #include "synthesis/cpu/surface_kernels.h"
+#if TEXFAB_HAS_VULKAN
+#include "synthesis/vulkan/surface_kernels.h"
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -25,6 +29,103 @@ void forSites(size_t count, const Context& ctx, Fn&& fn) {
     fn(size_t(b) * kSiteGrain, std::min(count, size_t(e) * kSiteGrain));
   });
 }
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// The levels synthesized and each one's parameters: atlas levels top..0, each at the exemplar
+// stack level closest to its scale.
+struct Plan {
+  const ExemplarAnalysis& analysis;
+  const SurfaceDomain& domain;
+  const SurfaceSynthesisOptions& options;
+  double pixelsPerTexel = 0;
+  int top = 0;
+  std::vector<float> jitter;  // per stack level
+
+  int stackLevel(int a) const { return stackLevelForAtlasLevel(analysis, a, pixelsPerTexel); }
+  const AnalysisLevel& tables(int a) const { return analysis.levels[size_t(stackLevel(a))]; }
+  int64_t amplitude256(int a) const {
+    return int64_t(std::lrint(double(jitter[size_t(stackLevel(a))]) * tables(a).spacing * 256.0));
+  }
+  cpu::LevelTables tableView(int a) const {
+    const AnalysisLevel& al = tables(a);
+    return {analysis.width, analysis.height, al.spacing, analysis.k, al.appearance.data(), al.neighborhood.data(),
+            al.candidates.data()};
+  }
+  int subpasses() const { return options.correct ? options.passes * 4 : 0; }
+};
+
+Plan planFor(const ExemplarAnalysis& analysis, const SurfaceDomain& domain, const SurfaceSynthesisOptions& options) {
+  Plan p{analysis, domain, options, 0, 0, {}};
+  p.pixelsPerTexel = std::max(medianPixelsPerTexel(domain.levels[0]), 1e-6);
+  const int finest = analysis.finestLevel();
+  p.jitter = options.jitter.empty() ? defaultJitter(finest + 1) : options.jitter;
+  p.jitter.resize(size_t(finest + 1), p.jitter.back());
+  // The coarsest atlas level synthesized: the first that reaches the coarsest stack level.
+  p.top = int(domain.levels.size()) - 1;
+  while (p.top > 0 && p.stackLevel(p.top - 1) == 0) --p.top;
+  return p;
+}
+
+std::vector<uint32_t> synthesizeOnCpu(const Plan& plan, const Context& ctx, std::vector<LevelStats>& stats) {
+  const int ew = plan.analysis.width, eh = plan.analysis.height;
+  std::vector<uint32_t> previous, current, scratch;
+  for (int a = plan.top; a >= 0; --a) {
+    const auto start = Clock::now();
+    const SurfaceLevel& level = plan.domain.levels[size_t(a)];
+    const auto sites = [&](auto&& kernel) { forSites(level.size(), ctx, kernel); };
+    current.assign(level.size(), 0);
+    if (a == plan.top)
+      sites([&](size_t b, size_t e) { cpu::initSurfaceKernel(level, current.data(), ew, eh, b, e); });
+    else
+      sites([&](size_t b, size_t e) { cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), ew, eh, b, e); });
+    sites([&](size_t b, size_t e) {
+      cpu::jitterSurfaceKernel(level, current.data(), plan.options.seed, a, plan.amplitude256(a), ew, eh, b, e);
+    });
+    const cpu::LevelTables tables = plan.tableView(a);
+    scratch.resize(current.size());
+    for (int k = 0; k < plan.subpasses(); ++k) {
+      sites([&](size_t b, size_t e) { cpu::correctSurfaceKernel(level, current.data(), scratch.data(), tables, k % 4, b, e); });
+      current.swap(scratch);
+    }
+    previous.swap(current);
+    stats.push_back({a, int64_t(level.size()), since(start)});
+  }
+  return previous;
+}
+
+#if TEXFAB_HAS_VULKAN
+// The same on a Vulkan device: the levels stay on the device, one submit per level.
+std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const Plan& plan, const Context& ctx,
+                                         std::vector<LevelStats>& stats) {
+  const int ew = plan.analysis.width, eh = plan.analysis.height;
+  vulkan::Commands commands(device);
+  vulkan::Buffer previous, current, scratch;
+  for (int a = plan.top; a >= 0; --a) {
+    const auto start = Clock::now();
+    const vulkan::SurfaceSites sites = vulkan::uploadSites(commands, plan.domain.levels[size_t(a)]);
+    const vulkan::LevelTables tables = vulkan::uploadTables(commands, plan.tableView(a));
+    current = vulkan::coordBuffer(device, sites);
+    scratch = vulkan::coordBuffer(device, sites);
+    if (a == plan.top) vulkan::initSurfaceKernel(commands, sites, current, ew, eh);
+    else vulkan::upsampleSurfaceKernel(commands, sites, previous, current, ew, eh);
+    vulkan::jitterSurfaceKernel(commands, sites, current, plan.options.seed, a, plan.amplitude256(a), ew, eh);
+    for (int k = 0; k < plan.subpasses(); ++k) {
+      vulkan::correctSurfaceKernel(commands, sites, current, scratch, tables, k % 4);
+      std::swap(current, scratch);
+    }
+    commands.submit(ctx);
+    previous = std::move(current);
+    stats.push_back({a, int64_t(sites.count), since(start)});
+  }
+  std::vector<uint32_t> coords(plan.domain.levels[0].size());
+  commands.download(previous, 0, coords.data(), coords.size() * 4);
+  commands.submit(ctx);
+  return coords;
+}
+#endif
 
 } // namespace
 
@@ -66,53 +167,18 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
       throw Error("surface domain level " + std::to_string(a) + " has arrays of different lengths");
   }
 
+  const Plan plan = planFor(analysis, domain, options);
   SurfaceSynthesisResult result;
-  result.exemplarPixelsPerTexel = std::max(medianPixelsPerTexel(domain.levels[0]), 1e-6);
-  const double ppt = result.exemplarPixelsPerTexel;
-  const int finest = analysis.finestLevel();
-  std::vector<float> jitter = options.jitter.empty() ? defaultJitter(finest + 1) : options.jitter;
-  jitter.resize(size_t(finest + 1), jitter.back());
-
-  // The coarsest atlas level synthesized: the first that reaches the coarsest stack level.
-  int top = int(domain.levels.size()) - 1;
-  while (top > 0 && stackLevelForAtlasLevel(analysis, top - 1, ppt) == 0) --top;
-
-  std::vector<uint32_t> previous, current, scratch;
-  for (int a = top; a >= 0; --a) {
-    const auto start = std::chrono::steady_clock::now();
-    const SurfaceLevel& level = domain.levels[size_t(a)];
-    const int l = stackLevelForAtlasLevel(analysis, a, ppt);
-    const AnalysisLevel& al = analysis.levels[size_t(l)];
-    current.assign(level.size(), 0);
-    if (a == top)
-      forSites(level.size(), ctx, [&](size_t b, size_t e) {
-        cpu::initSurfaceKernel(level, current.data(), analysis.width, analysis.height, b, e);
-      });
-    else
-      forSites(level.size(), ctx, [&](size_t b, size_t e) {
-        cpu::upsampleSurfaceKernel(level, previous.data(), current.data(), analysis.width, analysis.height, b, e);
-      });
-    const auto amplitude256 = int64_t(std::lrint(double(jitter[size_t(l)]) * al.spacing * 256.0));
-    forSites(level.size(), ctx, [&](size_t b, size_t e) {
-      cpu::jitterSurfaceKernel(level, current.data(), options.seed, a, amplitude256, analysis.width, analysis.height,
-                               b, e);
-    });
-
-    const cpu::LevelTables tables{analysis.width, analysis.height, al.spacing, analysis.k,
-                                  al.appearance.data(), al.neighborhood.data(), al.candidates.data()};
-    scratch.resize(current.size());
-    for (int pass = 0; pass < (options.correct ? options.passes : 0); ++pass)
-      for (int cls = 0; cls < 4; ++cls) {
-        forSites(level.size(), ctx, [&](size_t b, size_t e) {
-          cpu::correctSurfaceKernel(level, current.data(), scratch.data(), tables, cls, b, e);
-        });
-        current.swap(scratch);
-      }
-    previous.swap(current);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.levels.push_back({a, int64_t(level.size()), seconds});
+  result.exemplarPixelsPerTexel = plan.pixelsPerTexel;
+#if TEXFAB_HAS_VULKAN
+  if (const auto device = deviceFor(ctx)) {
+    result.coords = synthesizeOnDevice(*device, plan, ctx, result.levels);
+    return result;
   }
-  result.coords = std::move(previous);
+#else
+  deviceFor(ctx);
+#endif
+  result.coords = synthesizeOnCpu(plan, ctx, result.levels);
   return result;
 }
 

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// texfab info: what a model contains (size, topology, UVs, materials, textures).
+// texfab info: what a model contains (size, topology, UVs, materials, textures); with --devices,
+// the Vulkan devices the synthesis kernels can run on.
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
 #include "geometry/mesh_topology.h"
+#include "synthesis/backend.h"
 
 #include <nlohmann/json.hpp>
 
@@ -15,8 +17,35 @@ namespace {
 
 struct InfoArgs {
   std::string model;
+  bool devices = false;
   bool json = false;
 };
+
+void printDevices(bool json) {
+  const std::vector<synthesis::vulkan::DeviceInfo> devices = synthesis::vulkanDevices();
+  if (json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& d : devices)
+      j.push_back({{"index", d.index}, {"name", d.name}, {"type", d.type}, {"driver", d.driver},
+                   {"vulkan", d.apiVersion}, {"memory_bytes", d.memoryBytes}, {"max_binding_bytes", d.maxRangeBytes},
+                   {"usable", d.unusable.empty()}, {"unusable_because", d.unusable}});
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  if (devices.empty()) {
+    std::printf("no Vulkan device found (%s)\n", synthesis::vulkanBuilt()
+                                                     ? "no Vulkan loader or driver; the CPU backend runs everything"
+                                                     : "this texfab was built without the Vulkan backend");
+    return;
+  }
+  for (const auto& d : devices) {
+    std::printf("[%d] %s\n", d.index, d.name.c_str());
+    std::printf("    type      %s\n    driver    %s\n    Vulkan    %s\n    memory    %.1f GiB (binding range %.0f MiB)\n",
+                d.type.c_str(), d.driver.c_str(), d.apiVersion.c_str(), double(d.memoryBytes) / double(1 << 30),
+                double(d.maxRangeBytes) / double(1 << 20));
+    if (!d.unusable.empty()) std::printf("    unusable  %s\n", d.unusable.c_str());
+  }
+}
 
 nlohmann::json describeTexture(const geometry::Texture& t) {
   if (!t) return nullptr;
@@ -29,6 +58,7 @@ nlohmann::json describeTexture(const geometry::Texture& t) {
 
 void runInfo(const InfoArgs& args) {
   using namespace geometry;
+  if (args.devices) return printDevices(args.json);
   const Mesh mesh = readMesh(args.model);
   const MeshTopology topo = computeTopology(mesh);
   const BoundingBox box = boundingBox(mesh);
@@ -105,8 +135,13 @@ Command addInfoCommand(CLI::App& root) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* app = root.add_subcommand("info", "Describe a model: size, bounding box, components, closed/manifold, genus, "
                                               "UVs, materials and textures");
-  app->add_option("model", args->model, "Model (.obj, .ply, .off, .stl, .gltf, .glb)")->required();
+  CLI::Option* model = app->add_option("model", args->model, "Model (.obj, .ply, .off, .stl, .gltf, .glb)");
+  app->add_flag("--devices", args->devices, "List the Vulkan devices (--backend vulkan, --device N) instead")
+      ->excludes(model);
   app->add_flag("--json", args->json, "Print JSON instead of text");
+  app->parse_complete_callback([args] {
+    if (args->model.empty() && !args->devices) throw CLI::RequiredError("a model (or --devices)");
+  });
   return {app, [args] { runInfo(*args); }};
 }
 

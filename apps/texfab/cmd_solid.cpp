@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab solid: lazy solid texture synthesis from 2-D exemplars (Dong, Lefebvre, Tong, Drettakis
 // 2008): a whole volume as slices, an arbitrary plane as an image, or colours at listed points.
+#include "apps/texfab/backend_flags.h"
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "render/image/error.h"
@@ -41,6 +42,7 @@ struct SolidArgs {
   int finestPasses = synthesis::SolidSynthesisOptions{}.finestPasses;
   int interleave = synthesis::SolidSynthesisOptions{}.interleave;
   int threads = 0;
+  BackendFlags backend;
   std::string report;
   std::string cacheDir;
   bool noCache = false;
@@ -110,6 +112,7 @@ void runSolid(const SolidArgs& args) {
   using namespace synthesis;
   Progress progress("texfab solid", args.quiet);
   Context ctx{.threads = args.threads};
+  if (const std::string line = applyBackend(args.backend, ctx); !line.empty()) progress.note("backend: " + line);
 
   // Validate everything before any work: one mode, its parameters, the outputs.
   const int modes = (args.volume != 0) + !args.plane.empty() + !args.points.empty();
@@ -418,6 +421,7 @@ Command addSolidCommand(CLI::App& root) {
                   "2: 8 sub-passes per pass, as in the paper; 1: one (a far shorter dependency chain)")
       ->capture_default_str();
   app->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  addBackendFlags(*app, args->backend);
   app->add_option("--report", args->report, "Write timings, voxel counts and memory to this JSON file");
   app->add_option("--cache-dir", args->cacheDir, "Analysis cache folder (default: ~/.cache/texfab)");
   app->add_flag("--no-cache", args->noCache, "Neither read nor write the analysis cache");

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab synth: 2-D texture synthesis from an exemplar (Lefebvre & Hoppe 2005/2006).
+#include "apps/texfab/backend_flags.h"
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "render/image/error.h"
@@ -30,6 +31,7 @@ struct SynthArgs {
   std::string coords;
   std::vector<std::string> apply;
   int threads = 0;
+  BackendFlags backend;
   std::string report;
   std::string cacheDir;
   bool noCache = false;
@@ -45,6 +47,7 @@ void runSynth(const SynthArgs& args) {
   using namespace synthesis;
   Progress progress("texfab synth", args.quiet);
   Context ctx{.threads = args.threads};
+  if (const std::string line = applyBackend(args.backend, ctx); !line.empty()) progress.note("backend: " + line);
 
   // Everything that can be checked before the work is checked first: a bad argument never costs
   // a synthesis, and a failure never leaves some outputs written and others not.
@@ -207,6 +210,7 @@ Command addSynthCommand(CLI::App& root) {
                   "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, "
                   "roughness, height; same size as the exemplar) and write OUT (repeatable)");
   app->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  addBackendFlags(*app, args->backend);
   app->add_option("--report", args->report, "Write timings and quality measures to this JSON file");
   app->add_option("--cache-dir", args->cacheDir, "Exemplar analysis cache folder (default: ~/.cache/texfab)");
   app->add_flag("--no-cache", args->noCache, "Neither read nor write the analysis cache");

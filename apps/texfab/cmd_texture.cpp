@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab texture: synthesize a texture over a mesh (anisometric synthesis in the atlas,
 // Lefebvre & Hoppe 2006, or lazy solid synthesis, Dong et al. 2008) and write the textured model.
+#include "apps/texfab/backend_flags.h"
 #include "apps/texfab/cli_util.h"
 #include "apps/texfab/command.h"
 #include "render/texture_mesh.h"
@@ -39,6 +40,7 @@ struct TextureArgs {
   std::string previewSize = "800";
   std::string report;
   int threads = 0;
+  BackendFlags backend;
   std::string cacheDir;
   bool noCache = false;
   bool quiet = false;
@@ -78,6 +80,7 @@ fs::path siblingPath(const fs::path& output, const std::string& suffix, const st
 void runTexture(const TextureArgs& args) {
   Progress progress("texfab texture", args.quiet);
   Context ctx{.threads = args.threads};
+  applyBackend(args.backend, ctx);  // the progress lines below name it
   // Everything checkable is checked before any work.
   geometry::meshFormatOf(args.output);
   render::TextureMeshOptions options;
@@ -263,6 +266,7 @@ Command addTextureCommand(CLI::App& root) {
                   "when a report is asked for) as JSON");
   app->add_option("--threads", args->threads, "Worker threads (0 = all cores); the result does not depend on it")
       ->capture_default_str();
+  addBackendFlags(*app, args->backend);
   app->add_option("--cache-dir", args->cacheDir, "Exemplar analysis cache folder (default: ~/.cache/texfab)");
   app->add_flag("--no-cache", args->noCache, "Neither read nor write the analysis cache");
   app->add_flag("-q,--quiet", args->quiet, "No progress output");

@@ -100,16 +100,17 @@ void solidColorKernel(const uint32_t* triples, int16_t* colors, const int8_t* la
 /// 3-D candidates of those three pixels, by integer SSD of projected neighborhoods; step 1's ties
 /// go to the smaller packed coordinate, step 2's to the earliest candidate (direction x, y, z;
 /// then rank). Reads triples `in` and their colours `inColors`; writes only those voxels of `out`
-/// and `outColors`. `tables.projection2d/projection3d` must be set. Uses AVX2 where the CPU has it (same
-/// integers, same result); searches its voxels in batches, phase by phase, so that their table
-/// reads overlap (voxels are independent: a port may search them one by one).
+/// and `outColors`. `tables.projection2d/projection3d` must be set. The portable kernel searches
+/// one voxel at a time (the specification); on x86 batches of voxels are searched phase by phase
+/// with SSE or AVX2 (same integers, same result).
 void solidCorrectKernel(const uint32_t* in, const int16_t* inColors, uint32_t* out, int16_t* outColors,
                         const int8_t* last, const VolumeGrid& grid, const SolidTables& tables, int interleave, int step,
                         int rowBegin, int rowEnd);
 
-/// Lets the correction kernel use SIMD (default) or forces its portable path (for tests: both give
-/// the same bytes).
-void solidAllowSimd(bool allow);
+/// The instruction sets the correction kernel may use: at most `limit`, as far as the CPU has
+/// them (default Avx2). For tests: every setting gives the same bytes.
+enum class SolidSimd : uint8_t { Portable, Sse, Avx2 };
+void solidLimitSimd(SolidSimd limit);
 
 /// Copies the voxels corrected at `step` (triples and colours) from `from` to `to`.
 void solidCommitKernel(const uint32_t* from, const int16_t* fromColors, uint32_t* to, int16_t* toColors,

@@ -2,7 +2,8 @@
 #pragma once
 // The fixed cases whose output bytes the golden tests hash. Each returns the FNV-1a 64 hash of
 // what texfab computes: exemplar coordinates, triples, texel UVs, image bytes, file bytes.
-// Inputs are small bundled data so that the whole suite runs in seconds.
+// Inputs are small bundled data so that the whole suite runs in seconds. The cases that synthesize
+// take the backend of their kernels (the Vulkan tests run them on the device: same hashes).
 
 #include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
@@ -27,6 +28,16 @@
 #include <vector>
 
 namespace texfab::golden {
+
+/// The expected hashes (hex). A deliberate change of output updates them here, with its reason in
+/// the commit message.
+inline constexpr const char* kWindow2d = "72908d5d3414dcbb";
+inline constexpr const char* kSolidVolume = "8068911192c5a6f3";
+inline constexpr const char* kSolidObliquePlane = "27e89beeb36ff2bd";
+inline constexpr const char* kAtlasTexelUvs = "66752b2be1750fd4";
+inline constexpr const char* kSurfaceTexture = "0b8d074efefb46ee";
+inline constexpr const char* kSolidTexture = "75c47fa886250c5b";
+inline constexpr const char* kGlbBytes = "b4cb60ad089f5722";
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {
@@ -75,22 +86,26 @@ inline const synthesis::SolidAnalysis& solidAnalysis32() {
   return a;
 }
 
+/// The context of the synthesis of a case.
+inline Context synthesisContext(Backend backend) { return Context{.threads = 2, .backend = backend}; }
+
 /// A 2-D window away from the origin, bundled brick, seed 7.
-inline uint64_t window2d() {
+inline uint64_t window2d(Backend backend = Backend::Cpu) {
   const Image exemplar = readImage(bundled("exemplars/brick.png"));
   const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(exemplar, {}, Context{.threads = 2});
   synthesis::SynthesisOptions options;
   options.seed = 7;
-  const synthesis::SynthesisResult r = synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, Context{.threads = 2});
+  const synthesis::SynthesisResult r =
+      synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, synthesisContext(backend));
   return hashOf(r.coords.coords);
 }
 
 /// A 12^3 box of the solid texture of marble32 with its colours.
-inline uint64_t solidVolume() {
+inline uint64_t solidVolume(Backend backend = Backend::Cpu) {
   synthesis::SolidSynthesisOptions options;
   options.seed = 3;
   const synthesis::SolidSynthesisResult r =
-      synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, Context{.threads = 2});
+      synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, synthesisContext(backend));
   std::vector<uint32_t> flat;
   for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
   std::vector<float> colours;
@@ -99,14 +114,15 @@ inline uint64_t solidVolume() {
 }
 
 /// The voxels of an oblique 40x40 plane through the solid texture of marble32.
-inline uint64_t solidPlane() {
+inline uint64_t solidPlane(Backend backend = Backend::Cpu) {
   std::vector<synthesis::Voxel> voxels;
   for (int j = 0; j < 40; ++j)
     for (int i = 0; i < 40; ++i) {
       const double x = 3 + 0.8 * i - 0.3 * j, y = -5 + 0.5 * i + 0.7 * j, z = 11 + 0.3 * i + 0.6 * j;
       voxels.push_back({int64_t(std::floor(x)), int64_t(std::floor(y)), int64_t(std::floor(z))});
     }
-  const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, Context{.threads = 2});
+  const synthesis::SolidSynthesisResult r =
+      synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, synthesisContext(backend));
   std::vector<uint32_t> flat;
   for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
   return hashOf(flat);
@@ -123,7 +139,7 @@ inline uint64_t atlasTexelUvs() {
   return hashOf(r.atlas.texelUvs);
 }
 
-inline render::TextureMeshResult textureElephant(render::TextureMode mode) {
+inline render::TextureMeshResult textureElephant(render::TextureMode mode, Backend backend) {
   static const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
   static const Image brick = readImage(bundled("exemplars/brick.png"));
   static const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(brick, {}, Context{.threads = 2});
@@ -136,26 +152,26 @@ inline render::TextureMeshResult textureElephant(render::TextureMode mode) {
   options.atlas.pack.width = options.atlas.pack.height = 256;
   options.measure = false;
   options.surface.seed = options.solid.seed = 5;
-  return render::textureMesh(mesh, ex, options);
+  return render::textureMesh(mesh, ex, options, Context{.backend = backend});
 }
 
 /// The bundled elephant textured at 256^2 with the bundled brick: coordinates and base colour.
-inline uint64_t surfaceTexture() {
-  const render::TextureMeshResult r = textureElephant(render::TextureMode::Surface);
+inline uint64_t surfaceTexture(Backend backend = Backend::Cpu) {
+  const render::TextureMeshResult r = textureElephant(render::TextureMode::Surface, backend);
   return hashOf8Bit(*r.baseColor) ^ hashOf(r.coords);
 }
 
 /// The same in solid mode with marble32.
-inline uint64_t solidTexture() {
-  const render::TextureMeshResult r = textureElephant(render::TextureMode::Solid);
+inline uint64_t solidTexture(Backend backend = Backend::Cpu) {
+  const render::TextureMeshResult r = textureElephant(render::TextureMode::Solid, backend);
   return hashOf8Bit(*r.baseColor);
 }
 
 /// The bytes of the GLB of the surface-mode elephant.
-inline uint64_t glbBytes() {
+inline uint64_t glbBytes(Backend backend = Backend::Cpu) {
   const test::TempDir dir("texfab-golden");
   const std::filesystem::path path = dir / "elephant.glb";
-  geometry::writeMesh(textureElephant(render::TextureMode::Surface).mesh, path);
+  geometry::writeMesh(textureElephant(render::TextureMode::Surface, backend).mesh, path);
   std::ifstream in(path, std::ios::binary);
   const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return hashOf(bytes);

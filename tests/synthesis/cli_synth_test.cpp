@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of `texfab synth` and `texfab stats`, through the real binary.
 #include "render/image/image_io.h"
+#include "synthesis/backend.h"
 #include "synthesis/coord_map.h"
 #include "test_support.h"
 
@@ -134,6 +135,40 @@ TEST(CliSynth, WindowsMatchTheFullImage) {
   for (int y = 0; y < 30; ++y)
     for (int x = 0; x < 40; ++x)
       for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 74, y + 27, c));
+}
+
+// --backend: an unknown name is a usage error; Vulkan without the device asked for is one line
+// (exit 2, no output); auto falls back to the CPU and says so; with a usable device, vulkan writes
+// the CPU's bytes. info --devices lists what the loader finds.
+TEST(CliSynth, BackendFlags) {
+  TempDir dir;
+  const std::string common = " -o " + (dir / "out.png").string() + " --size 48x40 --seed 4" + cacheArg(dir);
+  const Outcome bad = texfab("synth " + kBrick + common + " --backend gpu", dir);
+  EXPECT_EQ(bad.status, 1) << bad.err;
+  EXPECT_NE(bad.err.find("expected cpu, vulkan or auto"), std::string::npos) << bad.err;
+
+  const Outcome missing = texfab("synth " + kBrick + common + " --backend vulkan --device 999", dir);
+  EXPECT_EQ(missing.status, 2) << missing.err;
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
+  EXPECT_NE(missing.err.find("error: --backend vulkan: "), std::string::npos) << missing.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.png"));
+
+  ASSERT_EQ(texfab("synth " + kBrick + common + " -q", dir).status, 0);
+  const Image cpu = readImage(dir / "out.png");
+  const Outcome fallBack = texfab("synth " + kBrick + common + " --backend auto --device 999", dir);
+  ASSERT_EQ(fallBack.status, 0) << fallBack.err;
+  EXPECT_NE(fallBack.err.find("backend: CPU ("), std::string::npos) << fallBack.err;
+  EXPECT_EQ(readImage(dir / "out.png").pixels, cpu.pixels);
+
+  const Outcome devices = texfab("info --devices --json", dir);
+  ASSERT_EQ(devices.status, 0) << devices.err;
+  const nlohmann::json list = nlohmann::json::parse(devices.out);
+  EXPECT_EQ(list.size(), synthesis::vulkanDevices().size());
+  if (list.empty() || !list[0]["usable"].get<bool>()) GTEST_SKIP() << "no usable Vulkan device";
+  const Outcome vulkan = texfab("synth " + kBrick + common + " --backend vulkan --device 0", dir);
+  ASSERT_EQ(vulkan.status, 0) << vulkan.err;
+  EXPECT_NE(vulkan.err.find("backend: Vulkan: "), std::string::npos) << vulkan.err;
+  EXPECT_EQ(readImage(dir / "out.png").pixels, cpu.pixels);
 }
 
 TEST(CliSynth, StatsReportsTheMeasures) {

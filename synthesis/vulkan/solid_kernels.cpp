@@ -1,0 +1,198 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis. EGSR 2008,
+//           §4.3, §5.1, §5.2.
+#include "synthesis/vulkan/solid_kernels.h"
+
+#include "render/image/error.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/vulkan/shaders/kernel_params.h"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace texfab::synthesis::vulkan {
+
+namespace {
+
+constexpr uint32_t kInitSpirv[] =
+#include "synthesis/vulkan/shaders/solid_init_kernel.spv.inc"
+    ;
+constexpr uint32_t kUpsampleSpirv[] =
+#include "synthesis/vulkan/shaders/solid_upsample_kernel.spv.inc"
+    ;
+constexpr uint32_t kColorSpirv[] =
+#include "synthesis/vulkan/shaders/solid_color_kernel.spv.inc"
+    ;
+constexpr uint32_t kCorrectSpirv[] =
+#include "synthesis/vulkan/shaders/solid_correct_kernel.spv.inc"
+    ;
+constexpr uint32_t kCommitSpirv[] =
+#include "synthesis/vulkan/shaders/solid_commit_kernel.spv.inc"
+    ;
+
+const Kernel kInit{"solidInitKernel", kInitSpirv, {1, 1, 1, 1}, sizeof(SolidParams)};
+const Kernel kUpsample{"solidUpsampleKernel", kUpsampleSpirv, {1, 1, 1}, sizeof(SolidParams)};
+const Kernel kColor{"solidColorKernel", kColorSpirv, {1, 1, 1, 3}, sizeof(SolidParams)};
+const Kernel kCorrect{"solidCorrectKernel", kCorrectSpirv, {1, 1, 1, 1, 1, 1, 3, 3, 3, 3, 3, 1}, sizeof(SolidParams)};
+const Kernel kCommit{"solidCommitKernel", kCommitSpirv, {1, 1, 1, 1, 1}, sizeof(SolidParams)};
+
+constexpr int kPlaneInputs = 3 * 25;
+constexpr int kCrossInputs = 3 * kSolidCrossVoxels;
+
+// The tables of one level laid out in one buffer, each at a multiple of 256 bytes.
+struct Layout {
+  std::vector<uint8_t> bytes;
+
+  Slice add(const void* data, uint64_t size) {
+    const Slice s{(bytes.size() + 255) / 256 * 256, (size + 3) / 4 * 4};
+    bytes.resize(s.offset + s.bytes, 0);
+    std::memcpy(bytes.data() + s.offset, data, size);
+    return s;
+  }
+};
+
+// basis[d][j] of a prepared projection (its weights are stored chunk by chunk for SIMD).
+int32_t weight(const cpu::SolidKernelProjection& p, int d, int j) {
+  constexpr int kChunk = cpu::SolidKernelProjection::kChunk;
+  return p.weights[(size_t(j / kChunk) * size_t(p.rows) + size_t(d)) * kChunk + size_t(j % kChunk)];
+}
+
+std::vector<int32_t> projectionWords(const cpu::SolidTables& t) {
+  const cpu::SolidKernelProjection &p2 = *t.projection2d, &p3 = *t.projection3d;
+  std::vector<int32_t> w(p2.offset, p2.offset + 8);
+  w.insert(w.end(), p3.offset, p3.offset + 16);
+  for (int d = 0; d < 8; ++d)
+    for (int j = 0; j < kPlaneInputs; ++j) w.push_back(weight(p2, d, j));
+  for (int d = 0; d < t.dims; ++d)
+    for (int j = 0; j < kCrossInputs; ++j) w.push_back(weight(p3, d, j));
+  return w;
+}
+
+SolidParams paramsOf(const SolidChunks& c, const SolidTables* t) {
+  SolidParams p{};
+  p.chunks = c.count;
+  if (t) {
+    p.spacing = t->spacing;
+    p.exemplarWidth = t->exemplarWidth;
+    p.exemplarHeight = t->exemplarHeight;
+    p.dims = t->dims;
+    p.k2d = t->k2d;
+    p.k2dStride = t->k2dStride;
+    p.k3d = t->k3d;
+    p.shift2d = t->shift2d;
+    p.shift3d = t->shift3d;
+  }
+  return p;
+}
+
+uint64_t voxels(const SolidChunks& c) { return uint64_t(c.count) * kSolidChunkVoxels; }
+
+} // namespace
+
+SolidTables uploadSolidTables(Commands& commands, const cpu::SolidTables& t) {
+  if (t.dims > kSolidMaxDims || t.projection2d->dims != kSolid2dDims)
+    throw std::logic_error("uploadSolidTables: projections of other neighbourhoods");
+  SolidTables d;
+  d.exemplarWidth = t.exemplarWidth;
+  d.exemplarHeight = t.exemplarHeight;
+  d.spacing = t.spacing;
+  d.dims = t.dims;
+  d.k2d = t.k2d;
+  d.k2dStride = t.k2dStride;
+  d.k3d = t.k3d;
+  d.shift2d = t.projection2d->shift;
+  d.shift3d = t.projection3d->shift;
+  const uint64_t pixels = uint64_t(t.exemplarWidth) * uint64_t(t.exemplarHeight);
+  Layout layout;
+  // One image for the three axes shares its per-pixel tables: laid out once.
+  auto add = [&](const auto* const(&tables)[3], uint64_t bytes, std::array<Slice, 3>& slices) {
+    for (int e = 0; e < 3; ++e) {
+      const auto* first = std::find(tables, tables + e, tables[e]);
+      slices[size_t(e)] = first < tables + e ? slices[size_t(first - tables)] : layout.add(tables[e], bytes);
+    }
+  };
+  add(t.colors, pixels * 3, d.colors);
+  add(t.candidates2d, pixels * uint64_t(t.k2dStride) * 4, d.candidates2d);
+  add(t.candidateDescriptors2d, pixels * uint64_t(t.k2dStride) * kSolid2dDims, d.candidateDescriptors2d);
+  add(t.triples, pixels * kSolidMaxCandidates * 3 * 4, d.triples);
+  add(t.descriptors3d, pixels * kSolidMaxCandidates * uint64_t(t.dims), d.descriptors3d);
+  const std::vector<int32_t> projection = projectionWords(t);
+  d.projection = layout.add(projection.data(), projection.size() * 4);
+  for (const auto& s : {d.colors, d.candidates2d, d.candidateDescriptors2d, d.triples, d.descriptors3d})
+    if (s[0].bytes > commands.device().maxRangeBytes())
+      throw Error("solid exemplar tables (" + std::to_string(s[0].bytes >> 20) +
+                  " MiB each) exceed the Vulkan device's storage-buffer range");
+  d.data = commands.uploaded(std::span<const uint8_t>(layout.bytes));
+  return d;
+}
+
+uint32_t SolidChunks::maxCount(const Device& device) {
+  return uint32_t(std::min<uint64_t>(device.maxRangeBytes() / (kSolidChunkVoxels * 12), UINT32_MAX / kSolidChunkVoxels));
+}
+
+SolidChunks uploadChunks(Commands& commands, uint32_t count, std::span<const int32_t> keys, std::span<const int8_t> last,
+                         std::span<const int32_t> neighbours, std::span<const uint32_t> parents) {
+  if (count > SolidChunks::maxCount(commands.device()) || keys.size() != size_t(count) * 3 ||
+      last.size() != size_t(count) * kSolidChunkVoxels || neighbours.size() != size_t(count) * 27 ||
+      !(parents.empty() || parents.size() == size_t(count) * 512 * 3))
+    throw std::logic_error("uploadChunks: arrays of another size, or too many chunks for one binding");
+  Device& device = commands.device();
+  SolidChunks c;
+  c.count = count;
+  c.keys = commands.uploaded(keys);
+  c.last = commands.uploaded(last);
+  c.neighbours = commands.uploaded(neighbours);
+  c.parents = commands.uploaded(parents);
+  const uint64_t n = std::max<uint64_t>(voxels(c), 1);
+  c.triples = Buffer(device, n * 12);
+  c.colors = Buffer(device, n * 8);
+  c.corrected = Buffer(device, n * 12);
+  c.correctedColors = Buffer(device, n * 8);
+  return c;
+}
+
+void solidInitKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, uint32_t seed, int64_t jitter256) {
+  SolidParams p = paramsOf(c, &t);
+  p.seed = seed;
+  p.jitter256 = jitter256;
+  commands.dispatch(kInit, p, {c.keys, c.last, t.range(t.triples[2]), c.triples}, voxels(c));
+}
+
+void solidUpsampleKernel(Commands& commands, const SolidChunks& c, const SolidTables& t) {
+  commands.dispatch(kUpsample, paramsOf(c, &t), {c.last, c.parents, c.triples}, voxels(c));
+}
+
+void solidColorKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, int minLast) {
+  SolidParams p = paramsOf(c, &t);
+  p.minLast = minLast;
+  commands.dispatch(kColor, p,
+                    {c.last, c.triples, c.colors, t.range(t.colors[0]), t.range(t.colors[1]), t.range(t.colors[2])},
+                    voxels(c));
+}
+
+void solidCorrectKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, int interleave, int step) {
+  SolidParams p = paramsOf(c, &t);
+  p.interleave = interleave;
+  p.step = step;
+  commands.dispatch(kCorrect, p,
+                    {c.last, c.neighbours, c.triples, c.colors, c.corrected, c.correctedColors,
+                     t.range(t.colors[0]), t.range(t.colors[1]), t.range(t.colors[2]),
+                     t.range(t.candidates2d[0]), t.range(t.candidates2d[1]), t.range(t.candidates2d[2]),
+                     t.range(t.candidateDescriptors2d[0]), t.range(t.candidateDescriptors2d[1]),
+                     t.range(t.candidateDescriptors2d[2]),
+                     t.range(t.triples[0]), t.range(t.triples[1]), t.range(t.triples[2]),
+                     t.range(t.descriptors3d[0]), t.range(t.descriptors3d[1]), t.range(t.descriptors3d[2]),
+                     t.range(t.projection)},
+                    voxels(c));
+}
+
+void solidCommitKernel(Commands& commands, const SolidChunks& c, int interleave, int step) {
+  SolidParams p = paramsOf(c, nullptr);
+  p.interleave = interleave;
+  p.step = step;
+  commands.dispatch(kCommit, p, {c.last, c.corrected, c.correctedColors, c.triples, c.colors}, voxels(c));
+}
+
+} // namespace texfab::synthesis::vulkan

@@ -1,0 +1,153 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: Y. Dong, S. Lefebvre, X. Tong, G. Drettakis. Lazy Solid Texture Synthesis. EGSR 2008,
+//           §5 (parallel solid synthesis of a sparse level).
+#include "synthesis/vulkan/solid_level.h"
+
+#include "render/image/parallel.h"
+#include "synthesis/vulkan/solid_kernels.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <unordered_map>
+#include <vector>
+
+namespace texfab::synthesis::vulkan {
+
+namespace {
+
+using Key = std::array<int64_t, 3>;
+
+struct KeyHash {
+  size_t operator()(const Key& k) const {
+    uint64_t h = uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full + (h >> 29);
+    h ^= uint64_t(k[2]) * 0x165667B19E3779F9ull + (h >> 32);
+    return size_t(h ^ (h >> 31));
+  }
+};
+using KeyIndex = std::unordered_map<Key, uint32_t, KeyHash>;
+
+// The chunks of one part: those it finishes (its centre) first, then its halo.
+struct Part {
+  std::vector<uint32_t> slots;
+  size_t centre = 0;
+};
+
+// The chunks within `halo` chunks of the centre chunks, the centre first.
+Part withHalo(const std::vector<Key>& keys, const KeyIndex& index, std::vector<uint32_t> centre, int halo) {
+  Part p;
+  p.centre = centre.size();
+  std::unordered_map<uint32_t, bool> seen;
+  for (uint32_t s : centre) seen[s] = true;
+  p.slots = std::move(centre);
+  for (size_t i = 0; i < p.centre; ++i) {
+    const Key k = keys[p.slots[i]];
+    for (int dz = -halo; dz <= halo; ++dz)
+      for (int dy = -halo; dy <= halo; ++dy)
+        for (int dx = -halo; dx <= halo; ++dx) {
+          const auto it = index.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (it != index.end() && seen.emplace(it->second, true).second) p.slots.push_back(it->second);
+        }
+  }
+  return p;
+}
+
+// Splits `centre` in halves along its longest extent until each part with its halo holds at most
+// `maxChunks` chunks.
+void split(const std::vector<Key>& keys, const KeyIndex& index, std::vector<uint32_t> centre, int halo,
+           size_t maxChunks, std::vector<Part>& parts) {
+  Part part = withHalo(keys, index, centre, halo);
+  if (part.slots.size() <= maxChunks) {
+    parts.push_back(std::move(part));
+    return;
+  }
+  if (centre.size() == 1) throw std::logic_error("solid level: one chunk and its halo exceed a binding");
+  int axis = 0;
+  int64_t longest = -1;
+  for (int a = 0; a < 3; ++a) {
+    const auto [lo, hi] = std::minmax_element(centre.begin(), centre.end(),
+                                              [&](uint32_t p, uint32_t q) { return keys[p][size_t(a)] < keys[q][size_t(a)]; });
+    if (keys[*hi][size_t(a)] - keys[*lo][size_t(a)] > longest) longest = keys[*hi][size_t(a)] - keys[*lo][size_t(a)], axis = a;
+  }
+  const auto middle = centre.begin() + std::ptrdiff_t(centre.size() / 2);
+  std::nth_element(centre.begin(), middle, centre.end(), [&](uint32_t p, uint32_t q) {
+    return keys[p][size_t(axis)] < keys[q][size_t(axis)];
+  });
+  split(keys, index, std::vector<uint32_t>(centre.begin(), middle), halo, maxChunks, parts);
+  split(keys, index, std::vector<uint32_t>(middle, centre.end()), halo, maxChunks, parts);
+}
+
+// The device's inputs of a part: keys, masks, neighbours (slots within the part), parents.
+SolidChunks uploadPart(Commands& commands, const SolidLevelInput& level, const KeyIndex& index, const Part& part) {
+  const uint32_t n = uint32_t(part.slots.size());
+  std::unordered_map<uint32_t, int32_t> local;
+  for (uint32_t i = 0; i < n; ++i) local[part.slots[i]] = int32_t(i);
+  std::vector<int32_t> keys, neighbours;
+  std::vector<int8_t> last(size_t(n) * kSolidChunkVoxels);
+  std::vector<uint32_t> parents(level.parents ? size_t(n) * 512 * 3 : 0);
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t slot = part.slots[i];
+    const Key k = level.keys[slot];
+    for (int a = 0; a < 3; ++a) keys.push_back(int32_t(k[size_t(a)]));
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = index.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          const auto l = it == index.end() ? local.end() : local.find(it->second);
+          neighbours.push_back(l == local.end() ? -1 : l->second);
+        }
+    std::copy_n(level.last(slot), kSolidChunkVoxels, last.begin() + std::ptrdiff_t(i) * kSolidChunkVoxels);
+    if (level.parents) std::copy_n(level.parents(slot), 512 * 3, parents.begin() + std::ptrdiff_t(i) * 512 * 3);
+  }
+  return uploadChunks(commands, n, keys, last, neighbours, parents);
+}
+
+// One part: every step on the device, then its centre's final triples to `finish`.
+void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelInput& level, const KeyIndex& index,
+                    const Part& part, const SolidChunkSink& finish, const Context& ctx) {
+  Commands commands(device);
+  const SolidChunks chunks = uploadPart(commands, level, index, part);
+  if (level.parents) solidUpsampleKernel(commands, chunks, tables);
+  else solidInitKernel(commands, chunks, tables, level.seed, level.jitter256);
+  solidColorKernel(commands, chunks, tables, 0);
+  for (int t = 1; t <= level.steps; ++t) {
+    solidCorrectKernel(commands, chunks, tables, level.interleave, t);
+    solidCommitKernel(commands, chunks, level.interleave, t);
+  }
+  std::vector<uint32_t> triples(part.centre * kSolidChunkVoxels * 3);
+  commands.download(chunks.triples, 0, triples.data(), triples.size() * 4);
+  commands.submit(ctx);
+  const auto steps = int8_t(level.steps);
+  parallelFor(0, int(part.centre), ctx, [&](int b, int e) {
+    for (int i = b; i < e; ++i) {
+      const uint32_t slot = part.slots[size_t(i)];
+      const int8_t* last = level.last(slot);
+      if (std::find(last, last + kSolidChunkVoxels, steps) != last + kSolidChunkVoxels)
+        finish(slot, triples.data() + size_t(i) * kSolidChunkVoxels * 3);
+    }
+  });
+}
+
+} // namespace
+
+void synthesizeSolidLevel(Device& device, const cpu::SolidTables& tables, const SolidLevelInput& level,
+                          const SolidChunkSink& finish, const Context& ctx) {
+  const size_t n = level.keys.size();
+  if (n == 0) return;
+  const std::vector<Key> keys(level.keys.begin(), level.keys.end());
+  KeyIndex index;
+  for (uint32_t s = 0; s < n; ++s) index.emplace(keys[s], s);
+  // A correction step reads 2 voxels around each voxel: T steps reach ceil(2T / 16) chunks.
+  const int halo = (2 * level.steps + 15) / 16;
+  std::vector<uint32_t> all(n);
+  for (uint32_t s = 0; s < n; ++s) all[s] = s;
+  std::vector<Part> parts;
+  split(keys, index, std::move(all), halo, SolidChunks::maxCount(device), parts);
+
+  Commands commands(device);
+  const SolidTables deviceTables = uploadSolidTables(commands, tables);
+  commands.submit(ctx);
+  for (const Part& part : parts) synthesizePart(device, deviceTables, level, index, part, finish, ctx);
+}
+
+} // namespace texfab::synthesis::vulkan

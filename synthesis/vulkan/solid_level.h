@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// One level of lazy solid synthesis on a Vulkan device, as the engine (synthesize_solid.cpp) hands
+// it over once the level's masks are known: the device initializes or upsamples every needed voxel,
+// then runs the correction steps (solid kernels, solid_kernels.h), and the engine receives the
+// final triples chunk by chunk. The masks, their dilation, the parents' blocks and the coarse-level
+// cache stay on the CPU.
+//
+// A level whose chunks do not fit one binding (SolidChunks::maxCount) is computed in parts, each
+// with a halo of chunks around it deep enough for its correction steps (2 voxels per step), which
+// are computed again by the neighbouring part: a voxel's value does not depend on the part.
+
+#include "render/image/context.h"
+#include "synthesis/cpu/solid_kernels.h"
+#include "synthesis/vulkan/runtime.h"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <span>
+
+namespace texfab::synthesis::vulkan {
+
+struct SolidLevelInput {
+  std::span<const std::array<int64_t, 3>> keys;             ///< the level's 16^3 chunks (position / 16)
+  std::function<const int8_t*(uint32_t slot)> last;         ///< a chunk's mask, 4096 values
+  std::function<const uint32_t*(uint32_t slot)> parents;    ///< its parents' 8^3 triples; empty at the coarsest level
+  int steps = 0;        ///< correction steps T
+  int interleave = 1;
+  uint32_t seed = 0;    ///< initialization (coarsest level)
+  int64_t jitter256 = 0;
+};
+
+/// Receives the final triples (4096 * 3) of chunk `slot`; called from several threads at once.
+using SolidChunkSink = std::function<void(uint32_t slot, const uint32_t* triples)>;
+
+/// Synthesizes the level: every chunk holding a voxel with last = steps goes to `finish`.
+void synthesizeSolidLevel(Device& device, const cpu::SolidTables& tables, const SolidLevelInput& level,
+                          const SolidChunkSink& finish, const Context& ctx);
+
+} // namespace texfab::synthesis::vulkan
