@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Internal to geometry/: one reader/writer pair per format (obj_io.cpp, ply_io.cpp, off_io.cpp,
-// stl_io.cpp, gltf_read.cpp, gltf_write.cpp) behind readMesh/writeMesh, plus shared helpers.
+// stl_io.cpp, gltf_read.cpp, gltf_write.cpp, threemf_io.cpp) behind readMesh/writeMesh, plus shared
+// helpers.
 // Readers may return meshes that validateMesh has not checked yet; readMesh validates.
 
 #include "geometry/mesh_io.h"
@@ -19,6 +20,7 @@ Mesh readPly(const std::filesystem::path& path);
 Mesh readOff(const std::filesystem::path& path);
 Mesh readStl(const std::filesystem::path& path);
 Mesh readGltf(const std::filesystem::path& path); ///< .gltf and .glb
+Mesh read3mf(const std::filesystem::path& path);   ///< lib3mf inside threemf_io.cpp only
 
 /// Writers write to `tmp` (and commit any side files themselves, after the main file is complete
 /// in `tmp`); the caller renames `tmp` onto `path`.
@@ -35,6 +37,7 @@ void writeGltf(const Mesh& mesh, const std::filesystem::path& path, const std::f
 /// A texture's image as the writers store it: its file's bytes when options.textures is Keep and
 /// it has them, else encoded in the requested format (Keep: PNG).
 EncodedImage storedImage(const Texture& texture, const MeshWriteOptions& options);
+void write3mf(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp);
 
 /// The whole file; throws texfab::Error naming it when it cannot be read or exceeds `maxBytes`.
 std::vector<uint8_t> readFileBytes(const std::filesystem::path& path, uint64_t maxBytes = uint64_t(4) << 30);

@@ -27,7 +27,8 @@ MeshFormat meshFormatOf(const fs::path& path) {
   if (ext == ".stl") return MeshFormat::Stl;
   if (ext == ".gltf") return MeshFormat::Gltf;
   if (ext == ".glb") return MeshFormat::Glb;
-  throw Error(path.string() + ": unknown mesh format '" + ext + "' (expected .obj, .ply, .off, .stl, .gltf or .glb)");
+  if (ext == ".3mf") return MeshFormat::ThreeMf;
+  throw Error(path.string() + ": unknown mesh format '" + ext + "' (expected .obj, .ply, .off, .stl, .gltf, .glb or .3mf)");
 }
 
 const char* meshFormatName(MeshFormat format) {
@@ -38,6 +39,7 @@ const char* meshFormatName(MeshFormat format) {
   case MeshFormat::Stl: return "STL";
   case MeshFormat::Gltf: return "glTF";
   case MeshFormat::Glb: return "GLB";
+  case MeshFormat::ThreeMf: return "3MF";
   }
   return "?";
 }
@@ -58,6 +60,7 @@ Mesh readMesh(const fs::path& path, const Context& ctx) {
   case MeshFormat::Stl: mesh = detail::readStl(path); break;
   case MeshFormat::Gltf:
   case MeshFormat::Glb: mesh = detail::readGltf(path); break;
+  case MeshFormat::ThreeMf: mesh = detail::read3mf(path); break;
   }
   validateMesh(mesh, path.string());
   return mesh;
@@ -79,6 +82,7 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
     case MeshFormat::Stl: detail::writeStl(mesh, tmp, options.binary); break;
     case MeshFormat::Gltf: detail::writeGltf(mesh, path, tmp, false, options, sideFiles); break;
     case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options, sideFiles); break;
+    case MeshFormat::ThreeMf: detail::write3mf(mesh, path, tmp); break;
     }
   } catch (...) {
     discardTemporary(tmp);

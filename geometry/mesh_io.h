@@ -3,6 +3,7 @@
 // Reading and writing meshes. The format follows the file extension (case-insensitive):
 //   .obj (+ .mtl and its textures)   .ply (ascii / binary)   .off   .stl (ascii / binary)
 //   .gltf / .glb (glTF 2.0; KHR_draco_mesh_compression and KHR_texture_transform read)
+//   .3mf (core + Materials and Properties: texture2d with per-corner UVs, base materials)
 // Readers triangulate polygons, apply glTF node transforms, and validate the result
 // (validateMesh): bad input throws texfab::Error with a one-line message naming the file.
 // References inside a model (MTL files, textures, glTF buffers and images) must stay inside the
@@ -18,7 +19,7 @@
 
 namespace texfab::geometry {
 
-enum class MeshFormat { Obj, Ply, Off, Stl, Gltf, Glb };
+enum class MeshFormat { Obj, Ply, Off, Stl, Gltf, Glb, ThreeMf };
 
 /// The format of `path` from its extension; throws texfab::Error for an unknown one.
 MeshFormat meshFormatOf(const std::filesystem::path& path);
@@ -72,6 +73,9 @@ struct MeshWriteOptions {
 ///    and norm; map_Pr) with images next to the OBJ, named <stem>_<material>_<kind>.<ext>.
 ///  - PLY: positions, per-vertex normals (averaged), per-corner UVs as the face property
 ///    `texcoord` (MeshLab's convention), per-face material index as `material_index`.
+///  - 3MF: positions and triangles; textured materials as texture2d (image times colour factor)
+///    with per-corner UVs, plain materials as base materials (display colour). Normals, tangents,
+///    other maps and PBR factors are not in 3MF's core or Materials extension.
 ///  - OFF, STL: positions and triangles only.
 void writeMesh(const Mesh& mesh, const std::filesystem::path& path, const MeshWriteOptions& options = {});
 

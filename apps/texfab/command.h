@@ -19,6 +19,8 @@ Command addTextureCommand(CLI::App& root);
 Command addAtlasCommand(CLI::App& root);
 Command addSynthCommand(CLI::App& root);
 Command addSolidCommand(CLI::App& root);
+Command addSliceCommand(CLI::App& root);
+Command addMergeSlicesCommand(CLI::App& root);
 Command addRenderCommand(CLI::App& root);
 Command addStatsCommand(CLI::App& root);
 Command addInfoCommand(CLI::App& root);

@@ -80,8 +80,9 @@ int main(int argc, char** argv) {
   // Pipeline order: the main job first, then its parts, then the tools around them.
   const std::vector<cli::Command> commands{
       cli::addTextureCommand(app), cli::addAtlasCommand(app),  cli::addSynthCommand(app),
-      cli::addSolidCommand(app),   cli::addRenderCommand(app), cli::addStatsCommand(app),
-      cli::addInfoCommand(app),    cli::addConvertCommand(app)};
+      cli::addSolidCommand(app),   cli::addSliceCommand(app),  cli::addMergeSlicesCommand(app),
+      cli::addRenderCommand(app),  cli::addStatsCommand(app),  cli::addInfoCommand(app),
+      cli::addConvertCommand(app)};
 
   // An unknown command is named (CLI11 would print the top-level help for "texfab cut --help").
   std::string names;

@@ -1,0 +1,142 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Textured 3MF: files texfab writes read back with lib3mf itself (geometry, per-corner UVs in a
+// texture2d group, the texture's pixels, base material colours), texfab's own reader round trip,
+// and `texfab convert` and `texfab texture` writing 3MF.
+#include "geometry/mesh_io.h"
+#include "render/image/image_io.h"
+#include "tests/geometry/test_meshes.h"
+
+#include <Model/COM/NMR_DLLInterfaces.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace texfab::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace NMR;
+
+struct Owned {
+  PLib3MFBase* p = nullptr;
+  ~Owned() {
+    if (p) lib3mf_release(p);
+  }
+};
+
+// The texturedCube's faces as written: material 0 (textured) on the first six triangles.
+TEST(ThreeMf, Lib3mfReadsGeometryUvsAndTexture) {
+  TempDir dir;
+  const geometry::Mesh cube = texturedCube();
+  geometry::writeMesh(cube, dir / "cube.3mf");
+  Owned model, reader, objects, object, properties;
+  ASSERT_EQ(lib3mf_createmodel(&model.p), LIB3MF_OK);
+  ASSERT_EQ(lib3mf_model_queryreader(model.p, "3mf", &reader.p), LIB3MF_OK);
+  ASSERT_EQ(lib3mf_reader_readfromfileutf8(reader.p, (dir / "cube.3mf").c_str()), LIB3MF_OK);
+  ASSERT_EQ(lib3mf_model_getmeshobjects(model.p, &objects.p), LIB3MF_OK);
+  BOOL more = false;
+  ASSERT_EQ(lib3mf_resourceiterator_movenext(objects.p, &more), LIB3MF_OK);
+  ASSERT_TRUE(more);
+  ASSERT_EQ(lib3mf_resourceiterator_getcurrent(objects.p, &object.p), LIB3MF_OK);
+  DWORD nv = 0, nt = 0;
+  lib3mf_meshobject_getvertexcount(object.p, &nv);
+  lib3mf_meshobject_gettrianglecount(object.p, &nt);
+  ASSERT_EQ(nv, cube.vertexCount());
+  ASSERT_EQ(nt, cube.triangleCount());
+  for (DWORD i = 0; i < nv; ++i) {
+    MODELMESHVERTEX v;
+    lib3mf_meshobject_getvertex(object.p, i, &v);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(v.m_fPosition[k], cube.positions[i][k]);
+  }
+  ASSERT_EQ(lib3mf_meshobject_createpropertyhandler(object.p, &properties.p), LIB3MF_OK);
+  DWORD textureId = 0;
+  for (DWORD t = 0; t < nt; ++t) {
+    MODELMESHTRIANGLE tri;
+    lib3mf_meshobject_gettriangle(object.p, t, &tri);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(tri.m_nIndices[k], cube.triangles[t][size_t(k)]);
+    if (cube.materialOf(t) == 0) {
+      MODELMESHTEXTURE2D uv{};
+      ASSERT_EQ(lib3mf_propertyhandler_gettexture(properties.p, t, &uv), LIB3MF_OK);
+      ASSERT_NE(uv.m_nTextureID, 0u);
+      textureId = uv.m_nTextureID;
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(uv.m_fU[k], cube.uvs[3 * t + size_t(k)].x());
+        EXPECT_EQ(uv.m_fV[k], cube.uvs[3 * t + size_t(k)].y());
+      }
+    } else {
+      DWORD group = 0, index = 0;
+      ASSERT_EQ(lib3mf_propertyhandler_getbasematerial(properties.p, t, &group, &index), LIB3MF_OK);
+      Owned materials;
+      ASSERT_EQ(lib3mf_model_getbasematerialbyid(model.p, group, &materials.p), LIB3MF_OK);
+      BYTE r = 0, g = 0, b = 0, a = 0;
+      lib3mf_basematerial_getdisplaycolor(materials.p, index, &r, &g, &b, &a);
+      // Linear factor 0.2, 0.4, 0.6 in sRGB bytes.
+      EXPECT_EQ(int(r), 124);
+      EXPECT_EQ(int(g), 170);
+      EXPECT_EQ(int(b), 203);
+    }
+  }
+  // The texture: the material's image, as PNG bytes in the package.
+  Owned texture, attachment;
+  ASSERT_EQ(lib3mf_model_gettexture2dbyid(model.p, textureId, &texture.p), LIB3MF_OK);
+  ASSERT_EQ(lib3mf_texture2d_getattachment(texture.p, &attachment.p), LIB3MF_OK);
+  ULONG64 size = 0;
+  lib3mf_attachment_getstreamsize(attachment.p, &size);
+  std::vector<uint8_t> png(size);
+  ASSERT_EQ(lib3mf_attachment_writetobuffer(attachment.p, png.data(), size), LIB3MF_OK);
+  const Image image = decodeImage(png, "texture");
+  const Image& expected = *cube.materials[0].baseColorTexture.image;
+  ASSERT_EQ(image.width, expected.width);
+  ASSERT_EQ(image.height, expected.height);
+  // The factor (1, 0.9, 0.8) is multiplied in (linear light); red is untouched.
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) EXPECT_NEAR(image.at(x, y, 0), expected.at(x, y, 0), 0.5f / 255);
+}
+
+TEST(ThreeMf, RoundTripThroughTexfabsReader) {
+  TempDir dir;
+  geometry::Mesh cube = texturedCube();
+  cube.materials[0].baseColorFactor = {1, 1, 1, 1};
+  geometry::writeMesh(cube, dir / "cube.3mf");
+  const geometry::Mesh back = geometry::readMesh(dir / "cube.3mf");
+  ASSERT_EQ(back.positions, cube.positions);
+  ASSERT_EQ(back.triangles, cube.triangles);
+  ASSERT_EQ(back.materials.size(), 2u);
+  for (size_t t = 0; t < cube.triangleCount(); ++t) {
+    const geometry::Material& m = back.materials[back.materialOf(t)];
+    EXPECT_EQ(bool(m.baseColorTexture), cube.materialOf(t) == 0);
+    if (cube.materialOf(t) == 0)
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(back.uvs[3 * t + size_t(k)], cube.uvs[3 * t + size_t(k)]);
+    else
+      EXPECT_NEAR(m.baseColorFactor[2], 0.6f, 0.01f);
+  }
+  const Image& a = *back.materials[back.materialOf(0)].baseColorTexture.image;
+  const Image& b = *cube.materials[0].baseColorTexture.image;
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  ASSERT_EQ(a.channels, b.channels);
+  for (size_t i = 0; i < a.pixels.size(); ++i)  // 8-bit PNG in the package: equal to the byte
+    ASSERT_EQ(std::lround(a.pixels[i] * 255.0f), std::lround(b.pixels[i] * 255.0f)) << i;
+}
+
+TEST(ThreeMf, ConvertAndTextureWriteIt) {
+  TempDir dir;
+  const std::string cli = TEXFAB_CLI;
+  const fs::path obj = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/marble_cube.obj";
+  ASSERT_EQ(std::system((cli + " convert '" + obj.string() + "' '" + (dir / "c.3mf").string() + "' -q").c_str()), 0);
+  const geometry::Mesh converted = geometry::readMesh(dir / "c.3mf");
+  EXPECT_EQ(converted.triangleCount(), geometry::readMesh(obj).triangleCount());
+  EXPECT_TRUE(converted.hasUvs());
+  const fs::path exemplar = fs::path(TEXFAB_SOURCE_DIR) / "models/exemplars/brick.png";
+  const fs::path knot = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/knot1.off";
+  ASSERT_EQ(std::system((cli + " texture '" + knot.string() + "' -e '" + exemplar.string() + "' -o '" +
+                         (dir / "t.3mf").string() + "' --resolution 256 -q --no-cache").c_str()),
+            0);
+  const geometry::Mesh textured = geometry::readMesh(dir / "t.3mf");
+  ASSERT_EQ(textured.materials.size(), 1u);
+  EXPECT_EQ(textured.materials[0].baseColorTexture.image->width, 256);
+}
+
+} // namespace
+} // namespace texfab::testing

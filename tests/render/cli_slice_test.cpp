@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// texfab slice end to end: a small print with its manifest (checksums of the files written), the
+// preview and the report; shards through the command line merged by merge-slices; bad input and a
+// disk that fills up: one line, a non-zero exit, and no output.
+#include "geometry/mesh_io.h"
+#include "render/image/image_io.h"
+#include "render/slice_writer.h"
+#include "tests/geometry/solid_meshes.h"
+#include "tests/golden/golden_cases.h"
+#include "tests/test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace {
+namespace fs = std::filesystem;
+using texfab::test::TempDir;
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Runs `texfab slice ARGS`; stderr goes to `err`.
+int slice(const std::string& args, const fs::path& err = "/dev/null") {
+  return texfab::test::run(std::string(TEXFAB_CLI) + " slice " + args + " 2>'" + err.string() + "'");
+}
+
+// Built by appending: GCC 12 warns falsely (-Wrestrict) on "'" + std::string.
+std::string quoted(const fs::path& p) {
+  std::string q(1, '\'');
+  q.append(p.string()).push_back('\'');
+  return q;
+}
+
+// A 6 mm sphere as an OFF file, written once per test folder.
+fs::path sphereModel(const TempDir& dir) {
+  const fs::path p = dir / "sphere.off";
+  texfab::geometry::writeMesh(texfab::testing::makeIcoSphere(3.0f, 3), p);
+  return p;
+}
+
+const std::string kSmall = " --height 6 --dpi 127 --layer 0.2 --shell 0.6 -q";  // 30^3 voxels
+
+TEST(CliSlice, WritesLayersManifestPreviewAndReport) {
+  TempDir dir;
+  const fs::path model = sphereModel(dir);
+  ASSERT_EQ(slice(quoted(model) + " -o " + quoted(dir / "out") + kSmall + " --preview " + quoted(dir / "p.png") +
+                  " --report " + quoted(dir / "r.json")),
+            0);
+  const nlohmann::json m = nlohmann::json::parse(readText(dir / "out" / "slices.json"));
+  EXPECT_EQ(m["layers"]["count"], 30);
+  EXPECT_EQ(m["print"]["image"]["width"], 30);
+  EXPECT_EQ(m["print"]["materials"].size(), 6u);
+  ASSERT_EQ(m["files"].size(), 30u);
+  for (const auto& f : m["files"]) {
+    const std::string text = readText(dir / "out" / f["file"].get<std::string>());
+    const std::vector<uint8_t> bytes(text.begin(), text.end());
+    EXPECT_EQ(texfab::render::sha256Hex(bytes), f["sha256"]);
+    EXPECT_EQ(texfab::readImage(dir / "out" / f["file"].get<std::string>()).width, 30);
+  }
+  const texfab::Image preview = texfab::readImage(dir / "p.png");
+  EXPECT_GT(preview.width, 200);
+  const nlohmann::json r = nlohmann::json::parse(readText(dir / "r.json"));
+  EXPECT_GT(r["voxels"]["shell"].get<int64_t>(), 0);
+  EXPECT_LT(r["voxels"]["shell"].get<int64_t>(), r["voxels"]["inside"].get<int64_t>());
+}
+
+TEST(CliSlice, ShardsMergeIntoTheFullRun) {
+  TempDir dir;
+  const fs::path model = sphereModel(dir);
+  texfab::writeImage(texfab::golden::marble32(), dir / "marble32.png");  // a small exemplar: a fast analysis
+  const std::string common = quoted(model) + kSmall + " -e " + quoted(dir / "marble32.png") +
+                             " --feature-size 2 --cache-dir " + quoted(dir / "cache");
+  ASSERT_EQ(slice(common + " -o " + quoted(dir / "full") + " --threads 2"), 0);
+  for (int i = 0; i < 3; ++i)
+    ASSERT_EQ(slice(common + " -o " + quoted(dir / ("part" + std::to_string(i))) + " --shard " + std::to_string(i) +
+                    "/3 --threads 1"),
+              0);
+  ASSERT_EQ(slice(common + " -o " + quoted(dir / "lo") + " --layers 10:20"), 0);
+  const std::string merge = std::string(TEXFAB_CLI) + " merge-slices " + quoted(dir / "part2") + " " +
+                            quoted(dir / "part0") + " " + quoted(dir / "part1") + " -o " + quoted(dir / "merged");
+  ASSERT_EQ(texfab::test::run(merge), 0);
+  for (const auto& e : fs::directory_iterator(dir / "full"))
+    EXPECT_EQ(readText(e.path()), readText(dir / "merged" / e.path().filename())) << e.path().filename();
+  EXPECT_EQ(readText(dir / "lo" / "slice_00015.png"), readText(dir / "full" / "slice_00015.png"));
+}
+
+// One line on stderr, exit status `status` (1: a flag's value, 2: bad input), and no output folder.
+void expectRefused(const TempDir& dir, const std::string& args, const std::string& message, int status = 2) {
+  const fs::path out = dir / "refused";
+  const int got = slice(args + " -o " + quoted(out), dir / "err.txt");
+  const std::string err = readText(dir / "err.txt");
+  EXPECT_EQ(got, status) << args << ": " << err;
+  EXPECT_NE(err.find(message), std::string::npos) << args << ": " << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_FALSE(fs::exists(out)) << args;
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".refused"), std::string::npos) << "left behind: " << e.path();
+}
+
+TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
+  TempDir dir;
+  const std::string model = quoted(sphereModel(dir)) + " -q";
+  expectRefused(dir, model + " --dpi 0", "--dpi", 1);
+  expectRefused(dir, model + " --dpi 600,-3", "--dpi", 1);
+  expectRefused(dir, model + " --height -5", "--height", 1);
+  expectRefused(dir, model + " --height nan", "--height", 1);
+  expectRefused(dir, model + " --layer 0", "--layer", 1);
+  expectRefused(dir, model + " --shell -1", "--shell", 1);
+  expectRefused(dir, model + " --layers 5:99999", "--layers");
+  expectRefused(dir, model + " --shard 3/3", "--shard", 1);
+  expectRefused(dir, model + " --dither sparkle", "--dither", 1);
+  expectRefused(dir, model + " --core gold", "no material named 'gold'");
+  expectRefused(dir, quoted(dir / "missing.off"), "missing.off");
+  expectRefused(dir, model + " --bogus", "bogus", 1);
+  std::ofstream(dir / "none.json") << R"({"materials": []})";
+  expectRefused(dir, model + " --materials " + quoted(dir / "none.json"), "no materials");
+  std::ofstream(dir / "bad.json") << R"([{"name": "Red", "color": "#FF00"}])";
+  expectRefused(dir, model + " --materials " + quoted(dir / "bad.json"), "#RRGGBB");
+  // An open model that cannot be repaired: a sphere missing two triangles that touch at one vertex
+  // only (two holes through one vertex, not simple loops). One missing triangle is closed instead.
+  texfab::geometry::Mesh open = texfab::testing::makeIcoSphere(3.0f, 2);
+  const auto first = open.triangles[0];
+  const auto touching = std::find_if(open.triangles.begin() + 1, open.triangles.end(), [&](const auto& t) {
+    int shared = 0;
+    for (auto a : t)
+      for (auto b : first) shared += a == b;
+    return shared == 1;
+  });
+  ASSERT_NE(touching, open.triangles.end());
+  open.triangles.erase(touching);
+  open.triangles.erase(open.triangles.begin());
+  texfab::geometry::writeMesh(open, dir / "open.off");
+  expectRefused(dir, quoted(dir / "open.off") + " -q", "not closed");
+  // A layer larger than this machine's memory.
+  expectRefused(dir, model + " --height 250 --dpi 100000 --layer 10", "more than this machine's");
+}
+
+TEST(CliSlice, ExistingOutputNeedsForce) {
+  TempDir dir;
+  const std::string model = quoted(sphereModel(dir)) + kSmall;
+  fs::create_directories(dir / "out");
+  std::ofstream(dir / "out" / "keep.txt") << "x";
+  EXPECT_EQ(slice(model + " -o " + quoted(dir / "out"), dir / "err.txt"), 2);
+  EXPECT_NE(readText(dir / "err.txt").find("--force"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "out" / "keep.txt"));
+  EXPECT_EQ(slice(model + " -o " + quoted(dir / "out") + " --force"), 0);
+  EXPECT_FALSE(fs::exists(dir / "out" / "keep.txt"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "slices.json"));
+}
+
+TEST(CliSlice, AFullDiskLeavesNoOutput) {
+  // A file size limit (ulimit -f, SIGXFSZ ignored) makes a layer's write fail the way a full disk
+  // does; the run must stop with one line and leave neither layers nor a manifest.
+  TempDir dir;
+  const std::string command = "bash -c \"trap '' XFSZ; ulimit -f 1; '" + std::string(TEXFAB_CLI) + "' slice " +
+                              quoted(sphereModel(dir)) + kSmall + " --format voxelprint -o " + quoted(dir / "out") +
+                              "\" 2>" + quoted(dir / "err.txt");
+  EXPECT_EQ(texfab::test::run(command), 2);
+  const std::string err = readText(dir / "err.txt");
+  EXPECT_NE(err.find("disk full"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << "left behind: " << e.path();
+}
+
+} // namespace
