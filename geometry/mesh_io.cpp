@@ -45,7 +45,8 @@ const char* meshFormatName(MeshFormat format) {
 }
 
 bool meshFormatCarriesTextures(MeshFormat format) {
-  return format == MeshFormat::Obj || format == MeshFormat::Gltf || format == MeshFormat::Glb;
+  return format == MeshFormat::Obj || format == MeshFormat::Gltf || format == MeshFormat::Glb ||
+         format == MeshFormat::ThreeMf;  // base colour only
 }
 
 Mesh readMesh(const fs::path& path, const Context& ctx) {

@@ -27,7 +27,8 @@ MeshFormat meshFormatOf(const std::filesystem::path& path);
 /// Human-readable names: "OBJ", "PLY", ...
 const char* meshFormatName(MeshFormat format);
 
-/// Whether the format carries materials with textures (glTF, GLB, OBJ+MTL); PLY, OFF and STL do not.
+/// Whether the format carries materials with textures (glTF, GLB, OBJ+MTL; 3MF: the base colour
+/// only); PLY, OFF and STL do not.
 bool meshFormatCarriesTextures(MeshFormat format);
 
 /// Reads a mesh. Texture images of OBJ and glTF materials are decoded (and their file bytes kept:

@@ -90,7 +90,7 @@ void runTexture(TextureJob& job) {
   if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --scale or --feature-size, not both");
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
-                     " files cannot carry the texture; write .glb, .gltf or .obj");
+                     " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
   checkMemory(render::textureMeshMemoryBytes(o), "a " + std::to_string(o.atlas.pack.width) + "x" +
                                                      std::to_string(o.atlas.pack.height) + " atlas");
   const CompanionFiles maps = parseMaps(job.maps);
