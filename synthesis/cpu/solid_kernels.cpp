@@ -173,24 +173,12 @@ uint32_t nearest2d(const VoxelSearch& s, const SolidTables& t, int e) {
   return coordV(uint32_t(best)) * uint32_t(t.exemplarWidth) + coordU(uint32_t(best));
 }
 
-// Step 2: the rank e * kSolidMaxCandidates + k of the best of the k3d 3-D candidates of the three pixels.
-uint32_t nearest3d(const VoxelSearch& s, const SolidTables& t) {
-  uint64_t best = UINT64_MAX;
-  for (int e = 0; e < 3; ++e) {
-    const int8_t* descriptors = t.descriptors3d[e] + size_t(s.pixels[e]) * kSolidMaxCandidates * size_t(t.dims);
-    for (int k = 0; k < t.k3d; ++k)
-      best = std::min(best, searchKey(ssd(s.target3d, descriptors + size_t(k) * size_t(t.dims), t.dims),
-                                      uint32_t(e * kSolidMaxCandidates + k)));
-  }
-  return uint32_t(best);
-}
-
 void correctVoxel(VoxelSearch& s, const uint32_t* in, const int16_t* inColors, const Correction& c,
                   const SolidTables& t, Neighborhood& n) {
   findBases(s, in, c.bases);
   projectTargets(s, inColors, c, t, n);
   for (int e = 0; e < 3; ++e) s.pixels[e] = nearest2d(s, t, e);
-  s.triple = tripleOf(t, s.pixels, nearest3d(s, t));
+  s.triple = tripleOf(t, s.pixels, nearest3d(s, t, ssd));
 }
 
 } // namespace

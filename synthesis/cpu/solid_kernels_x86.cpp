@@ -225,14 +225,7 @@ void searchStep1Sse(VoxelSearch* batch, int count, const SolidTables& t) {
 void searchStep2Sse(VoxelSearch* batch, int count, const SolidTables& t) {
   for (int i = 0; i < count; ++i) {
     VoxelSearch& s = batch[i];
-    uint64_t best = UINT64_MAX;
-    for (int e = 0; e < 3; ++e) {
-      const int8_t* descriptors = t.descriptors3d[e] + size_t(s.pixels[e]) * kSolidMaxCandidates * size_t(t.dims);
-      for (int k = 0; k < t.k3d; ++k)
-        best = std::min(best, searchKey(ssd(s.target3d, descriptors + size_t(k) * size_t(t.dims), t.dims),
-                                        uint32_t(e * kSolidMaxCandidates + k)));
-    }
-    keepStep2(s, tripleOf(t, s.pixels, uint32_t(best)));
+    keepStep2(s, tripleOf(t, s.pixels, nearest3d(s, t, ssd)));
   }
 }
 

@@ -16,6 +16,8 @@
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/solid_analysis.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <cstring>
 
 namespace texfab::synthesis::cpu {
@@ -105,6 +107,21 @@ void forEachCorrected(const int8_t* last, const VolumeGrid& g, int interleave, i
 }
 
 inline uint64_t searchKey(int32_t ssd, uint32_t tie) { return uint64_t(uint32_t(ssd)) << 32 | tie; }
+
+/// Step 2: the rank e * kSolidMaxCandidates + k of the best of the k3d 3-D candidates of the three
+/// pixels; `ssd(a, b, n)` is the file's sum of squared differences (exact integers, so every
+/// variant gives the same rank).
+template <class Ssd>
+uint32_t nearest3d(const VoxelSearch& s, const SolidTables& t, Ssd&& ssd) {
+  uint64_t best = UINT64_MAX;
+  for (int e = 0; e < 3; ++e) {
+    const int8_t* descriptors = t.descriptors3d[e] + size_t(s.pixels[e]) * kSolidMaxCandidates * size_t(t.dims);
+    for (int k = 0; k < t.k3d; ++k)
+      best = std::min(best, searchKey(ssd(s.target3d, descriptors + size_t(k) * size_t(t.dims), t.dims),
+                                      uint32_t(e * kSolidMaxCandidates + k)));
+  }
+  return uint32_t(best);
+}
 
 /// (sum + offset) >> shift clamped to +-127: one projected dimension (round half up, as
 /// SolidProjection).
