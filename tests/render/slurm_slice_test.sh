@@ -86,8 +86,16 @@ sinfo -h -o %t 2> /dev/null | grep -q idle || fail "the node did not come up"
 args=("$repo/models/meshes/knot1.off" --height 12 --dpi 200 --layer 0.2 --shell 0.8
       -e "$repo/models/exemplars/marble.png" --feature-size 3 --cache-dir "$D/cache")
 "$texfab" slice "${args[@]}" -o "$D/single" -q 2> "$D/single.log" || fail "the single run failed"
-"$repo/scripts/slurm-slice.sh" --tasks 4 --cpus 1 --texfab "$texfab" --wait "${args[@]:0:1}" "$D/out" \
-  "${args[@]:1}" > "$D/submit.log" 2>&1 || fail "the Slurm run failed"
+# A job that does not finish in 150 s is stuck (the single run above takes seconds): say what
+# Slurm saw instead of running into ctest's timeout.
+timeout 150 "$repo/scripts/slurm-slice.sh" --tasks 4 --cpus 1 --texfab "$texfab" --wait "${args[@]:0:1}" \
+  "$D/out" "${args[@]:1}" > "$D/submit.log" 2>&1
+status=$?
+if [ $status -ne 0 ]; then
+  { squeue -a -o '%i %j %T %r'; scontrol show node localhost; } > "$D/queue.log" 2>&1
+  [ $status -eq 124 ] && fail "the Slurm jobs did not finish in 150 s"
+  fail "the Slurm run failed (exit $status)"
+fi
 [ -f "$D/out/slices.json" ] || fail "no merged manifest"
 [ ! -e "$D/out.parts" ] || fail "the shards were not removed after the merge"
 diff -r "$D/single" "$D/out" > "$D/diff.log" || fail "merged output differs from the single run"
