@@ -19,8 +19,8 @@ chmod 755 "$D"
 pids=()
 cleanup() {
   if [ -n "${SLURM_CONF:-}" ]; then
-    scancel --quiet --user="$(id -un)" 2> /dev/null
-    scontrol shutdown 2> /dev/null
+    timeout 10 scancel --quiet --user="$(id -un)" 2> /dev/null
+    timeout 10 scontrol shutdown 2> /dev/null
   fi
   for pid in "${pids[@]}"; do
     for _ in $(seq 50); do kill -0 "$pid" 2> /dev/null || break; sleep 0.1; done
@@ -39,10 +39,12 @@ pids+=($!)
 for _ in $(seq 100); do munge -n -S "$D/munge.sock" > /dev/null 2>&1 && break; sleep 0.1; done
 munge -n -S "$D/munge.sock" > /dev/null 2>&1 || fail "munged did not start"
 
-# Two free ports on 127.0.0.1.
+# Two free ports. The daemons listen on every interface: CommunicationParameters=NoInAddrAny would
+# bind them to the address of the machine's host name, which a chroot or a minimal container may
+# not resolve (both daemons then exit); only holders of this test's private munge key get in.
 read -r ctld_port slurmd_port < <(python3 -c 'import socket
 s = [socket.socket() for _ in range(2)]
-[x.bind(("127.0.0.1", 0)) for x in s]
+[x.bind(("", 0)) for x in s]
 print(*[x.getsockname()[1] for x in s])')
 mkdir -p "$D/state" "$D/spool"
 cat > "$D/slurm.conf" <<EOF
@@ -50,7 +52,6 @@ ClusterName=texfab-test
 SlurmctldHost=localhost(127.0.0.1)
 SlurmctldPort=$ctld_port
 SlurmdPort=$slurmd_port
-CommunicationParameters=NoCtldInAddrAny,NoInAddrAny
 SlurmUser=$(id -un)
 AuthType=auth/munge
 CredType=cred/munge
@@ -74,13 +75,18 @@ ReturnToService=2
 NodeName=localhost NodeAddr=127.0.0.1 CPUs=$(nproc)
 PartitionName=test Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 EOF
+# slurmd loads a cgroup plugin even with proctrack/linuxproc and task/none; name the v1 plugin,
+# which initializes without a mounted cgroup file system (a chroot or a minimal container),
+# instead of autodetecting from /sys/fs/cgroup.
+echo "CgroupPlugin=cgroup/v1" > "$D/cgroup.conf"
 export SLURM_CONF="$D/slurm.conf"
 slurmctld -D -c > "$D/slurmctld.out.log" 2>&1 &
 pids+=($!)
 slurmd -D -N localhost > "$D/slurmd.out.log" 2>&1 &
 pids+=($!)
-for _ in $(seq 150); do sinfo -h -o %t 2> /dev/null | grep -q idle && break; sleep 0.2; done
-sinfo -h -o %t 2> /dev/null | grep -q idle || fail "the node did not come up"
+node_idle() { timeout 5 sinfo -h -o %t 2> /dev/null | grep -q idle; }
+for _ in $(seq 150); do node_idle && break; sleep 0.2; done
+node_idle || fail "the node did not come up"
 
 # The print: bundled knot, solid marble texture, 60 layers.
 args=("$repo/models/meshes/knot1.off" --height 12 --dpi 200 --layer 0.2 --shell 0.8
