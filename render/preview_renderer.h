@@ -51,6 +51,13 @@ public:
   Image render(const RenderOptions& options, const Context& ctx = {}) const;
 
 private:
+  struct View;    ///< one render()'s camera, lights and sampling
+  struct Surface; ///< what a camera ray hit: position, normals, material
+  void addSample(const View& view, int px, int py, int s, Eigen::Vector3f& sum, float& coverage) const;
+  Surface surfaceAt(const View& view, const geometry::RayHit& hit, const Eigen::Vector3f& dir) const;
+  Eigen::Vector3f lightSurface(const View& view, const Surface& surface, const Eigen::Vector3f& dir, int px, int py,
+                               int s) const;
+
   struct MaterialMaps {
     MipPyramid baseColor, metallicRoughness, normal;
   };
