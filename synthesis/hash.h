@@ -8,6 +8,7 @@
 //
 // Based on: M. Jarzynski, M. Olano. Hash Functions for GPU Rendering. JCGT 9(3), 2020 (PCG hash).
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 
@@ -40,6 +41,18 @@ struct Fnv1a {
     for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
   }
   template <class T> void add(const T& value) { add(&value, sizeof(T)); }
+};
+
+/// A cell of a 3-D integer grid (a chunk of a solid level) and its hash for unordered containers
+/// (not for randomness).
+using GridKey = std::array<int64_t, 3>;
+struct GridKeyHash {
+  size_t operator()(const GridKey& k) const {
+    uint64_t h = uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full + (h >> 29);
+    h ^= uint64_t(k[2]) * 0x165667B19E3779F9ull + (h >> 32);
+    return size_t(h ^ (h >> 31));
+  }
 };
 
 } // namespace texfab::synthesis

@@ -106,16 +106,7 @@ constexpr int kHalo = 2;                   // radius of the 61-voxel 3-neighborh
 constexpr int kGathered = kChunk + 2 * kHalo;
 constexpr int kGatheredVoxels = kGathered * kGathered * kGathered;
 
-using ChunkKey = std::array<int64_t, 3>;
-
-struct ChunkKeyHash {
-  size_t operator()(const ChunkKey& k) const {
-    uint64_t h = uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
-    h ^= uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full + (h >> 29);
-    h ^= uint64_t(k[2]) * 0x165667B19E3779F9ull + (h >> 32);
-    return size_t(h ^ (h >> 31));
-  }
-};
+using ChunkKey = GridKey;
 
 template <int Shift = kChunkShift> inline int localIndex(int64_t x, int64_t y, int64_t z) {
   constexpr int64_t m = (1 << Shift) - 1;
@@ -127,7 +118,7 @@ template <int Shift = kChunkShift> inline int localIndex(int64_t x, int64_t y, i
 template <class T, int N, int Shift = kChunkShift> struct ChunkStore {
   static constexpr int kVoxels = 1 << (3 * Shift);
   T fill{};
-  std::unordered_map<ChunkKey, uint32_t, ChunkKeyHash> index;
+  std::unordered_map<ChunkKey, uint32_t, GridKeyHash> index;
   std::vector<ChunkKey> keys;
   std::vector<std::unique_ptr<T[]>> chunks;
 

@@ -4,6 +4,7 @@
 #include "synthesis/vulkan/solid_level.h"
 
 #include "render/image/parallel.h"
+#include "synthesis/hash.h"
 #include "synthesis/vulkan/solid_kernels.h"
 
 #include <algorithm>
@@ -15,17 +16,8 @@ namespace texfab::synthesis::vulkan {
 
 namespace {
 
-using Key = std::array<int64_t, 3>;
-
-struct KeyHash {
-  size_t operator()(const Key& k) const {
-    uint64_t h = uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
-    h ^= uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full + (h >> 29);
-    h ^= uint64_t(k[2]) * 0x165667B19E3779F9ull + (h >> 32);
-    return size_t(h ^ (h >> 31));
-  }
-};
-using KeyIndex = std::unordered_map<Key, uint32_t, KeyHash>;
+using Key = GridKey;
+using KeyIndex = std::unordered_map<Key, uint32_t, GridKeyHash>;
 
 // The chunks of one part: those it finishes (its centre) first, then its halo.
 struct Part {
