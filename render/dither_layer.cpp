@@ -6,6 +6,7 @@
 #include "render/image/error.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace texfab::render {
 
@@ -27,11 +28,29 @@ void LayerDitherer::ditherRow(int y, std::span<const geometry::VoxelSpan> row, c
   ++rowsDone_;
 }
 
-void LayerDitherer::blueNoiseRow(int y, std::span<const geometry::VoxelSpan> row, const float* rgba, uint8_t* out) const {
+// Neighbouring voxels mostly share a colour (a solid texture's voxel spans several print voxels),
+// so a colour's mix is computed once per run of equal colours; the thresholds of the row come from
+// one row of the array.
+void LayerDitherer::blueNoiseRow(int y, std::span<const geometry::VoxelSpan> row, const float* rgba, uint8_t* out) {
+  const int64_t size = noise_->size;
+  const auto wrap = [size](int64_t v) { return (v % size + size) % size; };
+  const uint32_t* ranks = noise_->rank.data() + size_t(size * (wrap(y) + size * wrap(layer_)));
+  const float cells = float(noise_->rank.size());
+  thresholds_.resize(size_t(size));
+  for (int64_t i = 0; i < size; ++i) thresholds_[size_t(i)] = (float(ranks[i]) + 0.5f) / cells;  // as threshold()
+  MaterialMixer::Mix mix;
+  const float* mixed = nullptr;  // the colour `mix` is of
   for (const geometry::VoxelSpan& s : row) {
     if (!s.shell) continue;
-    for (int x = s.begin; x < s.end; ++x, rgba += 4)
-      out[x] = uint8_t(mixer_.pick(rgba, noise_->threshold(x, y, layer_)) + 1);
+    int64_t cell = wrap(s.begin);
+    for (int x = s.begin; x < s.end; ++x, rgba += 4) {
+      if (!mixed || std::memcmp(mixed, rgba, 4 * sizeof(float)) != 0) {
+        mix = mixer_.mix(rgba);
+        mixed = rgba;
+      }
+      out[x] = uint8_t(mixer_.pick(mix, thresholds_[size_t(cell)]) + 1);
+      if (++cell == size) cell = 0;
+    }
   }
 }
 

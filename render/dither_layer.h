@@ -38,7 +38,7 @@ public:
   void ditherRow(int y, std::span<const geometry::VoxelSpan> row, const float* shellRgba, uint8_t* out);
 
 private:
-  void blueNoiseRow(int y, std::span<const geometry::VoxelSpan> row, const float* rgba, uint8_t* out) const;
+  void blueNoiseRow(int y, std::span<const geometry::VoxelSpan> row, const float* rgba, uint8_t* out);
   void diffuseRow(std::span<const geometry::VoxelSpan> row, const float* rgba, uint8_t* out);
 
   const MaterialMixer& mixer_;
@@ -49,6 +49,7 @@ private:
   std::vector<float> error_, nextError_;  // Floyd-Steinberg: diffused error of this row and the next, 3 per voxel
   std::vector<float> target_;             // Floyd-Steinberg: this row's colours by x, 4 per voxel
   std::vector<uint8_t> shell_;            // Floyd-Steinberg: whether voxel x of this row is shell
+  std::vector<float> thresholds_;         // blue noise: the thresholds of this row's cells of the array
 };
 
 } // namespace texfab::render

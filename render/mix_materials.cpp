@@ -137,17 +137,27 @@ void MaterialMixer::fractions(const float rgb[3], float* out) const {
   }
 }
 
-int MaterialMixer::pick(const float rgba[4], float t) const {
-  const float alpha = std::clamp(std::isfinite(rgba[3]) ? rgba[3] : 1.0f, 0.0f, 1.0f);
-  if (t >= alpha && translucent_ >= 0) return translucent_;
-  if (translucent_ >= 0) t /= alpha;
+MaterialMixer::Mix MaterialMixer::mix(const float rgba[4]) const {
+  Mix m;
+  m.alpha = std::clamp(std::isfinite(rgba[3]) ? rgba[3] : 1.0f, 0.0f, 1.0f);
   float f[16];
   fractions(rgba, f);
   float cumulative = 0;
+  for (size_t i = 0; i < opaque_.size(); ++i) m.cumulative[i] = cumulative += f[i];
+  return m;
+}
+
+int MaterialMixer::pick(const Mix& m, float t) const {
+  if (translucent_ >= 0) {
+    if (t >= m.alpha) return translucent_;
+    t /= m.alpha;
+  }
   for (size_t i = 0; i + 1 < opaque_.size(); ++i)
-    if (t < (cumulative += f[i])) return opaque_[i];
+    if (t < m.cumulative[i]) return opaque_[i];
   return opaque_.back();
 }
+
+int MaterialMixer::pick(const float rgba[4], float t) const { return pick(mix(rgba), t); }
 
 std::array<float, 3> MaterialMixer::reproduced(const float rgb[3]) const {
   float f[16];

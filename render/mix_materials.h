@@ -36,6 +36,14 @@ public:
   /// (the first opaque one if there is none).
   int pick(const float rgba[4], float t) const;
 
+  /// A colour's mix prepared for many thresholds: pick(mix(rgba), t) == pick(rgba, t).
+  struct Mix {
+    float alpha = 1;
+    float cumulative[16] = {};  ///< running sums of the fractions, opaque() order
+  };
+  Mix mix(const float rgba[4]) const;
+  int pick(const Mix& mix, float t) const;
+
   /// The linear colour of rgb's mix (rgb itself when the materials can reproduce it).
   std::array<float, 3> reproduced(const float rgb[3]) const;
 

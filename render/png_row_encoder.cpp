@@ -166,6 +166,9 @@ void PngRowEncoder::addRow(const uint8_t* pixels) {
   literal(filter);
   adlerLiterals(&filter, 1);
   const int c = channels_;
+  // Adler-32: short runs (noise) go through zlib's adler32 together, long ones in closed form.
+  constexpr int64_t kClosedFormRun = 16;
+  int64_t pending = 0;  // first pixel not yet in the checksum
   for (int64_t x = 0; x < width_;) {
     const int64_t end = runEnd(pixels, x, width_, c);
     const uint8_t* p = pixels + x * c;
@@ -175,9 +178,14 @@ void PngRowEncoder::addRow(const uint8_t* pixels) {
     if (copied >= 3) copy(copied);
     else
       for (int64_t i = 0; i < copied; ++i) literal(p[i % c]);
-    adlerRun(p, end - x);
+    if (end - x >= kClosedFormRun) {
+      if (pending < x) adlerLiterals(pixels + pending * c, (x - pending) * c);
+      adlerRun(p, end - x);
+      pending = end;
+    }
     x = end;
   }
+  if (pending < width_) adlerLiterals(pixels + pending * c, (width_ - pending) * c);
 }
 
 std::vector<uint8_t> PngRowEncoder::finish() {

@@ -182,10 +182,9 @@ SliceResult sliceModel(const geometry::LayerVoxelizer& voxelizer, VoxelColorSour
   std::optional<MaterialMixer> mixer;
   std::optional<BlueNoiseVolume> noise;
   if (o.dither != DitherMode::None) mixer.emplace(o.materials);
-  if (o.dither == DitherMode::BlueNoise) noise = blueNoiseVolume(o.blueNoiseSize, g.pitchMm);
   std::optional<SlicePreview> preview;
   if (o.preview) preview.emplace(g, o.firstLayer, count);
-  LayerSetup setup{g, o, colors, mixer ? &*mixer : nullptr, noise ? &*noise : nullptr, {}, 0, 1, preview ? &*preview : nullptr};
+  LayerSetup setup{g, o, colors, mixer ? &*mixer : nullptr, nullptr, {}, 0, 1, preview ? &*preview : nullptr};
   setup.palette.push_back({0, 0, 0, 0});
   for (const PrintMaterial& m : o.materials) setup.palette.push_back(m.color);
   setup.core = uint8_t(findPrintMaterial(o.materials, o.coreMaterial) + 1);
@@ -200,11 +199,16 @@ SliceResult sliceModel(const geometry::LayerVoxelizer& voxelizer, VoxelColorSour
   for (int batch = o.firstLayer; batch < o.firstLayer + count; batch += o.batchLayers) {
     const int n = std::min(o.batchLayers, o.firstLayer + count - batch);
     std::vector<geometry::LayerSpans> spans(static_cast<size_t>(n));
-    parallelFor(0, n, ctx, [&](int b, int e) {
+    // Item -1 of the first batch builds the blue-noise array (serial work) beside the voxelization.
+    const int extra = o.dither == DitherMode::BlueNoise && !noise ? 1 : 0;
+    parallelFor(-extra, n, ctx, [&](int b, int e) {
       Clock::time_point t = Clock::now();
-      for (int i = b; i < e; ++i) spans[size_t(i)] = voxelizer.voxelize(batch + i);
+      for (int i = b; i < e; ++i)
+        if (i < 0) noise = blueNoiseVolume(o.blueNoiseSize, g.pitchMm);
+        else spans[size_t(i)] = voxelizer.voxelize(batch + i);
       clock.voxelize += StageClock::since(t);
     });
+    setup.noise = noise ? &*noise : nullptr;
     Clock::time_point t = Clock::now();
     colors.prepare(spans, stage.inner());
     result.report.prepareSeconds += double(StageClock::since(t)) * 1e-9;

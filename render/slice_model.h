@@ -49,7 +49,7 @@ struct SliceOptions {
   /// VeroWhite).
   std::string coreMaterial = "white";
   int blueNoiseSize = 32;  ///< period of the threshold array in voxels; 16, 24, 32, ... 64
-  int batchLayers = 16;    ///< layers per batch; 1-4096. Larger batches synthesize fewer, larger requests
+  int batchLayers = 64;    ///< layers per batch; 1-4096. Larger batches synthesize fewer, larger requests
   bool preview = false;    ///< also render SliceResult::preview
 
   void validate() const;
@@ -60,7 +60,7 @@ struct SliceReport {
   int layers = 0;             ///< layers written
   int64_t insideVoxels = 0, shellVoxels = 0;
   uint64_t bytes = 0;         ///< PNG bytes written
-  double voxelizeSeconds = 0; ///< inside and shell spans
+  double voxelizeSeconds = 0; ///< inside and shell spans (and the blue-noise array, built beside them)
   double prepareSeconds = 0;  ///< colour source preparation (solid synthesis), wall clock
   double colorSeconds = 0;    ///< shell colours
   double ditherSeconds = 0;   ///< material choice and row assembly

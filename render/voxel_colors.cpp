@@ -40,6 +40,7 @@ SolidVoxelColors::SolidVoxelColors(const synthesis::SolidAnalysis& analysis, con
     : analysis_(analysis), ex_(ex), ey_(ey), ez_(ez), options_(options), scale_(scale), grid_(grid),
       cache_(std::make_unique<synthesis::SolidLevelCache>(size_t(128) << 20)), samples_(std::make_unique<Samples>()) {
   options.validate();
+  if (grid.rotation(0, grid.modelAxisOfX) != 1) throw Error("internal: the print's x must be a model axis, unflipped");
   if (!(scale > 0) || !std::isfinite(scale)) throw Error("solid texture scale must be a positive number of voxels per model unit");
   const Eigen::Vector3d far = grid.origin + Eigen::Vector3d(grid.width, grid.height, grid.layers).cwiseProduct(grid.pitch);
   const double reach = std::max(grid.origin.cwiseAbs().maxCoeff(), far.cwiseAbs().maxCoeff()) * scale;  // any rotation
@@ -54,19 +55,56 @@ synthesis::Voxel SolidVoxelColors::solidVoxel(int x, int y, int layer) const {
   return {int64_t(std::floor(p.x())), int64_t(std::floor(p.y())), int64_t(std::floor(p.z()))};
 }
 
+int64_t SolidVoxelColors::fastCoordinate(int x) const {
+  // The rotation takes the print's x to model axis modelAxisOfX with factor +1, so that
+  // coordinate of center(x, y, layer) is centerX(x), bit for bit.
+  return int64_t(std::floor(grid_.centerX(x) * scale_));
+}
+
 void SolidVoxelColors::prepare(std::span<const geometry::LayerSpans> layers, const Context& ctx) {
   Samples next;
   const int fast = grid_.modelAxisOfX;
   next.order = fast == 0 ? std::array<int, 3>{2, 1, 0} : std::array<int, 3>{2, 0, 1};
+  // The solid voxels of each shell span: a run along the fast axis (every one between the ends
+  // when a print voxel is narrower than a solid voxel, else listed one by one).
+  struct Run {
+    int64_t slow[2], lo, hi;
+    bool operator<(const Run& o) const {
+      return slow[0] != o.slow[0] ? slow[0] < o.slow[0] : slow[1] != o.slow[1] ? slow[1] < o.slow[1] : lo < o.lo;
+    }
+  };
+  const bool contiguous = grid_.pitch.x() * scale_ <= 0.5;
+  std::vector<Run> runs;
   for (const geometry::LayerSpans& layer : layers)
-    for (int r = 0; r < layer.rows(); ++r)
-      for (const geometry::VoxelSpan& s : layer.row(r))
-        for (int x = s.shell ? s.begin : s.end; x < s.end; ++x) {
-          const synthesis::Voxel v = solidVoxel(x, grid_.height - 1 - r, layer.layer);
-          if (x == s.begin || coordinate(v, fast) != coordinate(next.voxels.back(), fast)) next.voxels.push_back(v);
+    for (int r = 0; r < layer.rows(); ++r) {
+      const synthesis::Voxel row = solidVoxel(0, grid_.height - 1 - r, layer.layer);
+      const int64_t slow[2] = {coordinate(row, next.order[0]), coordinate(row, next.order[1])};
+      for (const geometry::VoxelSpan& s : layer.row(r)) {
+        if (!s.shell) continue;
+        if (contiguous) {
+          runs.push_back({{slow[0], slow[1]}, fastCoordinate(s.begin), fastCoordinate(s.end - 1)});
+          continue;
         }
-  std::sort(next.voxels.begin(), next.voxels.end(), [&](const auto& a, const auto& b) { return next.less(a, b); });
-  next.voxels.erase(std::unique(next.voxels.begin(), next.voxels.end()), next.voxels.end());
+        for (int x = s.begin; x < s.end; ++x)
+          if (const int64_t f = fastCoordinate(x); x == s.begin || f != runs.back().hi)
+            runs.push_back({{slow[0], slow[1]}, f, f});
+      }
+    }
+  std::sort(runs.begin(), runs.end());
+  for (size_t i = 0; i < runs.size();) {
+    Run merged = runs[i];
+    for (++i; i < runs.size() && runs[i].slow[0] == merged.slow[0] && runs[i].slow[1] == merged.slow[1] &&
+              runs[i].lo <= merged.hi + 1;
+         ++i)
+      merged.hi = std::max(merged.hi, runs[i].hi);
+    synthesis::Voxel v;
+    coordinate(v, next.order[0]) = merged.slow[0];
+    coordinate(v, next.order[1]) = merged.slow[1];
+    for (int64_t f = merged.lo; f <= merged.hi; ++f) {
+      coordinate(v, fast) = f;
+      next.voxels.push_back(v);
+    }
+  }
   const synthesis::SolidSynthesisResult result = synthesis::synthesizeSolid(analysis_, next.voxels, options_, cache_.get(), ctx);
   requested_ += int64_t(next.voxels.size());
   synthesized_ += result.voxelsSynthesized();
@@ -85,7 +123,7 @@ void SolidVoxelColors::colors(int layer, int y, int begin, int end, float* rgba)
   auto at = std::lower_bound(s.voxels.begin(), s.voxels.end(), solidVoxel(begin, y, layer),
                              [&](const auto& a, const auto& b) { return s.less(a, b); });
   for (int x = begin; x < end; ++x, rgba += 4) {
-    const int64_t along = coordinate(solidVoxel(x, y, layer), fast);
+    const int64_t along = fastCoordinate(x);
     while (at + 1 < s.voxels.end() && coordinate(*at, fast) < along) ++at;
     assert(at != s.voxels.end() && coordinate(*at, fast) == along && "a voxel outside the prepared shell");
     const float* c = &s.rgb[3 * size_t(at - s.voxels.begin())];

@@ -55,6 +55,7 @@ public:
 private:
   struct Samples;
   synthesis::Voxel solidVoxel(int x, int y, int layer) const;  // under print voxel (x, y, layer)
+  int64_t fastCoordinate(int x) const;  // solidVoxel's coordinate along modelAxisOfX, cheaper
   const synthesis::SolidAnalysis& analysis_;
   const Image &ex_, &ey_, &ez_;
   synthesis::SolidSynthesisOptions options_;
