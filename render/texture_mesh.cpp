@@ -82,10 +82,192 @@ double textureMeshMemoryBytes(const TextureMeshOptions& o) {
   return double(o.atlas.pack.width) * double(o.atlas.pack.height) * bytesPerTexel;
 }
 
+namespace {
+
+/// textureMesh's stages, in order; each fills its part of the result.
+class TextureJob {
+ public:
+  TextureJob(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o, const Context& ctx)
+      : mesh_(mesh), ex_(ex), o_(o), ctx_(ctx), exemplar_(*ex.color), surface_(o.mode == TextureMode::Surface) {}
+
+  void buildAtlas(const geometry::MeshOrientation& orientation);
+  void checkScale();
+  void buildDomain();
+  void synthesize();
+  void resolveMaps();
+  void measure();
+  TextureMeshResult finish();
+
+ private:
+  /// Warnings go to the report and, at once, to ctx (before the long synthesis).
+  void warn(std::string message) {
+    ctx_.warn(message);
+    r_.warnings.push_back(std::move(message));
+  }
+  /// Channel `channel` of a companion map (or the exemplar) at a site's synthesized coordinates.
+  float lookup(const Image& map, size_t site, int channel, bool magnified) const;
+
+  const geometry::Mesh& mesh_;
+  const TextureExemplar& ex_;
+  const TextureMeshOptions& o_;
+  const Context& ctx_;
+  const Image& exemplar_;
+  const bool surface_;
+  TextureMeshResult r_;
+  double pixelsPerTexel_ = 0;
+  synthesis::SurfaceDomain domain_; ///< its finest level: the sites (texels) every map is baked at
+};
+
+void TextureJob::buildAtlas(const geometry::MeshOrientation& orientation) {
+  Stage stage(ctx_, "atlas");
+  r_.atlas = generateAtlas(mesh_, o_.atlas, ctx_.nested());
+  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
+    r_.atlas.report.repairs.insert(r_.atlas.report.repairs.begin(), repair);
+  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty())
+    r_.warnings.push_back(warning);
+  const AtlasReport& ar = r_.atlas.report;
+  if (ar.flippedTriangles || ar.overlappingTexels)
+    throw Error("internal: the atlas has flipped triangles or overlaps; please report this mesh");
+  stage.finish(counted(int64_t(ar.charts), "chart") + ", utilization " + figure(ar.utilization) + ", L2 stretch " +
+               figure(ar.l2Stretch));
+  for (const std::string& repair : ar.repairs) ctx_.warn(repair);
+}
+
+// Scale: exemplar pixels per model unit, and per texel.
+void TextureJob::checkScale() {
+  const Atlas& atlas = r_.atlas.atlas;
+  r_.textureScale = o_.textureScale > 0 ? o_.textureScale : atlas.texelsPerUnit;
+  pixelsPerTexel_ = r_.textureScale / atlas.texelsPerUnit;
+  const int exemplarSide = std::min(exemplar_.width, exemplar_.height);
+  if (pixelsPerTexel_ > exemplarSide / 2.0)
+    throw Error("the scale puts " + figure(pixelsPerTexel_) + " exemplar pixels in one texel (the exemplar is " +
+                std::to_string(exemplarSide) + " pixels): features would be smaller than a texel; lower the scale "
+                "or raise the resolution");
+  if (pixelsPerTexel_ > 2.0)
+    warn("the exemplar is minified " + figure(pixelsPerTexel_) +
+         "x (exemplar pixels per texel): its finest detail is lost; raise --resolution to keep it");
+  const double diagonal = geometry::boundingBox(mesh_).diagonal();
+  if (exemplarSide / r_.textureScale > diagonal)
+    warn("one exemplar spans " + figure(exemplarSide / r_.textureScale) + " model units, more than the model's diagonal (" +
+         figure(diagonal) + ")");
+}
+
+// Fields: Jacobians (surface mode) and the surface domain.
+void TextureJob::buildDomain() {
+  const Atlas& atlas = r_.atlas.atlas;
+  TexelField<TexelJacobian> jacobians;
+  SurfaceDomainOptions domainOptions;
+  if (surface_) {
+    Stage fieldStage(ctx_, "tangent field");
+    const geometry::TangentField field = geometry::computeTangentField(mesh_, o_.field);
+    fieldStage.finish(std::to_string(field.singularTriangles.size()) + " singularities");
+    jacobians = computeJacobians(mesh_, atlas, r_.atlas.fields, field, r_.textureScale, ctx_);
+    // Levels down to the one whose texels span the whole exemplar.
+    const int side = std::max(exemplar_.width, exemplar_.height);
+    domainOptions.maxLevels = std::clamp(2 + int(std::ceil(std::log2(side / std::max(pixelsPerTexel_, 1e-3)))), 1, 16);
+  } else {
+    domainOptions.maxLevels = 1;            // texels only (no Jacobians: no texture frame)
+    domainOptions.neighbors = o_.measure;  // for the seam measure only
+  }
+  Stage stage(ctx_, "fields");
+  domain_ = buildSurfaceDomain(mesh_, r_.atlas.connectivity, atlas, r_.atlas.fields, jacobians, domainOptions, ctx_);
+  stage.finish(std::to_string(domain_.levels[0].size()) + " texels, " + std::to_string(domain_.levels.size()) + " levels");
+}
+
+void TextureJob::synthesize() {
+  Stage stage(ctx_, "synthesis");
+  if (surface_) {
+    synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex_.analysis, domain_, o_.surface, ctx_);
+    r_.coords = std::move(s.coords);
+    r_.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
+    r_.synthesisLevels = s.levels;
+    stage.finish(std::to_string(s.levels.size()) + " levels, " + figure(s.exemplarPixelsPerTexel) +
+                 " exemplar pixels per texel");
+  } else {
+    r_.exemplarPixelsPerTexel = pixelsPerTexel_;
+    // Long on large atlases: the engine reports each level inside this stage.
+    SolidSites solid = solidTriplesAtSites(domain_.levels[0], r_.atlas.fields, *ex_.solidAnalysis, o_.solid, r_.textureScale,
+                                           stage.inner());
+    r_.triples = std::move(solid.triples);
+    r_.voxelsRequested = solid.voxelsRequested;
+    r_.voxelsSynthesized = solid.voxelsSynthesized;
+    stage.finish(std::to_string(r_.voxelsRequested) + " voxels requested, " + std::to_string(r_.voxelsSynthesized) +
+                 " synthesized");
+  }
+}
+
+float TextureJob::lookup(const Image& map, size_t site, int channel, bool magnified) const {
+  channel = std::min(channel, map.channels - 1);
+  if (surface_) {
+    const float u = synthesis::surfaceU(r_.coords[site]), v = synthesis::surfaceV(r_.coords[site]);
+    if (magnified) return bilinearToroidal(map, u, v, channel);
+    return map.at(int(std::floor(u + 0.5f)) % map.width, int(std::floor(v + 0.5f)) % map.height, channel);
+  }
+  // Solid: the mean over the three exemplar coordinates (as solidColors()).
+  float sum = 0;
+  for (uint32_t c : r_.triples[site]) sum += map.at(int(synthesis::coordU(c)), int(synthesis::coordV(c)), channel);
+  return sum / 3.0f;
+}
+
+// Resolve: colours and companion maps through the same coordinates.
+void TextureJob::resolveMaps() {
+  Stage stage(ctx_, "resolve");
+  const Atlas& atlas = r_.atlas.atlas;
+  const synthesis::SurfaceLevel& sites = domain_.levels[0];
+  const int gutter = o_.atlas.pack.gutter;
+  const int colorChannels = synthesis::solidColorChannels(exemplar_, exemplar_, exemplar_); // 3, or 1 for grey
+  // Colours at the nearest exemplar pixel keep the exemplar's sharpness; bilinear filtering only
+  // where the exemplar is magnified (a texel finer than its pixels), where nearest looks blocky.
+  const bool magnified = r_.exemplarPixelsPerTexel < 0.75;
+  auto bake = [&](int channels, auto&& texel) {
+    return std::make_shared<const Image>(bakeSites(atlas.width, atlas.height, sites, channels, gutter, ctx_, texel));
+  };
+  r_.baseColor = bake(colorChannels, [&](size_t s, float* out) {
+    for (int ch = 0; ch < colorChannels; ++ch) out[ch] = lookup(exemplar_, s, ch, magnified);
+  });
+  if (ex_.normal)
+    r_.normal = bake(3, [&](size_t s, float* out) {
+      float n[3];
+      for (int ch = 0; ch < 3; ++ch) n[ch] = lookup(*ex_.normal, s, ch, magnified);
+      rotateNormal(sites.jacobian[s], n, out);
+    });
+  if (ex_.roughness)
+    r_.metallicRoughness = bake(3, [&](size_t s, float* out) {
+      out[0] = 1.0f;                                     // unused (occlusion slot)
+      out[1] = lookup(*ex_.roughness, s, 0, magnified); // roughness
+      out[2] = 0.0f;                                     // metallic
+    });
+  if (ex_.height)
+    r_.height = bake(1, [&](size_t s, float* out) { out[0] = lookup(*ex_.height, s, 0, magnified); });
+  stage.finish(std::to_string(atlas.width) + "x" + std::to_string(atlas.height) + " maps");
+}
+
+void TextureJob::measure() {
+  Stage stage(ctx_, "measures");
+  const synthesis::SurfaceLevel& sites = domain_.levels[0];
+  r_.measures.seams = measureSeams(sites, *r_.baseColor);
+  std::string detail = "seam ratio " + figure(r_.measures.seams.ratio);
+  if (surface_) {
+    r_.measures.scale =
+        measureScale(sites, r_.coords, r_.atlas.fields, ex_.analysis->width, ex_.analysis->height, r_.textureScale);
+    r_.measures.fidelity = measureSurfaceFidelity(sites, *r_.baseColor, exemplar_, r_.atlas.fields, 1024, ctx_);
+    detail += ", scale within 15 % on " + figure(100 * r_.measures.scale->fractionWithin) + " % of the surface, fidelity " +
+              figure(r_.measures.fidelity->fidelity);
+  }
+  stage.finish(detail);
+}
+
+TextureMeshResult TextureJob::finish() {
+  r_.mesh = texturedMesh(mesh_, r_.atlas.atlas, r_);
+  r_.sites = std::move(domain_.levels[0]);
+  return std::move(r_);
+}
+
+} // namespace
+
 TextureMeshResult textureMesh(const geometry::Mesh& input, const TextureExemplar& ex, const TextureMeshOptions& o,
                               const Context& ctx) {
   checkCompanionMaps(ex, o.mode);  // and that there is an exemplar
-  const Image& exemplar = *ex.color;
   const bool surface = o.mode == TextureMode::Surface;
   if (surface && !ex.analysis) throw Error("texture: surface mode needs the exemplar analysis");
   if (!surface && !ex.solidAnalysis) throw Error("texture: solid mode needs the solid exemplar analysis");
@@ -99,145 +281,15 @@ TextureMeshResult textureMesh(const geometry::Mesh& input, const TextureExemplar
       geometry::computeOrientation(input, geometry::computeConnectivity(input));
   std::optional<geometry::Mesh> oriented;
   if (!orientation.flip.empty()) geometry::flipTriangles(oriented.emplace(input), orientation.flip);
-  const geometry::Mesh& mesh = oriented ? *oriented : input;
 
-  TextureMeshResult r;
-  Stage atlasStage(ctx, "atlas");
-  r.atlas = generateAtlas(mesh, o.atlas, ctx.nested());
-  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
-    r.atlas.report.repairs.insert(r.atlas.report.repairs.begin(), repair);
-  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty())
-    r.warnings.push_back(warning);
-  const Atlas& atlas = r.atlas.atlas;
-  const AtlasReport& ar = r.atlas.report;
-  if (ar.flippedTriangles || ar.overlappingTexels)
-    throw Error("internal: the atlas has flipped triangles or overlaps; please report this mesh");
-  atlasStage.finish(counted(int64_t(ar.charts), "chart") + ", utilization " + figure(ar.utilization) +
-                             ", L2 stretch " + figure(ar.l2Stretch));
-  for (const std::string& repair : ar.repairs) ctx.warn(repair);
-
-  // Warnings go to the report and, at once, to ctx (before the long synthesis).
-  auto warn = [&](std::string message) {
-    ctx.warn(message);
-    r.warnings.push_back(std::move(message));
-  };
-
-  // Scale: exemplar pixels per model unit, and per texel.
-  r.textureScale = o.textureScale > 0 ? o.textureScale : atlas.texelsPerUnit;
-  const double pixelsPerTexel = r.textureScale / atlas.texelsPerUnit;
-  const int exemplarSide = std::min(exemplar.width, exemplar.height);
-  if (pixelsPerTexel > exemplarSide / 2.0)
-    throw Error("the scale puts " + figure(pixelsPerTexel) + " exemplar pixels in one texel (the exemplar is " +
-                std::to_string(exemplarSide) + " pixels): features would be smaller than a texel; lower the scale "
-                "or raise the resolution");
-  if (pixelsPerTexel > 2.0)
-    warn("the exemplar is minified " + figure(pixelsPerTexel) +
-                         "x (exemplar pixels per texel): its finest detail is lost; raise --resolution to keep it");
-  const double diagonal = geometry::boundingBox(mesh).diagonal();
-  if (exemplarSide / r.textureScale > diagonal)
-    warn("one exemplar spans " + figure(exemplarSide / r.textureScale) +
-                         " model units, more than the model's diagonal (" + figure(diagonal) + ")");
-
-  // Fields: Jacobians and the surface domain.
-  TexelField<TexelJacobian> jacobians;
-  SurfaceDomainOptions domainOptions;
-  if (surface) {
-    Stage fieldStage(ctx, "tangent field");
-    const geometry::TangentField field = geometry::computeTangentField(mesh, o.field);
-    fieldStage.finish(std::to_string(field.singularTriangles.size()) + " singularities");
-    jacobians = computeJacobians(mesh, atlas, r.atlas.fields, field, r.textureScale, ctx);
-    // Levels down to the one whose texels span the whole exemplar.
-    const int side = std::max(exemplar.width, exemplar.height);
-    domainOptions.maxLevels = std::clamp(2 + int(std::ceil(std::log2(side / std::max(pixelsPerTexel, 1e-3)))), 1, 16);
-  } else {
-    domainOptions.maxLevels = 1;  // texels only (no Jacobians: no texture frame)
-    domainOptions.neighbors = o.measure;  // for the seam measure only
-  }
-  Stage domainStage(ctx, "fields");
-  synthesis::SurfaceDomain domain =
-      buildSurfaceDomain(mesh, r.atlas.connectivity, atlas, r.atlas.fields, jacobians, domainOptions, ctx);
-  jacobians = {};
-  domainStage.finish(std::to_string(domain.levels[0].size()) + " texels, " +
-                              std::to_string(domain.levels.size()) + " levels");
-
-  const synthesis::SurfaceLevel& sites = domain.levels[0];
-  const int gutter = o.atlas.pack.gutter;
-  Stage synthesisStage(ctx, "synthesis");
-  if (surface) {
-    synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex.analysis, domain, o.surface, ctx);
-    r.coords = std::move(s.coords);
-    r.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
-    r.synthesisLevels = s.levels;
-    synthesisStage.finish(std::to_string(s.levels.size()) + " levels, " + figure(s.exemplarPixelsPerTexel) +
-                                   " exemplar pixels per texel");
-  } else {
-    r.exemplarPixelsPerTexel = pixelsPerTexel;
-    // Long on large atlases: the engine reports each level inside this stage.
-    SolidSites solid =
-        solidTriplesAtSites(sites, r.atlas.fields, *ex.solidAnalysis, o.solid, r.textureScale, synthesisStage.inner());
-    r.triples = std::move(solid.triples);
-    r.voxelsRequested = solid.voxelsRequested;
-    r.voxelsSynthesized = solid.voxelsSynthesized;
-    synthesisStage.finish(std::to_string(r.voxelsRequested) + " voxels requested, " +
-                                   std::to_string(r.voxelsSynthesized) + " synthesized");
-  }
-
-  // Resolve: colours and companion maps through the same coordinates.
-  Stage resolveStage(ctx, "resolve");
-  const int colourChannels = synthesis::solidColorChannels(exemplar, exemplar, exemplar);  // 3, or 1 for grey
-  // Colours at the nearest exemplar pixel keep the exemplar's sharpness; bilinear filtering only
-  // where the exemplar is magnified (a texel finer than its pixels), where nearest looks blocky.
-  const bool magnified = r.exemplarPixelsPerTexel < 0.75;
-  auto lookup = [&](const Image& map, size_t site, int channel) -> float {
-    channel = std::min(channel, map.channels - 1);
-    if (surface) {
-      const float u = synthesis::surfaceU(r.coords[site]), v = synthesis::surfaceV(r.coords[site]);
-      if (magnified) return bilinearToroidal(map, u, v, channel);
-      return map.at(int(std::floor(u + 0.5f)) % map.width, int(std::floor(v + 0.5f)) % map.height, channel);
-    }
-    // Solid: the mean over the three exemplar coordinates (as solidColors()).
-    float sum = 0;
-    for (uint32_t c : r.triples[site]) sum += map.at(int(synthesis::coordU(c)), int(synthesis::coordV(c)), channel);
-    return sum / 3.0f;
-  };
-  r.baseColor = std::make_shared<const Image>(bakeSites(atlas.width, atlas.height, sites, colourChannels, gutter, ctx, [&](size_t s, float* out) {
-    for (int ch = 0; ch < colourChannels; ++ch) out[ch] = lookup(exemplar, s, ch);
-  }));
-  if (ex.normal)
-    r.normal = std::make_shared<const Image>(bakeSites(atlas.width, atlas.height, sites, 3, gutter, ctx, [&](size_t s, float* out) {
-      float n[3];
-      for (int ch = 0; ch < 3; ++ch) n[ch] = lookup(*ex.normal, s, ch);
-      rotateNormal(sites.jacobian[s], n, out);
-    }));
-  if (ex.roughness)
-    r.metallicRoughness = std::make_shared<const Image>(bakeSites(atlas.width, atlas.height, sites, 3, gutter, ctx, [&](size_t s, float* out) {
-      out[0] = 1.0f;                        // unused (occlusion slot)
-      out[1] = lookup(*ex.roughness, s, 0); // roughness
-      out[2] = 0.0f;                        // metallic
-    }));
-  if (ex.height)
-    r.height = std::make_shared<const Image>(bakeSites(atlas.width, atlas.height, sites, 1, gutter, ctx, [&](size_t s, float* out) {
-      out[0] = lookup(*ex.height, s, 0);
-    }));
-  resolveStage.finish(std::to_string(atlas.width) + "x" + std::to_string(atlas.height) + " maps");
-
-  if (o.measure) {
-    Stage measureStage(ctx, "measures");
-    r.measures.seams = measureSeams(sites, *r.baseColor);
-    std::string detail = "seam ratio " + figure(r.measures.seams.ratio);
-    if (surface) {
-      r.measures.scale = measureScale(sites, r.coords, r.atlas.fields, ex.analysis->width, ex.analysis->height,
-                                      r.textureScale);
-      r.measures.fidelity = measureSurfaceFidelity(sites, *r.baseColor, exemplar, r.atlas.fields, 1024, ctx);
-      detail += ", scale within 15 % on " + figure(100 * r.measures.scale->fractionWithin) + " % of the surface, fidelity " +
-                figure(r.measures.fidelity->fidelity);
-    }
-    measureStage.finish(detail);
-  }
-
-  r.mesh = texturedMesh(mesh, atlas, r);
-  r.sites = std::move(domain.levels[0]);
-  return r;
+  TextureJob job(oriented ? *oriented : input, ex, o, ctx);
+  job.buildAtlas(orientation);
+  job.checkScale();
+  job.buildDomain();
+  job.synthesize();
+  job.resolveMaps();
+  if (o.measure) job.measure();
+  return job.finish();
 }
 
 } // namespace texfab::render
