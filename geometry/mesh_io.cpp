@@ -95,6 +95,26 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
   commitFile(tmp, path);
 }
 
+void writeScene(std::span<const SceneNode> nodes, const fs::path& path, const MeshWriteOptions& options) {
+  const MeshFormat format = meshFormatOf(path);
+  if (format != MeshFormat::Gltf && format != MeshFormat::Glb)
+    throw Error(path.string() + ": a scene of several meshes needs a .glb or .gltf output");
+  if (nodes.empty()) throw Error(path.string() + ": a scene needs at least one mesh");
+  for (const SceneNode& node : nodes) validateMesh(node.mesh, path.string() + " (" + node.name + ")");
+  checkOutputLocation(path);
+  const fs::path tmp = temporaryPathFor(path);
+  std::vector<std::pair<fs::path, fs::path>> sideFiles;  // (temporary, final)
+  try {
+    detail::writeGltfScene(nodes, path, tmp, format == MeshFormat::Glb, options, sideFiles);
+  } catch (...) {
+    discardTemporary(tmp);
+    for (const auto& side : sideFiles) discardTemporary(side.first);
+    throw;
+  }
+  for (const auto& side : sideFiles) commitFile(side.first, side.second);
+  commitFile(tmp, path);
+}
+
 namespace detail {
 
 EncodedImage storedImage(const Texture& texture, const MeshWriteOptions& options) {
