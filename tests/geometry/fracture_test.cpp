@@ -137,6 +137,7 @@ TEST(CutMesh, PlaneThroughEdgesAndPlanesOnFacesOrOutside) {
   }
 }
 
+// Disabled: open piece when a plane holds model edges or passes within rounding of vertices (x = 0 here).
 TEST(CutMesh, DISABLED_SeveralPlanesCutEveryPiece) {
   const Mesh m = makeSphere(40, 20);
   const CutMeshResult r = cut(m, {{{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 1, 0.1}}, {{0, 0, 0.2}, {0, 0, 1}}});

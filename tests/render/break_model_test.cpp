@@ -71,7 +71,7 @@ double interiorNoise(const CutFaceTexture& t) {
   return n ? sum / double(n) : 0;
 }
 
-TEST(BreakModel, DISABLED_TheTwoFacesOfACrackShowTheSameColours) {
+TEST(BreakModel, TheTwoFacesOfACrackShowTheSameColours) {
   const BrokenModel m = fracturedSphere(6, false);
   ASSERT_TRUE(m.interior);
   const CrackMatch match = measureCrackMatch(m);
@@ -125,6 +125,7 @@ TEST(BreakModel, CutFacesAreTheSolidTextureAtTheirPositions) {
       EXPECT_FLOAT_EQ(t.baseColor->at(t.sites.x[picked[i]], t.sites.y[picked[i]], c), colour[i * size_t(channels) + size_t(c)]);
 }
 
+// Disabled: z = 0 passes within 1e-16 of the sphere's equator vertices: an open piece (as CutMesh's).
 TEST(BreakModel, DISABLED_RecutTexturesOnlyTheNewFacesAndReusesTheCache) {
   BreakModelOptions o = fractureOptions(3);
   o.fracture.reset();
