@@ -116,78 +116,72 @@ std::string uriOf(const std::string& name) {
 
 } // namespace
 
-void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options,
-               std::vector<std::pair<fs::path, fs::path>>& sideFiles) {
+namespace {
+
+// The mesh as written: normals present and unit, tangents with w = ±1 where a normal map needs them
+// (as the validator checks).
+Mesh preparedForGltf(const Mesh& input, const MeshWriteOptions& options) {
   Mesh mesh = input;
   if (!mesh.hasNormals()) computeSmoothNormals(mesh);
   bool anyNormalMap = false;
   for (const Material& m : mesh.materials) anyNormalMap |= bool(m.normalTexture);
   if (mesh.hasUvs() && !mesh.hasTangents() && anyNormalMap && options.computeMissingTangents) computeTangents(mesh);
   if (!mesh.hasUvs()) mesh.tangents.clear();
-  // Unit normals and tangents with w = ±1, as the validator checks.
   for (auto& n : mesh.normals) n = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : Eigen::Vector3f(0, 0, 1);
   for (auto& t : mesh.tangents) {
     Eigen::Vector3f xyz = t.head<3>();
     xyz = xyz.squaredNorm() > 0 ? Eigen::Vector3f(xyz.normalized()) : Eigen::Vector3f(1, 0, 0);
     t = Eigen::Vector4f(xyz.x(), xyz.y(), xyz.z(), t.w() < 0 ? -1.0f : 1.0f);
   }
+  return mesh;
+}
 
-  GltfBuilder b(binary);
-  json doc;
-  doc["asset"] = {{"version", "2.0"}, {"generator", "texfab"}};
-  json extensionsUsed = json::array();
-  bool usesTransform = false, usesWebp = false;
-  const bool external = !binary && !options.embed;  // .gltf with its buffer and images beside it
-  const std::string stem = path.stem().string();
-  auto sideFile = [&](const std::string& name, std::string_view bytes) {
-    const fs::path final = path.parent_path() / name;
-    const fs::path side = temporaryPathFor(final);
-    sideFiles.emplace_back(side, final);
-    writeFileBytes(side, bytes, final);
-  };
+bool sameTexture(const Texture& a, const Texture& b) {
+  return a.image == b.image && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
+}
 
-  // Materials and textures (one image per distinct Image object).
-  json materials = json::array(), textures = json::array(), images = json::array();
-  std::map<const Image*, int> imageIndex;
-  std::vector<ImageCodec> codecs;  // per image
-  auto textureInfo = [&](const Texture& t) -> json {
-    int image;
-    const auto it = imageIndex.find(t.image.get());
-    if (it != imageIndex.end()) {
-      image = it->second;
-    } else {
-      const EncodedImage file = storedImage(t, options);
-      const char* mime = mimeTypeOf(file.codec);
-      json entry;
-      if (binary) {
-        entry = {{"bufferView", b.bufferView(file.bytes.data(), file.bytes.size(), 0)}, {"mimeType", mime}};
-      } else if (external) {
-        const std::string name = stem + "_" + std::to_string(images.size()) + extensionOf(file.codec);
-        sideFile(name, {reinterpret_cast<const char*>(file.bytes.data()), file.bytes.size()});
-        entry = {{"uri", uriOf(name)}};
-      } else {
-        entry = {{"uri", std::string("data:") + mime + ";base64," + encodeBase64(file.bytes)}};
-      }
-      images.push_back(entry);
-      codecs.push_back(file.codec);
-      image = int(images.size() - 1);
-      imageIndex[t.image.get()] = image;
-    }
-    // A WebP image is the source of EXT_texture_webp (required: there is no fallback image).
-    if (codecs[size_t(image)] == ImageCodec::Webp) {
-      textures.push_back({{"sampler", 0}, {"extensions", {{"EXT_texture_webp", {{"source", image}}}}}});
-      usesWebp = true;
-    } else {
-      textures.push_back({{"sampler", 0}, {"source", image}});
-    }
-    json info = {{"index", int(textures.size() - 1)}};
-    if (t.hasTransform()) {
-      info["extensions"]["KHR_texture_transform"] = {
-          {"offset", {t.offset.x(), t.offset.y()}}, {"scale", {t.scale.x(), t.scale.y()}}, {"rotation", t.rotation}};
-      usesTransform = true;
-    }
-    return info;
-  };
+bool sameMaterial(const Material& a, const Material& b) {
+  return a.name == b.name && a.baseColorFactor == b.baseColorFactor && a.metallicFactor == b.metallicFactor &&
+         a.roughnessFactor == b.roughnessFactor && a.normalScale == b.normalScale && a.doubleSided == b.doubleSided &&
+         a.blend == b.blend && sameTexture(a.baseColorTexture, b.baseColorTexture) &&
+         sameTexture(a.metallicRoughnessTexture, b.metallicRoughnessTexture) && sameTexture(a.normalTexture, b.normalTexture);
+}
+
+// A glTF document being built: its meshes, and the materials, textures and images they share.
+class GltfDocument {
+public:
+  GltfDocument(const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options,
+               std::vector<std::pair<fs::path, fs::path>>& sideFiles)
+      : path_(path), tmp_(tmp), binary_(binary), external_(!binary && !options.embed), options_(options),
+        sideFiles_(sideFiles), b_(binary) {}
+
+  /// Adds a mesh (prepared) and returns its index. Its materials are written in its order; those
+  /// equal to a material of an earlier mesh are shared with it.
+  int addMesh(const Mesh& mesh, const std::string& name);
+  void addNode(json node) { nodes_.push_back(std::move(node)); }
+  /// Writes the file to `tmp` (side files committed by the caller).
+  void write();
+
+private:
+  void sideFile(const std::string& name, std::string_view bytes);
+  json textureInfo(const Texture& t);
+  int material(const Material& m, bool textured, bool firstMesh);
+  json primitives(const Mesh& mesh, const std::vector<int>& materialIndex);
+
+  fs::path path_, tmp_;
+  bool binary_, external_;  // external: a .gltf with its buffer and images beside it
+  const MeshWriteOptions& options_;
+  std::vector<std::pair<fs::path, fs::path>>& sideFiles_;
+  GltfBuilder b_;
+  bool usesTransform_ = false, usesWebp_ = false;
+  json materials_ = json::array(), textures_ = json::array(), images_ = json::array();
+  json meshes_ = json::array(), nodes_ = json::array();
+  std::map<const Image*, int> imageIndex_;  // one image per distinct Image object
+  std::vector<ImageCodec> codecs_;          // per image
+  std::vector<std::pair<Material, bool>> written_;  // (material, textured) per materials_ entry
+};
+
+int GltfDocument::addMesh(const Mesh& mesh, const std::string& name) {
   std::vector<Material> materialList = mesh.materials;
   if (materialList.empty()) {
     // A plain dielectric, not glTF's default (metallicFactor 1), which viewers show as dark metal.
@@ -196,25 +190,85 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
     plain.roughnessFactor = 0.5f;
     materialList.push_back(plain);
   }
-  for (const Material& m : materialList) {
-    json pbr = {{"baseColorFactor", {m.baseColorFactor.x(), m.baseColorFactor.y(), m.baseColorFactor.z(), m.baseColorFactor.w()}},
-                {"metallicFactor", m.metallicFactor},
-                {"roughnessFactor", m.roughnessFactor}};
-    const bool textured = mesh.hasUvs();
-    if (textured && m.baseColorTexture) pbr["baseColorTexture"] = textureInfo(m.baseColorTexture);
-    if (textured && m.metallicRoughnessTexture) pbr["metallicRoughnessTexture"] = textureInfo(m.metallicRoughnessTexture);
-    json material = {{"pbrMetallicRoughness", pbr}};
-    if (!m.name.empty()) material["name"] = m.name;
-    if (textured && m.normalTexture) {
-      material["normalTexture"] = textureInfo(m.normalTexture);
-      if (m.normalScale != 1.0f) material["normalTexture"]["scale"] = m.normalScale;
-    }
-    if (m.doubleSided) material["doubleSided"] = true;
-    if (m.blend) material["alphaMode"] = "BLEND";
-    materials.push_back(material);
-  }
+  std::vector<int> materialIndex;
+  for (const Material& m : materialList) materialIndex.push_back(material(m, mesh.hasUvs(), meshes_.empty()));
+  json entry = {{"primitives", primitives(mesh, materialIndex)}};
+  if (!name.empty()) entry["name"] = name;
+  meshes_.push_back(entry);
+  return int(meshes_.size() - 1);
+}
 
-  // One primitive per (material, tag).
+void GltfDocument::sideFile(const std::string& name, std::string_view bytes) {
+  const fs::path final = path_.parent_path() / name;
+  const fs::path side = temporaryPathFor(final);
+  sideFiles_.emplace_back(side, final);
+  writeFileBytes(side, bytes, final);
+}
+
+json GltfDocument::textureInfo(const Texture& t) {
+  int image;
+  const auto it = imageIndex_.find(t.image.get());
+  if (it != imageIndex_.end()) {
+    image = it->second;
+  } else {
+    const EncodedImage file = storedImage(t, options_);
+    const char* mime = mimeTypeOf(file.codec);
+    json entry;
+    if (binary_) {
+      entry = {{"bufferView", b_.bufferView(file.bytes.data(), file.bytes.size(), 0)}, {"mimeType", mime}};
+    } else if (external_) {
+      const std::string name = path_.stem().string() + "_" + std::to_string(images_.size()) + extensionOf(file.codec);
+      sideFile(name, {reinterpret_cast<const char*>(file.bytes.data()), file.bytes.size()});
+      entry = {{"uri", uriOf(name)}};
+    } else {
+      entry = {{"uri", std::string("data:") + mime + ";base64," + encodeBase64(file.bytes)}};
+    }
+    images_.push_back(entry);
+    codecs_.push_back(file.codec);
+    image = int(images_.size() - 1);
+    imageIndex_[t.image.get()] = image;
+  }
+  // A WebP image is the source of EXT_texture_webp (required: there is no fallback image).
+  if (codecs_[size_t(image)] == ImageCodec::Webp) {
+    textures_.push_back({{"sampler", 0}, {"extensions", {{"EXT_texture_webp", {{"source", image}}}}}});
+    usesWebp_ = true;
+  } else {
+    textures_.push_back({{"sampler", 0}, {"source", image}});
+  }
+  json info = {{"index", int(textures_.size() - 1)}};
+  if (t.hasTransform()) {
+    info["extensions"]["KHR_texture_transform"] = {
+        {"offset", {t.offset.x(), t.offset.y()}}, {"scale", {t.scale.x(), t.scale.y()}}, {"rotation", t.rotation}};
+    usesTransform_ = true;
+  }
+  return info;
+}
+
+// The material's index: a new entry, or (after the first mesh) an equal one already written.
+int GltfDocument::material(const Material& m, bool textured, bool firstMesh) {
+  if (!firstMesh)
+    for (size_t i = 0; i < written_.size(); ++i)
+      if (written_[i].second == textured && sameMaterial(written_[i].first, m)) return int(i);
+  json pbr = {{"baseColorFactor", {m.baseColorFactor.x(), m.baseColorFactor.y(), m.baseColorFactor.z(), m.baseColorFactor.w()}},
+              {"metallicFactor", m.metallicFactor},
+              {"roughnessFactor", m.roughnessFactor}};
+  if (textured && m.baseColorTexture) pbr["baseColorTexture"] = textureInfo(m.baseColorTexture);
+  if (textured && m.metallicRoughnessTexture) pbr["metallicRoughnessTexture"] = textureInfo(m.metallicRoughnessTexture);
+  json material = {{"pbrMetallicRoughness", pbr}};
+  if (!m.name.empty()) material["name"] = m.name;
+  if (textured && m.normalTexture) {
+    material["normalTexture"] = textureInfo(m.normalTexture);
+    if (m.normalScale != 1.0f) material["normalTexture"]["scale"] = m.normalScale;
+  }
+  if (m.doubleSided) material["doubleSided"] = true;
+  if (m.blend) material["alphaMode"] = "BLEND";
+  materials_.push_back(material);
+  written_.emplace_back(m, textured);
+  return int(materials_.size() - 1);
+}
+
+// One primitive per (material, tag).
+json GltfDocument::primitives(const Mesh& mesh, const std::vector<int>& materialIndex) {
   std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>> groups;
   for (size_t t = 0; t < mesh.triangles.size(); ++t) groups[{mesh.materialOf(t), mesh.tagOf(t)}].push_back(uint32_t(t));
   json primitives = json::array();
@@ -238,60 +292,68 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
         }
         v.indices.push_back(it->second);
       }
-    json primitive = {{"mode", 4}, {"material", key.first}};
+    json primitive = {{"mode", 4}, {"material", materialIndex[key.first]}};
     if (key.second != 0) primitive["extras"] = {{"texfab:tag", key.second}};
     json attributes;
-    if (options.draco) {
+    if (options_.draco) {
       DracoAttributeIds ids;
-      const std::vector<uint8_t> compressed = encodeDraco(v, options, ids);
+      const std::vector<uint8_t> compressed = encodeDraco(v, options_, ids);
       // Accessors describe the decoded data: decode once to get its exact count and bounds.
-      const VertexArrays decoded = decodeDraco(compressed.data(), compressed.size(), ids, path.string());
-      const int view = b.bufferView(compressed.data(), compressed.size(), 0);
+      const VertexArrays decoded = decodeDraco(compressed.data(), compressed.size(), ids, path_.string());
+      const int view = b_.bufferView(compressed.data(), compressed.size(), 0);
       json dracoAttributes;
-      attributes["POSITION"] = b.accessor<3>(decoded.positions, "VEC3", true, -1);
+      attributes["POSITION"] = b_.accessor<3>(decoded.positions, "VEC3", true, -1);
       dracoAttributes["POSITION"] = ids.position;
-      attributes["NORMAL"] = b.accessor<3>(decoded.normals, "VEC3", false, -1);
+      attributes["NORMAL"] = b_.accessor<3>(decoded.normals, "VEC3", false, -1);
       dracoAttributes["NORMAL"] = ids.normal;
       if (ids.uv >= 0) {
-        attributes["TEXCOORD_0"] = b.accessor<2>(decoded.uvs, "VEC2", false, -1);
+        attributes["TEXCOORD_0"] = b_.accessor<2>(decoded.uvs, "VEC2", false, -1);
         dracoAttributes["TEXCOORD_0"] = ids.uv;
       }
       if (ids.tangent >= 0) {
-        attributes["TANGENT"] = b.accessor<4>(decoded.tangents, "VEC4", false, -1);
+        attributes["TANGENT"] = b_.accessor<4>(decoded.tangents, "VEC4", false, -1);
         dracoAttributes["TANGENT"] = ids.tangent;
       }
-      primitive["indices"] = b.indexAccessor(decoded.indices, decoded.positions.size(), false);
+      primitive["indices"] = b_.indexAccessor(decoded.indices, decoded.positions.size(), false);
       primitive["extensions"]["KHR_draco_mesh_compression"] = {{"bufferView", view}, {"attributes", dracoAttributes}};
     } else {
-      attributes["POSITION"] = b.accessor<3>(v.positions, "VEC3", true);
-      attributes["NORMAL"] = b.accessor<3>(v.normals, "VEC3", false);
-      if (!v.uvs.empty()) attributes["TEXCOORD_0"] = b.accessor<2>(v.uvs, "VEC2", false);
-      if (!v.tangents.empty()) attributes["TANGENT"] = b.accessor<4>(v.tangents, "VEC4", false);
-      primitive["indices"] = b.indexAccessor(v.indices, v.positions.size(), true);
+      attributes["POSITION"] = b_.accessor<3>(v.positions, "VEC3", true);
+      attributes["NORMAL"] = b_.accessor<3>(v.normals, "VEC3", false);
+      if (!v.uvs.empty()) attributes["TEXCOORD_0"] = b_.accessor<2>(v.uvs, "VEC2", false);
+      if (!v.tangents.empty()) attributes["TANGENT"] = b_.accessor<4>(v.tangents, "VEC4", false);
+      primitive["indices"] = b_.indexAccessor(v.indices, v.positions.size(), true);
     }
     primitive["attributes"] = attributes;
     primitives.push_back(primitive);
   }
+  return primitives;
+}
 
+void GltfDocument::write() {
+  json doc;
+  doc["asset"] = {{"version", "2.0"}, {"generator", "texfab"}};
+  json extensionsUsed = json::array();
+  json rootNodes = json::array();
+  for (size_t i = 0; i < nodes_.size(); ++i) rootNodes.push_back(int(i));
   doc["scene"] = 0;
-  doc["scenes"] = json::array({{{"nodes", {0}}}});
-  doc["nodes"] = json::array({{{"mesh", 0}}});
-  doc["meshes"] = json::array({{{"primitives", primitives}}});
-  doc["materials"] = materials;
-  if (!textures.empty()) {
-    doc["textures"] = textures;
-    doc["images"] = images;
+  doc["scenes"] = json::array({{{"nodes", rootNodes}}});
+  doc["nodes"] = nodes_;
+  doc["meshes"] = meshes_;
+  doc["materials"] = materials_;
+  if (!textures_.empty()) {
+    doc["textures"] = textures_;
+    doc["images"] = images_;
     doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}});
   }
-  b.align(4);
-  if (!b.views().empty()) doc["bufferViews"] = b.views();
-  if (!b.accessors().empty()) doc["accessors"] = b.accessors();
-  if (options.draco) {
+  b_.align(4);
+  if (!b_.views().empty()) doc["bufferViews"] = b_.views();
+  if (!b_.accessors().empty()) doc["accessors"] = b_.accessors();
+  if (options_.draco) {
     extensionsUsed.push_back("KHR_draco_mesh_compression");
     doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
   }
-  if (usesTransform) extensionsUsed.push_back("KHR_texture_transform");
-  if (usesWebp) {
+  if (usesTransform_) extensionsUsed.push_back("KHR_texture_transform");
+  if (usesWebp_) {
     extensionsUsed.push_back("EXT_texture_webp");
     if (!doc.contains("extensionsRequired")) doc["extensionsRequired"] = json::array();
     doc["extensionsRequired"].push_back("EXT_texture_webp");
@@ -299,12 +361,13 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
   if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
 
   std::string out;
-  if (binary) {
-    if (!b.buffer().empty()) doc["buffers"] = json::array({{{"byteLength", b.buffer().size()}}});
+  std::vector<uint8_t>& buffer = b_.buffer();
+  if (binary_) {
+    if (!buffer.empty()) doc["buffers"] = json::array({{{"byteLength", buffer.size()}}});
     std::string text = doc.dump();
     while (text.size() % 4) text += ' ';
-    const uint64_t total = 12 + 8 + text.size() + (b.buffer().empty() ? 0 : 8 + b.buffer().size());
-    if (total > UINT32_MAX) throw Error(path.string() + ": the model is too large for a GLB file (4 GiB)");
+    const uint64_t total = 12 + 8 + text.size() + (buffer.empty() ? 0 : 8 + buffer.size());
+    if (total > UINT32_MAX) throw Error(path_.string() + ": the model is too large for a GLB file (4 GiB)");
     auto put32 = [&](uint32_t v) {
       for (int i = 0; i < 4; ++i) out += char((v >> (8 * i)) & 0xff);
     };
@@ -314,25 +377,48 @@ void writeGltf(const Mesh& input, const fs::path& path, const fs::path& tmp, boo
     put32(uint32_t(text.size()));
     put32(0x4E4F534A);
     out += text;
-    if (!b.buffer().empty()) {
-      put32(uint32_t(b.buffer().size()));
+    if (!buffer.empty()) {
+      put32(uint32_t(buffer.size()));
       put32(0x004E4942);
-      out.append(reinterpret_cast<const char*>(b.buffer().data()), b.buffer().size());
+      out.append(reinterpret_cast<const char*>(buffer.data()), buffer.size());
     }
   } else {
-    if (!b.buffer().empty()) {
+    if (!buffer.empty()) {
       std::string uri;
-      if (external) {
-        sideFile(stem + ".bin", {reinterpret_cast<const char*>(b.buffer().data()), b.buffer().size()});
-        uri = uriOf(stem + ".bin");
+      if (external_) {
+        const std::string name = path_.stem().string() + ".bin";
+        sideFile(name, {reinterpret_cast<const char*>(buffer.data()), buffer.size()});
+        uri = uriOf(name);
       } else {
-        uri = "data:application/octet-stream;base64," + encodeBase64(b.buffer());
+        uri = "data:application/octet-stream;base64," + encodeBase64(buffer);
       }
-      doc["buffers"] = json::array({{{"byteLength", b.buffer().size()}, {"uri", uri}}});
+      doc["buffers"] = json::array({{{"byteLength", buffer.size()}, {"uri", uri}}});
     }
     out = doc.dump(1) + "\n";
   }
-  writeFileBytes(tmp, out, path);
+  writeFileBytes(tmp_, out, path_);
+}
+
+} // namespace
+
+void writeGltfScene(std::span<const SceneNode> nodes, const fs::path& path, const fs::path& tmp, bool binary,
+                    const MeshWriteOptions& options, std::vector<std::pair<fs::path, fs::path>>& sideFiles) {
+  GltfDocument doc(path, tmp, binary, options, sideFiles);
+  for (const SceneNode& node : nodes) {
+    json entry = {{"mesh", doc.addMesh(preparedForGltf(node.mesh, options), node.name)}};
+    if (!node.name.empty()) entry["name"] = node.name;
+    if (node.translation != Eigen::Vector3f::Zero())
+      entry["translation"] = {node.translation.x(), node.translation.y(), node.translation.z()};
+    doc.addNode(entry);
+  }
+  doc.write();
+}
+
+void writeGltf(const Mesh& mesh, const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options,
+               std::vector<std::pair<fs::path, fs::path>>& sideFiles) {
+  GltfDocument doc(path, tmp, binary, options, sideFiles);
+  doc.addNode({{"mesh", doc.addMesh(preparedForGltf(mesh, options), "")}});
+  doc.write();
 }
 
 } // namespace texfab::geometry::detail

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,6 +34,10 @@ void writeStl(const Mesh& mesh, const std::filesystem::path& tmp, bool binary);
 void writeGltf(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp, bool binary,
                const MeshWriteOptions& options,
                std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& sideFiles);
+/// Several meshes as one glTF scene (writeScene).
+void writeGltfScene(std::span<const SceneNode> nodes, const std::filesystem::path& path, const std::filesystem::path& tmp,
+                    bool binary, const MeshWriteOptions& options,
+                    std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& sideFiles);
 
 /// A texture's image as the writers store it: its file's bytes when options.textures is Keep and
 /// it has them, else encoded in the requested format (Keep: PNG).

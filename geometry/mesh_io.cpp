@@ -67,15 +67,36 @@ Mesh readMesh(const fs::path& path, const Context& ctx) {
   return mesh;
 }
 
+namespace {
+
+using SideFiles = std::vector<std::pair<fs::path, fs::path>>;  // (temporary, final)
+
+// Runs write(tmp, sideFiles) for `path`; on failure the temporaries are removed. Side files
+// (textures, MTL, .bin) are committed first, the model last: it never points at missing files.
+template <class Write>
+void writeCommitted(const fs::path& path, Write&& write) {
+  checkOutputLocation(path);
+  const fs::path tmp = temporaryPathFor(path);
+  SideFiles sideFiles;
+  try {
+    write(tmp, sideFiles);
+  } catch (...) {
+    discardTemporary(tmp);
+    for (const auto& side : sideFiles) discardTemporary(side.first);
+    throw;
+  }
+  for (const auto& side : sideFiles) commitFile(side.first, side.second);
+  commitFile(tmp, path);
+}
+
+} // namespace
+
 void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& options) {
   const MeshFormat format = meshFormatOf(path);
   validateMesh(mesh, path.string());
   if (options.draco && format != MeshFormat::Gltf && format != MeshFormat::Glb)
     throw Error(path.string() + ": Draco compression needs a .glb or .gltf output");
-  checkOutputLocation(path);
-  const fs::path tmp = temporaryPathFor(path);
-  std::vector<std::pair<fs::path, fs::path>> sideFiles; // (temporary, final)
-  try {
+  writeCommitted(path, [&](const fs::path& tmp, SideFiles& sideFiles) {
     switch (format) {
     case MeshFormat::Obj: detail::writeObj(mesh, path, tmp, options, sideFiles); break;
     case MeshFormat::Ply: detail::writePly(mesh, tmp, options.binary); break;
@@ -85,14 +106,18 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
     case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options, sideFiles); break;
     case MeshFormat::ThreeMf: detail::write3mf(mesh, path, tmp); break;
     }
-  } catch (...) {
-    discardTemporary(tmp);
-    for (const auto& side : sideFiles) discardTemporary(side.first);
-    throw;
-  }
-  // Side files (textures, MTL) first, the model last: the model never points at missing files.
-  for (const auto& side : sideFiles) commitFile(side.first, side.second);
-  commitFile(tmp, path);
+  });
+}
+
+void writeScene(std::span<const SceneNode> nodes, const fs::path& path, const MeshWriteOptions& options) {
+  const MeshFormat format = meshFormatOf(path);
+  if (format != MeshFormat::Gltf && format != MeshFormat::Glb)
+    throw Error(path.string() + ": a scene of several meshes needs a .glb or .gltf output");
+  if (nodes.empty()) throw Error(path.string() + ": a scene needs at least one mesh");
+  for (const SceneNode& node : nodes) validateMesh(node.mesh, path.string() + " (" + node.name + ")");
+  writeCommitted(path, [&](const fs::path& tmp, SideFiles& sideFiles) {
+    detail::writeGltfScene(nodes, path, tmp, format == MeshFormat::Glb, options, sideFiles);
+  });
 }
 
 namespace detail {

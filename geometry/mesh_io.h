@@ -15,6 +15,7 @@
 #include "render/image/context.h"
 
 #include <filesystem>
+#include <span>
 #include <string>
 
 namespace texfab::geometry {
@@ -79,5 +80,17 @@ struct MeshWriteOptions {
 ///    other maps and PBR factors are not in 3MF's core or Materials extension.
 ///  - OFF, STL: positions and triangles only.
 void writeMesh(const Mesh& mesh, const std::filesystem::path& path, const MeshWriteOptions& options = {});
+
+/// One part of a scene: a mesh placed at `translation` (a glTF node with a mesh of its own).
+struct SceneNode {
+  std::string name;
+  Mesh mesh;  ///< positions relative to the node
+  Eigen::Vector3f translation{0.0f, 0.0f, 0.0f};
+};
+
+/// Writes meshes as one glTF 2.0 scene (.glb or .gltf): a named node and mesh per entry, in order,
+/// with the MeshWriteOptions of writeMesh. Materials equal in every field (the same texture images
+/// included) are written once and shared.
+void writeScene(std::span<const SceneNode> nodes, const std::filesystem::path& path, const MeshWriteOptions& options = {});
 
 } // namespace texfab::geometry

@@ -72,7 +72,7 @@ void rotateNormal(const std::array<float, 4>& j, const float* in, float* out) {
 
 SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
                                const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
-                               double scale, const Context& ctx) {
+                               double scale, const Context& ctx, synthesis::SolidLevelCache* cache) {
   std::vector<synthesis::Voxel> voxels(sites.size());
   for (size_t s = 0; s < sites.size(); ++s) {
     const atlas::Float3& p = fields.position.at(sites.x[s], sites.y[s]);
@@ -82,8 +82,7 @@ SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas
       if (std::abs(c) > synthesis::kMaxSolidPosition)
         throw Error("the scale puts the model outside the solid texture's range (|position × scale| <= 2^30)");
   }
-  // One request: a coarse-level cache could not serve it (it only serves later requests).
-  synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, voxels, options, nullptr, ctx);
+  synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, voxels, options, cache, ctx);
   return {std::move(result.triples), result.distinctVoxels, result.voxelsSynthesized()};
 }
 

@@ -54,9 +54,10 @@ struct SolidSites {
 
 /// The voxel of each site (its surface position times `scale` voxels per model unit, floored),
 /// synthesized in one request: texels sharing a voxel share its value. Throws texfab::Error when
-/// a position times the scale leaves the solid texture's range.
+/// a position times the scale leaves the solid texture's range. `cache` (may be null) serves and
+/// keeps coarse levels across requests (a single request gains nothing from it).
 SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
                                const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
-                               double scale, const Context& ctx = {});
+                               double scale, const Context& ctx = {}, synthesis::SolidLevelCache* cache = nullptr);
 
 } // namespace texfab::render

@@ -19,6 +19,8 @@ Command addTextureCommand(CLI::App& root);
 Command addAtlasCommand(CLI::App& root);
 Command addSynthCommand(CLI::App& root);
 Command addSolidCommand(CLI::App& root);
+Command addFractureCommand(CLI::App& root);
+Command addCutCommand(CLI::App& root);
 Command addSliceCommand(CLI::App& root);
 Command addMergeSlicesCommand(CLI::App& root);
 Command addRenderCommand(CLI::App& root);

@@ -79,10 +79,10 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "texfab " TEXFAB_VERSION);
   // Pipeline order: the main job first, then its parts, then the tools around them.
   const std::vector<cli::Command> commands{
-      cli::addTextureCommand(app), cli::addAtlasCommand(app),  cli::addSynthCommand(app),
-      cli::addSolidCommand(app),   cli::addSliceCommand(app),  cli::addMergeSlicesCommand(app),
-      cli::addRenderCommand(app),  cli::addStatsCommand(app),  cli::addInfoCommand(app),
-      cli::addConvertCommand(app)};
+      cli::addTextureCommand(app), cli::addAtlasCommand(app),       cli::addSynthCommand(app),
+      cli::addSolidCommand(app),   cli::addFractureCommand(app),    cli::addCutCommand(app),
+      cli::addSliceCommand(app),   cli::addMergeSlicesCommand(app), cli::addRenderCommand(app),
+      cli::addStatsCommand(app),   cli::addInfoCommand(app),        cli::addConvertCommand(app)};
 
   // An unknown command is named (CLI11 would print the top-level help for "texfab cut --help").
   std::string names;

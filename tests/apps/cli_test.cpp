@@ -73,7 +73,7 @@ TEST(Cli, HelpListsTheCommandsInPipelineOrder) {
 }
 
 TEST(Cli, UnknownCommandsAreNamed) {
-  for (const std::string& args : {"bogus", "cut --help", "fracture", "fracture --help"}) {
+  for (const std::string& args : {"bogus", "shatter --help", "explode", "explode --help"}) {
     const CliResult r = runCli(args);
     EXPECT_EQ(r.status, 1) << args;
     const std::string name = args.substr(0, args.find(' '));
