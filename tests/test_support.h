@@ -45,6 +45,19 @@ inline int run(const std::string& command) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
+/// Where CGAL's mesh data set was extracted (models/fetch; $TEXFAB_CGAL_DATA overrides), or empty.
+inline std::filesystem::path cgalDataDir() {
+  if (const char* env = std::getenv("TEXFAB_CGAL_DATA"); env && *env) return env;
+  const std::filesystem::path p = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / "cgal";
+  return std::filesystem::exists(p / "elephant.off") ? p : std::filesystem::path();
+}
+
+/// A file of CGAL's data set, or empty when the data set is absent (tests then skip).
+inline std::filesystem::path cgalModel(const std::string& name) {
+  const std::filesystem::path dir = cgalDataDir();
+  return dir.empty() ? dir : dir / name;
+}
+
 /// What a command printed and how it ended.
 struct CliResult {
   int status = -1;     ///< exit status; 128 + signal when killed
@@ -63,6 +76,7 @@ inline std::string readFile(const std::filesystem::path& path) {
   return text;
 }
 
+#ifdef TEXFAB_CLI
 /// Runs the texfab CLI with `args` (already quoted for the shell), capturing stdout and stderr.
 inline CliResult runCli(const std::string& args) {
   static std::atomic<int> counter{0};
@@ -80,6 +94,7 @@ inline CliResult runCli(const std::string& args) {
   std::filesystem::remove(base.string() + ".err", ec);
   return r;
 }
+#endif
 
 /// A path quoted for the shell.
 inline std::string quote(const std::filesystem::path& path) {

@@ -8,6 +8,7 @@
 #include "render/image/error.h"
 #include "geometry/mesh_io.h"
 #include "tests/atlas/test_meshes.h"
+#include "tests/test_support.h"
 
 #include <gtest/gtest.h>
 

@@ -2,33 +2,26 @@
 // texfab atlas end to end: outputs, report, debug images; bad arguments fail before any output.
 #include "geometry/mesh_io.h"
 #include "render/image/image_io.h"
+#include "tests/test_support.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
 namespace {
 namespace fs = std::filesystem;
 
-int run(const std::string& args) {
-  const std::string cmd = std::string(TEXFAB_CLI) + " atlas " + args + " -q 2>/dev/null";
-  return std::system(cmd.c_str());
-}
+using texfab::test::TempDir;
 
-fs::path tempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("texfab_atlas_cli_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+int run(const std::string& args) { return texfab::test::runCli("atlas " + args + " -q").status; }
 
 TEST(CliAtlas, WritesMeshReportAndDebugImages) {
   const fs::path model = fs::path(TEXFAB_SOURCE_DIR) / "models" / "meshes" / "knot1.off";
   if (!fs::exists(model)) GTEST_SKIP() << "models/meshes/knot1.off absent";
-  const fs::path d = tempDir("ok");
+  const TempDir dir("texfab-atlas-cli");
+  const fs::path& d = dir.path();
   ASSERT_EQ(0, run(model.string() + " -o " + (d / "knot.glb").string() + " --resolution 512 --report " +
                    (d / "r.json").string() + " --debug-images " + (d / "dbg").string()));
   const texfab::geometry::Mesh out = texfab::geometry::readMesh(d / "knot.glb");
@@ -59,7 +52,8 @@ TEST(CliAtlas, WritesMeshReportAndDebugImages) {
 
 TEST(CliAtlas, BadArgumentsFailWithoutOutput) {
   const fs::path model = fs::path(TEXFAB_SOURCE_DIR) / "models" / "meshes" / "knot1.off";
-  const fs::path d = tempDir("bad");
+  const TempDir dir("texfab-atlas-cli");
+  const fs::path& d = dir.path();
   const std::string out = " -o " + (d / "x.glb").string();
   EXPECT_NE(0, run(model.string() + out + " --parameterizer foo"));
   EXPECT_NE(0, run(model.string() + out + " --resolution 1000"));

@@ -15,8 +15,8 @@ namespace {
 
 using geometry::Mesh;
 
-using texfab::testing::append;
-using texfab::testing::box;
+using texfab::test::append;
+using texfab::test::box;
 
 /// A unit cube whose first triangle (0, 2, 3) is split around two points 1e-7 from its corner 0:
 /// one of the five pieces has a positive area under the degeneracy threshold (1e-14 diag²).

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <filesystem>
 
-namespace texfab::atlas::test {
+namespace texfab::test {
 
 /// A w×h grid of n×n quads in the z = 0 plane, counter-clockwise seen from +z.
 inline geometry::Mesh makePlane(int n, float w = 1, float h = 1) {
@@ -64,8 +64,4 @@ inline geometry::Mesh makeSphere(int around, int rings, float r = 1) {
   return m;
 }
 
-inline std::filesystem::path cgalModel(const std::string& name) {
-  return std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / "cgal" / name;
-}
-
-} // namespace texfab::atlas::test
+} // namespace texfab::test

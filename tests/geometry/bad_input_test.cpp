@@ -10,8 +10,8 @@
 
 using namespace texfab;
 using namespace texfab::geometry;
-using texfab::testing::errorOf;
-using texfab::testing::TempDir;
+using texfab::test::errorOf;
+using texfab::test::TempDir;
 
 namespace {
 
@@ -110,17 +110,13 @@ TEST(BadInput, EachProblemGetsAOneLineError) {
 TEST(BadInput, CommandLineExitsTwoAndWritesNothing) {
   TempDir dir("texfab-cli");
   write(dir / "bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
-  const std::string cli = TEXFAB_CLI;
   for (const std::string& args : {"convert '" + (dir / "bad.obj").string() + "' '" + (dir / "out.glb").string() + "'",
                                  "render '" + (dir / "bad.obj").string() + "' -o '" + (dir / "out.png").string() + "'",
                                  "info '" + (dir / "bad.obj").string() + "'"}) {
-    const int status = std::system((cli + " " + args + " >/dev/null 2>'" + (dir / "err.txt").string() + "'").c_str());
-    EXPECT_EQ(WEXITSTATUS(status), 2) << args;
-    std::ifstream err(dir / "err.txt");
-    std::string line, extra;
-    std::getline(err, line);
-    EXPECT_NE(line.find("bad.obj"), std::string::npos) << line;
-    EXPECT_FALSE(std::getline(err, extra)) << "more than one line: " << extra;
+    const texfab::test::CliResult r = texfab::test::runCli(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_NE(r.err.find("bad.obj"), std::string::npos) << r.err;
+    EXPECT_EQ(r.errLines(), 1u) << r.err;
   }
   for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
     EXPECT_TRUE(entry.path().filename() == "bad.obj" || entry.path().filename() == "err.txt") << entry.path();

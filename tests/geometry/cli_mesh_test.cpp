@@ -10,34 +10,18 @@
 #include <cstdio>
 
 using namespace texfab;
-using texfab::testing::TempDir;
+using texfab::test::quote;
+using texfab::test::runCli;
+using texfab::test::TempDir;
 
 namespace {
 
 const std::filesystem::path kMeshes = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/meshes";
 
-// Runs the CLI; returns (exit status, stdout).
-std::pair<int, std::string> runCli(const std::string& args) {
-  const std::string command = std::string(TEXFAB_CLI) + " " + args + " 2>/dev/null";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (pipe && fgets(buffer.data(), int(buffer.size()), pipe)) out += buffer.data();
-  const int status = pipe ? pclose(pipe) : -1;
-  return {WEXITSTATUS(status), out};
-}
-
-std::string quote(const std::filesystem::path& p) {
-  std::string out = p.string();
-  out.insert(out.begin(), '\'');
-  out.push_back('\'');
-  return out;
-}
-
 } // namespace
 
 TEST(CliMesh, InfoJsonDescribesTheBundledModels) {
-  auto [status, out] = runCli("info --json " + quote(kMeshes / "marble_cube.glb"));
+  auto [status, out, err] = runCli("info --json " + quote(kMeshes / "marble_cube.glb"));
   ASSERT_EQ(status, 0);
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["triangles"], 12);
@@ -49,10 +33,10 @@ TEST(CliMesh, InfoJsonDescribesTheBundledModels) {
   EXPECT_EQ(j["uvs"], true);
   ASSERT_EQ(j["materials"].size(), 1u);
   EXPECT_EQ(j["materials"][0]["base_color_texture"]["width"], 128);
-  std::tie(status, out) = runCli("info --json " + quote(kMeshes / "knot1.off"));
-  ASSERT_EQ(status, 0);
-  EXPECT_EQ(nlohmann::json::parse(out)["genus"], 1);
-  EXPECT_EQ(nlohmann::json::parse(out)["uvs"], false);
+  const texfab::test::CliResult knot = runCli("info --json " + quote(kMeshes / "knot1.off"));
+  ASSERT_EQ(knot.status, 0);
+  EXPECT_EQ(nlohmann::json::parse(knot.out)["genus"], 1);
+  EXPECT_EQ(nlohmann::json::parse(knot.out)["uvs"], false);
 }
 
 TEST(CliMesh, InfoFindsTwoClosedCubesJoinedAtOneVertexNonManifold) {
@@ -76,7 +60,7 @@ TEST(CliMesh, InfoFindsTwoClosedCubesJoinedAtOneVertexNonManifold) {
   ASSERT_TRUE(f);
   std::fputs(off.c_str(), f);
   std::fclose(f);
-  auto [status, out] = runCli("info --json " + quote(dir / "touching.off"));
+  auto [status, out, err] = runCli("info --json " + quote(dir / "touching.off"));
   ASSERT_EQ(status, 0);
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["closed"], true);
@@ -88,15 +72,15 @@ TEST(CliMesh, InfoFindsTwoClosedCubesJoinedAtOneVertexNonManifold) {
 
 TEST(CliMesh, ConvertKeepsMaterialsAndRefusesBadRequests) {
   TempDir dir("texfab-cli-convert");
-  ASSERT_EQ(runCli("convert -q " + quote(kMeshes / "marble_cube.obj") + " " + quote(dir / "cube.glb") + " --draco").first, 0);
+  ASSERT_EQ(runCli("convert -q " + quote(kMeshes / "marble_cube.obj") + " " + quote(dir / "cube.glb") + " --draco").status, 0);
   const geometry::Mesh mesh = geometry::readMesh(dir / "cube.glb");
   EXPECT_EQ(mesh.triangleCount(), 12u);
   ASSERT_EQ(mesh.materials.size(), 1u);
   EXPECT_TRUE(mesh.materials[0].baseColorTexture);
-  ASSERT_EQ(runCli("convert -q " + quote(dir / "cube.glb") + " " + quote(dir / "cube.obj")).first, 0);
+  ASSERT_EQ(runCli("convert -q " + quote(dir / "cube.glb") + " " + quote(dir / "cube.obj")).status, 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "cube.mtl"));
-  EXPECT_EQ(runCli("convert -q " + quote(dir / "cube.glb") + " " + quote(dir / "cube.ply") + " --draco").first, 1);  // a usage error
-  EXPECT_EQ(runCli("convert -q " + quote(dir / "cube.glb") + " " + quote(dir / "cube.fbx")).first, 2);
+  EXPECT_EQ(runCli("convert -q " + quote(dir / "cube.glb") + " " + quote(dir / "cube.ply") + " --draco").status, 1);  // a usage error
+  EXPECT_EQ(runCli("convert -q " + quote(dir / "cube.glb") + " " + quote(dir / "cube.fbx")).status, 2);
   EXPECT_FALSE(std::filesystem::exists(dir / "cube.ply"));
 }
 
@@ -104,7 +88,7 @@ TEST(CliMesh, RenderWritesViewsAndTurntables) {
   TempDir dir("texfab-cli-render");
   ASSERT_EQ(runCli("render -q " + quote(kMeshes / "marble_cube.glb") + " -o " + quote(dir / "view.png") +
                    " --size 64x48 --spp 4 --background transparent")
-                .first,
+                .status,
             0);
   const Image view = readImage(dir / "view.png");
   EXPECT_EQ(view.width, 64);
@@ -114,9 +98,9 @@ TEST(CliMesh, RenderWritesViewsAndTurntables) {
   EXPECT_EQ(view.at(32, 24, 3), 1.0f);   // centre: the cube
   ASSERT_EQ(runCli("render -q " + quote(kMeshes / "knot1.off") + " -o " + quote(dir / "turn.png") +
                    " --size 32 --spp 1 --turntable 3 --background '#336699'")
-                .first,
+                .status,
             0);
   for (const char* name : {"turn_000.png", "turn_001.png", "turn_002.png"}) EXPECT_TRUE(std::filesystem::exists(dir / name));
   EXPECT_FALSE(std::filesystem::exists(dir / "turn.png"));
-  EXPECT_EQ(runCli("render -q " + quote(kMeshes / "knot1.off") + " -o " + quote(dir / "x.png") + " --background pink").first, 1);  // a bad flag value: usage
+  EXPECT_EQ(runCli("render -q " + quote(kMeshes / "knot1.off") + " -o " + quote(dir / "x.png") + " --background pink").status, 1);  // a bad flag value: usage
 }

@@ -9,7 +9,7 @@
 
 using namespace texfab;
 using namespace texfab::geometry;
-using texfab::testing::TempDir;
+using texfab::test::TempDir;
 
 namespace {
 
@@ -62,7 +62,7 @@ TEST_P(CorruptInput, NeverCrashesOnlyTexfabErrors) {
   TempDir dir("texfab-fuzz");
   const std::string name = GetParam();
   // The original: the textured cube (OBJ, glTF, PLY) or a bundled CGAL mesh (OFF, STL).
-  Mesh source = texfab::testing::texturedCube();
+  Mesh source = texfab::test::texturedCube();
   MeshWriteOptions options;
   options.binary = name.find("ascii") == std::string::npos;
   options.draco = name.find("draco") != std::string::npos;

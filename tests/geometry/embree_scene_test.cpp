@@ -72,7 +72,7 @@ void checkInsideAgainstWindingNumber(const Mesh& mesh, const std::string& name, 
 } // namespace
 
 TEST(EmbreeScene, RayHitsReportTriangleBarycentricsAndDistance) {
-  const Mesh cube = texfab::testing::texturedCube();
+  const Mesh cube = texfab::test::texturedCube();
   const EmbreeScene scene(cube);
   const RayHit hit = scene.intersect({{0.2f, 0.3f, 5.0f}, {0, 0, -1}});
   ASSERT_TRUE(hit.hit);
@@ -90,7 +90,7 @@ TEST(EmbreeScene, RayHitsReportTriangleBarycentricsAndDistance) {
 }
 
 TEST(EmbreeScene, InsideOfCubeAndOpenMeshesAreReported) {
-  Mesh cube = texfab::testing::texturedCube();
+  Mesh cube = texfab::test::texturedCube();
   const EmbreeScene scene(cube);
   EXPECT_TRUE(scene.inside({0.1f, 0.2f, 0.3f}));
   EXPECT_TRUE(scene.inside({0.99f, 0.99f, 0.99f}));
@@ -112,7 +112,7 @@ TEST(EmbreeScene, InsideAgreesWithWindingNumberOnBundledMeshes) {
 }
 
 TEST(EmbreeScene, InsideAgreesWithWindingNumberOnCgalDataSet) {
-  const auto dir = texfab::testing::cgalDataDir();
+  const auto dir = texfab::test::cgalDataDir();
   if (dir.empty()) GTEST_SKIP() << "CGAL data set not extracted (run models/fetch)";
   int tested = 0;
   for (const char* name : {"cow.off", "mushroom.off", "double-torus-example.off", "eight.off", "cube.off", "sphere.off",

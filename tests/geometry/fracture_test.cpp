@@ -16,13 +16,13 @@
 
 using namespace texfab;
 using namespace texfab::geometry;
-using texfab::atlas::test::makeCylinder;
-using texfab::atlas::test::makeSphere;
-using texfab::testing::errorOf;
+using texfab::test::makeCylinder;
+using texfab::test::makeSphere;
+using texfab::test::errorOf;
 
 namespace {
 
-Mesh cube() { return texfab::testing::texturedCube(); }  // [-1, 1]^3, UVs, two materials, a tag on the top
+Mesh cube() { return texfab::test::texturedCube(); }  // [-1, 1]^3, UVs, two materials, a tag on the top
 
 // A torus around z (genus 1: pieces of it are not convex).
 Mesh torus(int around, int tube, float r = 1.0f, float t = 0.35f) {

@@ -8,14 +8,14 @@
 
 using namespace texfab;
 using namespace texfab::geometry;
-using texfab::testing::TempDir;
+using texfab::test::TempDir;
 
 namespace {
 
 Mesh normalMappedMesh() {
-  Mesh m = texfab::testing::texturedCube();
-  m.materials[0].normalTexture.image = texfab::testing::gradientImage(8, 8);
-  m.materials[0].metallicRoughnessTexture.image = texfab::testing::gradientImage(4, 4);
+  Mesh m = texfab::test::texturedCube();
+  m.materials[0].normalTexture.image = texfab::test::gradientImage(8, 8);
+  m.materials[0].metallicRoughnessTexture.image = texfab::test::gradientImage(4, 4);
   m.materials[0].baseColorTexture.rotation = 0.5f;
   m.materials[1].baseColorFactor.w() = 0.5f;
   m.materials[1].blend = true;
@@ -40,7 +40,7 @@ TEST_P(GltfValidator, OutputHasNoErrorsOrWarnings) {
   options.embed = name.find("embed") != std::string::npos;
   if (name.find("jpeg") != std::string::npos) options.textures = TextureEncoding::Jpeg;
   if (name.find("webp") != std::string::npos) options.textures = TextureEncoding::Webp;
-  std::vector<std::pair<std::string, Mesh>> meshes = {{"cube", texfab::testing::texturedCube()},
+  std::vector<std::pair<std::string, Mesh>> meshes = {{"cube", texfab::test::texturedCube()},
                                                       {"normalmapped", normalMappedMesh()}};
   Mesh plain;  // no UVs, no normals, no materials
   plain.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};

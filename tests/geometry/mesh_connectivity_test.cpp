@@ -13,10 +13,10 @@ using namespace texfab::geometry;
 namespace {
 
 Mesh cube(Eigen::Vector3f lo = {0, 0, 0}, float size = 1) {
-  return texfab::testing::box(lo, Eigen::Vector3f::Constant(size));
+  return texfab::test::box(lo, Eigen::Vector3f::Constant(size));
 }
 
-using texfab::testing::append;
+using texfab::test::append;
 
 double signedVolume(const Mesh& m) {
   double v = 0;

@@ -13,8 +13,8 @@
 
 using namespace texfab;
 using namespace texfab::geometry;
-using texfab::testing::TempDir;
-using texfab::testing::texturedCube;
+using texfab::test::TempDir;
+using texfab::test::texturedCube;
 
 namespace {
 

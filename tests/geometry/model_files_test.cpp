@@ -15,7 +15,7 @@
 
 using namespace texfab;
 using namespace texfab::geometry;
-using texfab::testing::TempDir;
+using texfab::test::TempDir;
 
 namespace {
 
@@ -36,8 +36,8 @@ Mesh smoothGrid(int n) {
   Material mat;
   mat.name = "grid";
   mat.metallicFactor = 0;
-  mat.baseColorTexture.image = texfab::testing::gradientImage(16, 16);
-  mat.normalTexture.image = texfab::testing::gradientImage(8, 8);
+  mat.baseColorTexture.image = texfab::test::gradientImage(16, 16);
+  mat.normalTexture.image = texfab::test::gradientImage(8, 8);
   m.materials = {mat};
   return m;
 }

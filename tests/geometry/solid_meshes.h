@@ -7,7 +7,7 @@
 #include <array>
 #include <cmath>
 
-namespace texfab::testing {
+namespace texfab::test {
 
 /// An axis-aligned box [lo, hi], 12 triangles, outward facing.
 inline geometry::Mesh makeBox(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
@@ -64,4 +64,4 @@ inline double meshArea(const geometry::Mesh& m) {
   return a;
 }
 
-} // namespace texfab::testing
+} // namespace texfab::test

@@ -14,9 +14,7 @@
 #include <random>
 #include <string>
 
-namespace texfab::testing {
-
-using TempDir = test::TempDir;
+namespace texfab::test {
 
 /// A w x h RGB(A) image whose pixels follow a simple formula (so texture round trips can compare).
 inline std::shared_ptr<const Image> gradientImage(int w, int h, int channels = 3) {
@@ -28,8 +26,6 @@ inline std::shared_ptr<const Image> gradientImage(int w, int h, int channels = 3
   return image;
 }
 
-/// A closed unit cube (12 triangles, 8 shared vertices) with per-face UV squares (seams on every
-/// edge), flat per-corner normals, two materials (one textured) and a face tag on the top face.
 /// An axis-aligned closed box [lo, lo + size] (12 triangles, 8 shared vertices), normals outward.
 inline geometry::Mesh box(Eigen::Vector3f lo, Eigen::Vector3f size) {
   geometry::Mesh m;
@@ -51,6 +47,8 @@ inline void append(geometry::Mesh& a, const geometry::Mesh& b) {
   for (auto t : b.triangles) a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
 }
 
+/// A closed unit cube (12 triangles, 8 shared vertices) with per-face UV squares (seams on every
+/// edge), flat per-corner normals, two materials (one textured) and a face tag on the top face.
 inline geometry::Mesh texturedCube() {
   geometry::Mesh m;
   m.positions = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
@@ -82,13 +80,6 @@ inline geometry::Mesh texturedCube() {
   return m;
 }
 
-/// Where CGAL's mesh data set was extracted (models/fetch), or empty.
-inline std::filesystem::path cgalDataDir() {
-  if (const char* env = std::getenv("TEXFAB_CGAL_DATA"); env && *env) return env;
-  const std::filesystem::path p = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / "cgal";
-  return std::filesystem::exists(p / "elephant.off") ? p : std::filesystem::path();
-}
-
 /// The message of the texfab::Error that `fn` throws ("" if it throws none).
 template <class Fn>
 std::string errorOf(Fn&& fn) {
@@ -100,4 +91,4 @@ std::string errorOf(Fn&& fn) {
   return "";
 }
 
-} // namespace texfab::testing
+} // namespace texfab::test

@@ -12,7 +12,7 @@
 
 #include <cmath>
 
-namespace texfab::testing {
+namespace texfab::test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -122,16 +122,16 @@ TEST(ThreeMf, RoundTripThroughTexfabsReader) {
 
 TEST(ThreeMf, ConvertAndTextureWriteIt) {
   TempDir dir;
-  const std::string cli = TEXFAB_CLI;
   const fs::path obj = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/marble_cube.obj";
-  ASSERT_EQ(std::system((cli + " convert '" + obj.string() + "' '" + (dir / "c.3mf").string() + "' -q").c_str()), 0);
+  ASSERT_EQ(test::runCli("convert '" + obj.string() + "' '" + (dir / "c.3mf").string() + "' -q").status, 0);
   const geometry::Mesh converted = geometry::readMesh(dir / "c.3mf");
   EXPECT_EQ(converted.triangleCount(), geometry::readMesh(obj).triangleCount());
   EXPECT_TRUE(converted.hasUvs());
   const fs::path exemplar = fs::path(TEXFAB_SOURCE_DIR) / "models/exemplars/brick.png";
   const fs::path knot = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/knot1.off";
-  ASSERT_EQ(std::system((cli + " texture '" + knot.string() + "' -e '" + exemplar.string() + "' -o '" +
-                         (dir / "t.3mf").string() + "' --resolution 256 -q --no-cache").c_str()),
+  ASSERT_EQ(test::runCli("texture '" + knot.string() + "' -e '" + exemplar.string() + "' -o '" + (dir / "t.3mf").string() +
+                         "' --resolution 256 -q --no-cache")
+                .status,
             0);
   const geometry::Mesh textured = geometry::readMesh(dir / "t.3mf");
   ASSERT_EQ(textured.materials.size(), 1u);
@@ -139,4 +139,4 @@ TEST(ThreeMf, ConvertAndTextureWriteIt) {
 }
 
 } // namespace
-} // namespace texfab::testing
+} // namespace texfab::test

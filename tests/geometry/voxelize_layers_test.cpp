@@ -15,7 +15,7 @@
 #include <cmath>
 #include <random>
 
-namespace texfab::testing {
+namespace texfab::test {
 namespace {
 
 using namespace geometry;
@@ -221,4 +221,4 @@ TEST(PrintGrid, RefusesBadOptions) {
 }
 
 } // namespace
-} // namespace texfab::testing
+} // namespace texfab::test

@@ -17,7 +17,7 @@
 
 using namespace texfab;
 using namespace texfab::render;
-using texfab::atlas::test::makeSphere;
+using texfab::test::makeSphere;
 
 namespace {
 

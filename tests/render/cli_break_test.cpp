@@ -23,10 +23,9 @@ const fs::path kModel = kSource / "models" / "meshes" / "elephant.off";
 
 std::string quoted(const fs::path& p) { return std::string("'").append(p.string()).append("'"); }
 
-// Runs `texfab <command> <args>`, stderr to `log`; returns the exit status.
-int texfab(const std::string& command, const std::string& args, const fs::path& log) {
-  return texfab::test::run(std::string(TEXFAB_CLI).append(" ").append(command).append(" ").append(args).append(" 2>").append(
-      quoted(log)));
+// Runs `texfab <command> <args>`.
+texfab::test::CliResult texfab(const std::string& command, const std::string& args) {
+  return texfab::test::runCli(command + " " + args);
 }
 
 std::string readText(const fs::path& p) {
@@ -71,10 +70,9 @@ protected:
 TEST_F(CliBreak, FractureWritesValidPiecesAndAReport) {
   // 512²: the crack-edge seam measure then has some 600 edge samples (at 256², about 100: its
   // ratio then varies by more than 0.3 with the seed).
-  ASSERT_EQ(0, texfab("fracture", common("pieces.glb", 512) + " --pieces 5 --report " + quoted(dir / "r.json") +
-                                      " --separate " + quoted(dir / "parts"),
-                      dir / "log"))
-      << readText(dir / "log");
+  const auto run = texfab("fracture", common("pieces.glb", 512) + " --pieces 5 --report " + quoted(dir / "r.json") +
+                                           " --separate " + quoted(dir / "parts"));
+  ASSERT_EQ(0, run.status) << run.err;
   expectValid(dir / "pieces.glb");
   const nlohmann::json r = nlohmann::json::parse(readText(dir / "r.json"));
   EXPECT_EQ(r["piece_count"], 5);
@@ -101,21 +99,24 @@ TEST_F(CliBreak, FractureWritesValidPiecesAndAReport) {
 }
 
 TEST_F(CliBreak, SameBytesOnOneAndTwoThreads) {
-  ASSERT_EQ(0, texfab("fracture", common("a.glb") + " --pieces 4 --threads 1", dir / "log")) << readText(dir / "log");
-  ASSERT_EQ(0, texfab("fracture", common("b.glb") + " --pieces 4 --threads 2", dir / "log")) << readText(dir / "log");
+  for (const auto& [output, threads] : {std::pair{"a.glb", "1"}, std::pair{"b.glb", "2"}}) {
+    const auto run = texfab("fracture", common(output) + " --pieces 4 --threads " + threads);
+    ASSERT_EQ(0, run.status) << run.err;
+  }
   EXPECT_EQ(readText(dir / "a.glb"), readText(dir / "b.glb"));
 }
 
 TEST_F(CliBreak, CutByTwoPlanesAndAPlaneThatMisses) {
-  ASSERT_EQ(0, texfab("cut", common("cut.glb") + " --plane 0,0,0,1,0,0 --plane 0,0,0,0,1,0.2 --report " + quoted(dir / "r.json"),
-                      dir / "log"))
-      << readText(dir / "log");
+  const auto run = texfab("cut", common("cut.glb") + " --plane 0,0,0,1,0,0 --plane 0,0,0,0,1,0.2 --report " +
+                                      quoted(dir / "r.json"));
+  ASSERT_EQ(0, run.status) << run.err;
   expectValid(dir / "cut.glb");
   const nlohmann::json r = nlohmann::json::parse(readText(dir / "r.json"));
   EXPECT_GE(r["piece_count"].get<int>(), 4);
   EXPECT_LT(std::fabs(r["volume_relative_error"].get<double>()), 1e-6);
-  ASSERT_EQ(0, texfab("cut", common("missed.glb") + " --plane 0,0,50,0,0,1 --report " + quoted(dir / "m.json"), dir / "log"));
-  EXPECT_NE(readText(dir / "log").find("plane 1 misses the model"), std::string::npos) << readText(dir / "log");
+  const auto missed = texfab("cut", common("missed.glb") + " --plane 0,0,50,0,0,1 --report " + quoted(dir / "m.json"));
+  ASSERT_EQ(0, missed.status) << missed.err;
+  EXPECT_NE(missed.err.find("plane 1 misses the model"), std::string::npos) << missed.err;
   EXPECT_EQ(nlohmann::json::parse(readText(dir / "m.json"))["piece_count"], 1);
 }
 
@@ -123,11 +124,10 @@ TEST_F(CliBreak, RepairsAnOpenModel) {
   // A cube with one face missing: the hole is filled (and shows the interior).
   std::ofstream(dir / "open.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
                                      "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\n";
-  ASSERT_EQ(0, texfab("cut", quoted(dir / "open.obj") + " --interior " + quoted(exemplar) +
-                                 " --interior-resolution 128 -o " + quoted(dir / "c.glb") + " --plane 0.5,0.5,0.5,1,0,0",
-                      dir / "log"))
-      << readText(dir / "log");
-  EXPECT_NE(readText(dir / "log").find("repaired: filled 1 holes"), std::string::npos) << readText(dir / "log");
+  const auto run = texfab("cut", quoted(dir / "open.obj") + " --interior " + quoted(exemplar) +
+                                      " --interior-resolution 128 -o " + quoted(dir / "c.glb") + " --plane 0.5,0.5,0.5,1,0,0");
+  ASSERT_EQ(0, run.status) << run.err;
+  EXPECT_NE(run.err.find("repaired: filled 1 holes"), std::string::npos) << run.err;
   expectValid(dir / "c.glb");
 }
 
@@ -151,8 +151,7 @@ TEST_F(CliBreak, BadInputFailsWithOneLineAndNoOutput) {
       {"cut", model + interior + " --plane 0,0,0,0,0,1 --explode -1", "--explode", 1},
   };
   for (const auto& [command, args, says, expected] : cases) {
-    const int status = texfab(command, args + " -q -o " + quoted(dir / "out.glb"), dir / "log");
-    const std::string log = readText(dir / "log");
+    const auto [status, out, log] = texfab(command, args + " -q -o " + quoted(dir / "out.glb"));
     EXPECT_EQ(status, expected) << args << "\n" << log;
     EXPECT_NE(log.find(says), std::string::npos) << args << "\n" << log;
     EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;

@@ -23,10 +23,8 @@ std::string readText(const fs::path& p) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// Runs `texfab slice ARGS`; stderr goes to `err`.
-int slice(const std::string& args, const fs::path& err = "/dev/null") {
-  return texfab::test::run(std::string(TEXFAB_CLI) + " slice " + args + " 2>'" + err.string() + "'");
-}
+// Runs `texfab slice ARGS`.
+texfab::test::CliResult slice(const std::string& args) { return texfab::test::runCli("slice " + args); }
 
 // Built by appending: GCC 12 warns falsely (-Wrestrict) on "'" + std::string.
 std::string quoted(const fs::path& p) {
@@ -38,7 +36,7 @@ std::string quoted(const fs::path& p) {
 // A 6 mm sphere as an OFF file, written once per test folder.
 fs::path sphereModel(const TempDir& dir) {
   const fs::path p = dir / "sphere.off";
-  texfab::geometry::writeMesh(texfab::testing::makeIcoSphere(3.0f, 3), p);
+  texfab::geometry::writeMesh(texfab::test::makeIcoSphere(3.0f, 3), p);
   return p;
 }
 
@@ -48,7 +46,7 @@ TEST(CliSlice, WritesLayersManifestPreviewAndReport) {
   TempDir dir;
   const fs::path model = sphereModel(dir);
   ASSERT_EQ(slice(quoted(model) + " -o " + quoted(dir / "out") + kSmall + " --preview " + quoted(dir / "p.png") +
-                  " --report " + quoted(dir / "r.json")),
+                  " --report " + quoted(dir / "r.json")).status,
             0);
   const nlohmann::json m = nlohmann::json::parse(readText(dir / "out" / "slices.json"));
   EXPECT_EQ(m["layers"]["count"], 30);
@@ -74,12 +72,12 @@ TEST(CliSlice, ShardsMergeIntoTheFullRun) {
   texfab::writeImage(texfab::golden::marble32(), dir / "marble32.png");  // a small exemplar: a fast analysis
   const std::string common = quoted(model) + kSmall + " -e " + quoted(dir / "marble32.png") +
                              " --feature-size 2 --cache-dir " + quoted(dir / "cache");
-  ASSERT_EQ(slice(common + " -o " + quoted(dir / "full") + " --threads 2"), 0);
+  ASSERT_EQ(slice(common + " -o " + quoted(dir / "full") + " --threads 2").status, 0);
   for (int i = 0; i < 3; ++i)
     ASSERT_EQ(slice(common + " -o " + quoted(dir / ("part" + std::to_string(i))) + " --shard " + std::to_string(i) +
-                    "/3 --threads 1"),
+                    "/3 --threads 1").status,
               0);
-  ASSERT_EQ(slice(common + " -o " + quoted(dir / "lo") + " --layers 10:20"), 0);
+  ASSERT_EQ(slice(common + " -o " + quoted(dir / "lo") + " --layers 10:20").status, 0);
   const std::string merge = std::string(TEXFAB_CLI) + " merge-slices " + quoted(dir / "part2") + " " +
                             quoted(dir / "part0") + " " + quoted(dir / "part1") + " -o " + quoted(dir / "merged");
   ASSERT_EQ(texfab::test::run(merge), 0);
@@ -91,9 +89,9 @@ TEST(CliSlice, ShardsMergeIntoTheFullRun) {
 // One line on stderr, exit status `status` (1: a flag's value, 2: bad input), and no output folder.
 void expectRefused(const TempDir& dir, const std::string& args, const std::string& message, int status = 2) {
   const fs::path out = dir / "refused";
-  const int got = slice(args + " -o " + quoted(out), dir / "err.txt");
-  const std::string err = readText(dir / "err.txt");
-  EXPECT_EQ(got, status) << args << ": " << err;
+  const texfab::test::CliResult r = slice(args + " -o " + quoted(out));
+  const std::string& err = r.err;
+  EXPECT_EQ(r.status, status) << args << ": " << err;
   EXPECT_NE(err.find(message), std::string::npos) << args << ": " << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_FALSE(fs::exists(out)) << args;
@@ -122,7 +120,7 @@ TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
   expectRefused(dir, model + " --materials " + quoted(dir / "bad.json"), "#RRGGBB");
   // An open model that cannot be repaired: a sphere missing two triangles that touch at one vertex
   // only (two holes through one vertex, not simple loops). One missing triangle is closed instead.
-  texfab::geometry::Mesh open = texfab::testing::makeIcoSphere(3.0f, 2);
+  texfab::geometry::Mesh open = texfab::test::makeIcoSphere(3.0f, 2);
   const auto first = open.triangles[0];
   const auto touching = std::find_if(open.triangles.begin() + 1, open.triangles.end(), [&](const auto& t) {
     int shared = 0;
@@ -144,10 +142,11 @@ TEST(CliSlice, ExistingOutputNeedsForce) {
   const std::string model = quoted(sphereModel(dir)) + kSmall;
   fs::create_directories(dir / "out");
   std::ofstream(dir / "out" / "keep.txt") << "x";
-  EXPECT_EQ(slice(model + " -o " + quoted(dir / "out"), dir / "err.txt"), 2);
-  EXPECT_NE(readText(dir / "err.txt").find("--force"), std::string::npos);
+  const texfab::test::CliResult refused = slice(model + " -o " + quoted(dir / "out"));
+  EXPECT_EQ(refused.status, 2);
+  EXPECT_NE(refused.err.find("--force"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "out" / "keep.txt"));
-  EXPECT_EQ(slice(model + " -o " + quoted(dir / "out") + " --force"), 0);
+  EXPECT_EQ(slice(model + " -o " + quoted(dir / "out") + " --force").status, 0);
   EXPECT_FALSE(fs::exists(dir / "out" / "keep.txt"));
   EXPECT_TRUE(fs::exists(dir / "out" / "slices.json"));
 }

@@ -38,14 +38,7 @@ struct Args {
   }
 };
 
-int texture(const Args& args, const fs::path& stderrFile = "/dev/null") {
-  Args command;
-  command << TEXFAB_CLI << "texture";
-  command.text += ' ';
-  command.text += args.text;
-  command << "2>" << stderrFile;
-  return texfab::test::run(command.text);
-}
+texfab::test::CliResult texture(const Args& args) { return texfab::test::runCli("texture " + args.text); }
 
 std::string readText(const fs::path& p) {
   std::ifstream in(p);
@@ -73,7 +66,7 @@ TEST(CliTexture, SurfaceModeOnTheBundledModel) {
     return a;
   };
   ASSERT_EQ(0, texture(common() << "-o" << d / "out.glb" << "--preview" << d / "view.png" << "--preview-size 200"
-                                << "--report" << d / "r.json"));
+                                << "--report" << d / "r.json").status);
   const texfab::geometry::Mesh out = texfab::geometry::readMesh(d / "out.glb");
   ASSERT_TRUE(out.hasUvs());
   ASSERT_EQ(out.materials.size(), 1u);
@@ -90,7 +83,7 @@ TEST(CliTexture, SurfaceModeOnTheBundledModel) {
     EXPECT_TRUE(r["timings"].contains(stage)) << stage;
 
   // Same seed, same file: the whole job is deterministic (also on one thread).
-  ASSERT_EQ(0, texture(common() << "-o" << d / "again.glb" << "--threads 1"));
+  ASSERT_EQ(0, texture(common() << "-o" << d / "again.glb" << "--threads 1").status);
   EXPECT_EQ(readText(d / "out.glb"), readText(d / "again.glb"));
 }
 
@@ -104,7 +97,7 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
       for (int c = 0; c < small.channels; ++c) crop.at(x, y, c) = small.at(x, y, c);
   texfab::writeImage(crop, d / "small.png");
   ASSERT_EQ(0, texture(Args() << kModel << "-e" << d / "small.png" << "--mode solid --resolution 256 -q --cache-dir"
-                              << d / "cache" << "-o" << d / "solid.glb" << "--report" << d / "solid.json"));
+                              << d / "cache" << "-o" << d / "solid.glb" << "--report" << d / "solid.json").status);
   expectValidGltf(d / "solid.glb");
   const nlohmann::json r = readJson(d / "solid.json");
   EXPECT_LE(r["measures"]["seams"]["ratio"].get<double>(), 1.1);
@@ -128,13 +121,13 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
     a << kModel << "-e" << d / "small.png" << "--resolution 256 -q --maps" << fs::path(maps) << "-o" << out;
     return a;
   };
-  ASSERT_EQ(0, texture(withMapsTo(d / "maps.glb") << "--draco"));
+  ASSERT_EQ(0, texture(withMapsTo(d / "maps.glb") << "--draco").status);
   expectValidGltf(d / "maps.glb");
   EXPECT_TRUE(fs::exists(d / "maps_height.png"));
   const texfab::geometry::Mesh withMaps = texfab::geometry::readMesh(d / "maps.glb");
   EXPECT_TRUE(withMaps.materials.at(0).normalTexture);
   EXPECT_TRUE(withMaps.materials.at(0).metallicRoughnessTexture);
-  ASSERT_EQ(0, texture(withMapsTo(d / "maps.obj")));
+  ASSERT_EQ(0, texture(withMapsTo(d / "maps.obj")).status);
   EXPECT_TRUE(fs::exists(d / "maps.mtl"));
 }
 
@@ -164,9 +157,9 @@ TEST(CliTexture, BadInputFailsWithOneLineAndNoOutput) {
       {"atlas larger than memory", base(kModel, kExemplar) << "--resolution 16384 --mode solid"},  // ~118 GB
   };
   for (const auto& [name, args] : cases) {
-    const fs::path err = d / "stderr.txt";
-    EXPECT_NE(0, texture(args, err)) << name;
-    const std::string text = readText(err);
+    const texfab::test::CliResult r = texture(args);
+    EXPECT_NE(0, r.status) << name;
+    const std::string& text = r.err;
     EXPECT_FALSE(text.empty()) << name;
     EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << name << ": " << text;
     EXPECT_EQ(text.rfind("texfab", 0), 0u) << name << ": " << text;  // texfab's message, not the shell's
@@ -180,11 +173,10 @@ TEST(CliTexture, TexturesABrokenMeshAndSaysWhatWasRepaired) {
   // triangle, an isolated vertex.
   std::ofstream(d / "broken.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 2 2 2\nv 0.5 0 0\n"
                                      "f 1 2 3\nf 2 1 4\nf 1 2 5\nf 1 7 2\nf 1 2 3\n";
-  const fs::path err = d / "stderr.txt";
-  ASSERT_EQ(0, texture(Args() << d / "broken.obj" << "-e" << kExemplar << "--resolution 256 -o" << d / "out.glb"
-                              << "--cache-dir" << d / "cache",
-                       err));
-  const std::string text = readText(err);
+  const texfab::test::CliResult r = texture(Args() << d / "broken.obj" << "-e" << kExemplar << "--resolution 256 -o"
+                                                  << d / "out.glb" << "--cache-dir" << d / "cache");
+  ASSERT_EQ(0, r.status) << r.err;
+  const std::string& text = r.err;
   EXPECT_NE(text.find("non-manifold"), std::string::npos) << text;
   EXPECT_NE(text.find("degenerate"), std::string::npos) << text;
   expectValidGltf(d / "out.glb");

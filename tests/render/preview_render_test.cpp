@@ -129,7 +129,7 @@ TEST(PreviewRenderer, MipMapsRemoveShimmerOfFineTextures) {
 }
 
 TEST(PreviewRenderer, OpaqueBackgroundAndTurntableViewsDiffer) {
-  const Mesh cube = texfab::testing::texturedCube();
+  const Mesh cube = texfab::test::texturedCube();
   const PreviewRenderer renderer(cube);
   RenderOptions o = frontView(48);
   o.transparentBackground = false;
@@ -194,7 +194,7 @@ Extent coveredExtent(const Image& image) {
 // Default view of a model: it fills the frame (its longer projected side at least 85 % of the
 // image, margin 1.08 leaves about 93 %) without being cut by the border, at any azimuth.
 TEST(PreviewRenderer, DefaultViewFramesTheModelTightly) {
-  const Mesh cube = texfab::testing::texturedCube();
+  const Mesh cube = texfab::test::texturedCube();
   const PreviewRenderer renderer(cube);
   for (float azimuth : {0.0f, 30.0f, 135.0f}) {
     RenderOptions o;
@@ -215,7 +215,7 @@ TEST(PreviewRenderer, UpAxisStandsTheModelUp) {
   EXPECT_TRUE(frontFor(Eigen::Vector3f::UnitY()).isApprox(Eigen::Vector3f::UnitZ()));
   EXPECT_TRUE(frontFor(Eigen::Vector3f::UnitZ()).isApprox(-Eigen::Vector3f::UnitY()));
   EXPECT_NEAR(frontFor(Eigen::Vector3f(1, 1, 0)).dot(Eigen::Vector3f(1, 1, 0)), 0.0f, 1e-6f);
-  const Mesh tall = texfab::testing::box({-0.5f, -0.5f, -1.5f}, {1, 1, 3});
+  const Mesh tall = texfab::test::box({-0.5f, -0.5f, -1.5f}, {1, 1, 3});
   const PreviewRenderer renderer(tall);
   RenderOptions o;
   o.width = o.height = 96;

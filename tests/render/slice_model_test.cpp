@@ -32,7 +32,7 @@ const Eigen::Vector3f kFaceColors[6] = {{0.4f, 1, 1}, {0.5f, 0, 0.5f}, {0.7f, 1,
 
 // A 4 mm cube (model units = mm) whose faces carry the colours above (makeBox's face order).
 geometry::Mesh faceColoredCube() {
-  geometry::Mesh m = testing::makeBox({0, 0, 0}, {4, 4, 4});
+  geometry::Mesh m = test::makeBox({0, 0, 0}, {4, 4, 4});
   for (int f = 0; f < 6; ++f) {
     geometry::Material material;
     material.name = "face" + std::to_string(f);
@@ -134,7 +134,7 @@ TEST(SliceModel, DitheredBlocksAverageToTheFaceColours) {
 }
 
 TEST(SliceModel, SolidColoursAreTheSynthesizersColours) {
-  const geometry::Mesh sphere = testing::makeIcoSphere(2.0f, 3);
+  const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3);
   const PrintGrid grid = gridFor(sphere, 0.1);
   const LayerVoxelizer voxelizer(sphere, grid);
   const double scale = 6.0;  // solid voxels per mm
@@ -166,7 +166,7 @@ TEST(SliceModel, SolidColoursAreTheSynthesizersColours) {
 }
 
 TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
-  const geometry::Mesh sphere = testing::makeIcoSphere(2.0f, 3, {0.2f, -0.1f, 0.05f});
+  const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3, {0.2f, -0.1f, 0.05f});
   const PrintGrid grid = gridFor(sphere, 0.1);
   geometry::VoxelizeOptions vo;
   vo.shellMm = 0.5;
@@ -198,7 +198,7 @@ TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
 }
 
 TEST(SliceModel, MergeRefusesGapsOverlapsAndOtherPrints) {
-  const geometry::Mesh box = testing::makeBox({0, 0, 0}, {1, 1, 1});
+  const geometry::Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
   const PrintGrid grid = gridFor(box, 0.1);
   const LayerVoxelizer voxelizer(box, grid);
   SurfaceVoxelColors colors(box, grid, 1.0);

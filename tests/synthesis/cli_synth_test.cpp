@@ -16,29 +16,11 @@ namespace {
 
 using test::TempDir;
 
-const std::string kCli = TEXFAB_CLI;
 const std::string kBrick = std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/brick.png";
 
-struct Outcome {
-  int status;
-  std::string err;
-  std::string out;
-};
+using Outcome = test::CliResult;
 
-Outcome texfab(const std::string& args, const TempDir& dir) {
-  const auto outFile = dir / "stdout.txt", errFile = dir / "stderr.txt";
-  const int status = test::run(kCli + " " + args + " >" + outFile.string() + " 2>" + errFile.string());
-  auto slurp = [](const std::filesystem::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
-  Outcome o{status, slurp(errFile), slurp(outFile)};
-  std::filesystem::remove(outFile);
-  std::filesystem::remove(errFile);
-  return o;
-}
+Outcome texfab(const std::string& args) { return test::runCli(args); }
 
 std::string cacheArg(const TempDir& dir) { return " --cache-dir " + (dir / "cache").string(); }
 
@@ -63,7 +45,7 @@ TEST(CliSynth, BadInputGivesOneLineErrorAndNoOutput) {
   };
   for (const auto& [args, mention] : cases) {
     SCOPED_TRACE(args);
-    const Outcome o = texfab("synth " + args + cacheArg(dir), dir);
+    const Outcome o = texfab("synth " + args + cacheArg(dir));
     EXPECT_NE(o.status, 0);
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
     EXPECT_NE(o.err.find("error"), std::string::npos) << o.err;
@@ -90,8 +72,7 @@ TEST(CliSynth, CoordsApplyAndReportAgree) {
   const Outcome o = texfab("synth " + kBrick + " -o " + (dir / "out.png").string() + " --size 200x150 --seed 9" +
                                " --coords " + (dir / "coords.png").string() + " --apply " +
                                (dir / "height.png").string() + ":" + (dir / "out_height.png").string() +
-                               " --report " + (dir / "report.json").string() + cacheArg(dir),
-                           dir);
+                               " --report " + (dir / "report.json").string() + cacheArg(dir));
   ASSERT_EQ(o.status, 0) << o.err;
   const Image out = readImage(dir / "out.png");
   const synthesis::CoordMap coords = synthesis::readCoordMap(dir / "coords.png", exemplar.width, exemplar.height);
@@ -117,8 +98,7 @@ TEST(CliSynth, CoordsApplyAndReportAgree) {
 
   // The second run finds the analysis in the cache and produces the same image.
   const Outcome again = texfab("synth " + kBrick + " -o " + (dir / "again.png").string() +
-                                   " --size 200x150 --seed 9 --report " + (dir / "again.json").string() + cacheArg(dir),
-                               dir);
+                                   " --size 200x150 --seed 9 --report " + (dir / "again.json").string() + cacheArg(dir));
   ASSERT_EQ(again.status, 0) << again.err;
   std::ifstream in2(dir / "again.json");
   EXPECT_TRUE(nlohmann::json::parse(in2)["exemplar"]["analysis_cached"].get<bool>());
@@ -128,9 +108,9 @@ TEST(CliSynth, CoordsApplyAndReportAgree) {
 TEST(CliSynth, WindowsMatchTheFullImage) {
   TempDir dir;
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "full.png").string() + " --window -64,-32,256,192 --threads 2" +
-                       cacheArg(dir), dir).status, 0);
+                       cacheArg(dir)).status, 0);
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "part.png").string() + " --window 10,-5,40,30 --threads 1" +
-                       cacheArg(dir), dir).status, 0);
+                       cacheArg(dir)).status, 0);
   const Image full = readImage(dir / "full.png"), part = readImage(dir / "part.png");
   for (int y = 0; y < 30; ++y)
     for (int x = 0; x < 40; ++x)
@@ -143,29 +123,29 @@ TEST(CliSynth, WindowsMatchTheFullImage) {
 TEST(CliSynth, BackendFlags) {
   TempDir dir;
   const std::string common = " -o " + (dir / "out.png").string() + " --size 48x40 --seed 4" + cacheArg(dir);
-  const Outcome bad = texfab("synth " + kBrick + common + " --backend gpu", dir);
+  const Outcome bad = texfab("synth " + kBrick + common + " --backend gpu");
   EXPECT_EQ(bad.status, 1) << bad.err;
   EXPECT_NE(bad.err.find("expected cpu|vulkan|auto"), std::string::npos) << bad.err;
 
-  const Outcome missing = texfab("synth " + kBrick + common + " --backend vulkan --device 999", dir);
+  const Outcome missing = texfab("synth " + kBrick + common + " --backend vulkan --device 999");
   EXPECT_EQ(missing.status, 2) << missing.err;
   EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
   EXPECT_NE(missing.err.find("error: --backend vulkan: "), std::string::npos) << missing.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.png"));
 
-  ASSERT_EQ(texfab("synth " + kBrick + common + " -q", dir).status, 0);
+  ASSERT_EQ(texfab("synth " + kBrick + common + " -q").status, 0);
   const Image cpu = readImage(dir / "out.png");
-  const Outcome fallBack = texfab("synth " + kBrick + common + " --backend auto --device 999", dir);
+  const Outcome fallBack = texfab("synth " + kBrick + common + " --backend auto --device 999");
   ASSERT_EQ(fallBack.status, 0) << fallBack.err;
   EXPECT_NE(fallBack.err.find("backend: CPU ("), std::string::npos) << fallBack.err;
   EXPECT_EQ(readImage(dir / "out.png").pixels, cpu.pixels);
 
-  const Outcome devices = texfab("info --devices --json", dir);
+  const Outcome devices = texfab("info --devices --json");
   ASSERT_EQ(devices.status, 0) << devices.err;
   const nlohmann::json list = nlohmann::json::parse(devices.out);
   EXPECT_EQ(list.size(), synthesis::vulkanDevices().size());
   if (list.empty() || !list[0]["usable"].get<bool>()) GTEST_SKIP() << "no usable Vulkan device";
-  const Outcome vulkan = texfab("synth " + kBrick + common + " --backend vulkan --device 0", dir);
+  const Outcome vulkan = texfab("synth " + kBrick + common + " --backend vulkan --device 0");
   ASSERT_EQ(vulkan.status, 0) << vulkan.err;
   EXPECT_NE(vulkan.err.find("backend: Vulkan: "), std::string::npos) << vulkan.err;
   EXPECT_EQ(readImage(dir / "out.png").pixels, cpu.pixels);
@@ -174,10 +154,9 @@ TEST(CliSynth, BackendFlags) {
 TEST(CliSynth, StatsReportsTheMeasures) {
   TempDir dir;
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "o.png").string() + " --size 256 --coords " +
-                       (dir / "c.exr").string() + cacheArg(dir), dir).status, 0);
+                       (dir / "c.exr").string() + cacheArg(dir)).status, 0);
   const Outcome o = texfab("stats " + (dir / "o.png").string() + " --exemplar " + kBrick + " --coords " +
-                               (dir / "c.exr").string() + " --report " + (dir / "s.json").string(),
-                           dir);
+                               (dir / "c.exr").string() + " --report " + (dir / "s.json").string());
   ASSERT_EQ(o.status, 0) << o.err;
   for (const char* word : {"fidelity", "histogram", "coherence", "coverage", "shifted"})
     EXPECT_NE(o.out.find(word), std::string::npos) << word;
@@ -187,10 +166,9 @@ TEST(CliSynth, StatsReportsTheMeasures) {
   EXPECT_LT(s["coherence"].get<double>(), 1.0);
   // A tiling of the exemplar measures as one.
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "t.png").string() + " --size 256 --jitter 0 --coords " +
-                       (dir / "t.png.coords.png").string() + cacheArg(dir), dir).status, 0);
+                       (dir / "t.png.coords.png").string() + cacheArg(dir)).status, 0);
   const Outcome t = texfab("stats " + (dir / "t.png").string() + " --exemplar " + kBrick + " --coords " +
-                               (dir / "t.png.coords.png").string() + " --report " + (dir / "t.json").string(),
-                           dir);
+                               (dir / "t.png.coords.png").string() + " --report " + (dir / "t.json").string());
   ASSERT_EQ(t.status, 0) << t.err;
   std::ifstream in2(dir / "t.json");
   const nlohmann::json tj = nlohmann::json::parse(in2);
@@ -201,15 +179,15 @@ TEST(CliSynth, StatsReportsTheMeasures) {
 
 TEST(CliSynth, HelpListsEveryCommandAndOption) {
   TempDir dir;
-  const Outcome top = texfab("--help", dir);
+  const Outcome top = texfab("--help");
   EXPECT_EQ(top.status, 0);
   EXPECT_NE(top.out.find("synth"), std::string::npos);
   EXPECT_NE(top.out.find("stats"), std::string::npos);
-  const Outcome synth = texfab("synth --help", dir);
+  const Outcome synth = texfab("synth --help");
   for (const char* flag : {"--size", "--seed", "--jitter", "--window", "--tileable", "--coords", "--apply", "--threads",
                            "--report"})
     EXPECT_NE(synth.out.find(flag), std::string::npos) << flag;
-  EXPECT_NE(texfab("", dir).status, 0);  // no command
+  EXPECT_NE(texfab("").status, 0);  // no command
 }
 
 } // namespace

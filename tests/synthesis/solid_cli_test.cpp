@@ -16,22 +16,10 @@ namespace {
 using test::TempDir;
 namespace fs = std::filesystem;
 
-const std::string kCli = TEXFAB_CLI;
 
-struct Outcome {
-  int status;
-  std::string err;
-};
+using Outcome = test::CliResult;
 
-Outcome texfab(const std::string& args, const TempDir& dir) {
-  const auto errFile = dir / "stderr.txt";
-  const int status = test::run(kCli + " " + args + " >/dev/null 2>" + errFile.string());
-  std::ifstream in(errFile);
-  std::stringstream s;
-  s << in.rdbuf();
-  fs::remove(errFile);
-  return {status, s.str()};
-}
+Outcome texfab(const std::string& args) { return test::runCli(args); }
 
 // A 32x32 crop of the bundled marble, written as PNG into `dir`.
 std::string smallExemplar(const TempDir& dir, int side = 32, const std::string& name = "ex.png") {
@@ -55,8 +43,7 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
   const std::string ex = smallExemplar(dir);
   const std::string common = ex + " --seed 5 -q --cache-dir " + (dir / "cache").string();
   ASSERT_EQ(texfab("solid " + common + " --volume 12 -o " + (dir / "vol").string() + " --raw " +
-                       (dir / "vol.raw").string() + " --report " + (dir / "r.json").string(),
-                   dir)
+                       (dir / "vol.raw").string() + " --report " + (dir / "r.json").string())
                 .status,
             0);
   EXPECT_EQ(entries(dir / "vol"), 12u);
@@ -69,8 +56,7 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
 
   // The z = 7 plane as an image equals slice 7 of the volume (and the analysis now is cached).
   ASSERT_EQ(texfab("solid " + common + " --plane 0,0,7,1,0,0,0,1,0 --size 12x12 -o " + (dir / "p.png").string() +
-                       " --report " + (dir / "r2.json").string(),
-                   dir)
+                       " --report " + (dir / "r2.json").string())
                 .status,
             0);
   std::ifstream report2File(dir / "r2.json");
@@ -84,7 +70,7 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
     std::ofstream points(dir / "pts.txt");
     points << "# x y z\n3.5 4.5 7.5\n3,4,7\n";
   }
-  ASSERT_EQ(texfab("solid " + common + " --points " + (dir / "pts.txt").string() + " -o " + (dir / "c.txt").string(), dir)
+  ASSERT_EQ(texfab("solid " + common + " --points " + (dir / "pts.txt").string() + " -o " + (dir / "c.txt").string())
                 .status,
             0);
   std::ifstream colours(dir / "c.txt");
@@ -100,8 +86,7 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
 
   // An oblique plane runs too.
   EXPECT_EQ(texfab("solid " + common + " --plane 0,0,0,0.7,0.2,0.5,-0.3,0.8,0.4 --size 16x10 -o " +
-                       (dir / "o.png").string(),
-                   dir)
+                       (dir / "o.png").string())
                 .status,
             0);
   EXPECT_EQ(readImage(dir / "o.png").width, 16);
@@ -134,7 +119,7 @@ TEST(CliSolid, BadInputIsOneLineNonZeroAndNoOutput) {
       {"solid " + ex + " --volume 8 --plane 0,0,0,1,0,0,0,1,0 -o " + (dir / "g").string(), "exactly one", "g", 1},
   };
   for (const Case& c : cases) {
-    const Outcome o = texfab(c.args + common, dir);
+    const Outcome o = texfab(c.args + common);
     EXPECT_EQ(o.status, c.status) << c.args << "\n" << o.err;
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
     EXPECT_NE(o.err.find(c.expect), std::string::npos) << o.err;
