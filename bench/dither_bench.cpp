@@ -43,8 +43,8 @@ std::vector<float> target(int kind) {
     const synthesis::VoxelBox box{0, 0, 0, int(kW * kPitch.x() * scale) + 1, int(kH * kPitch.y() * scale) + 1,
                                   int(kL * kPitch.z() * scale) + 1};
     const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolidBox(a, box, {});
-    std::vector<float> colours;
-    synthesis::solidColors(r.triples, marble, marble, marble, colours);
+    std::vector<float> colors;
+    synthesis::solidColors(r.triples, marble, marble, marble, colors);
     const size_t channels = size_t(synthesis::solidColorChannels(marble, marble, marble));
     for (int z = 0; z < kL; ++z)
       for (int y = 0; y < kH; ++y)
@@ -52,7 +52,7 @@ std::vector<float> target(int kind) {
           const int sx = int((x + 0.5) * kPitch.x() * scale), sy = int((y + 0.5) * kPitch.y() * scale),
                     sz = int((z + 0.5) * kPitch.z() * scale);
           const size_t s = (size_t(sz) * size_t(box.ny) + size_t(sy)) * size_t(box.nx) + size_t(sx);
-          for (size_t k = 0; k < 3; ++k) c[3 * at(x, y, z) + k] = srgbToLinear(colours[channels * s + std::min(k, channels - 1)]);
+          for (size_t k = 0; k < 3; ++k) c[3 * at(x, y, z) + k] = srgbToLinear(colors[channels * s + std::min(k, channels - 1)]);
         }
   } else {
     for (int z = 0; z < kL; ++z)
@@ -76,13 +76,13 @@ uint32_t hashVoxel(int x, int y, int z) {
 }
 
 // White noise: each voxel's threshold from a hash of its position.
-std::vector<float> whiteNoise(const std::vector<float>& colours, const MaterialMixer& mixer) {
-  std::vector<float> out(colours.size());
+std::vector<float> whiteNoise(const std::vector<float>& colors, const MaterialMixer& mixer) {
+  std::vector<float> out(colors.size());
   for (int z = 0; z < kL; ++z)
     for (int y = 0; y < kH; ++y)
       for (int x = 0; x < kW; ++x) {
         const size_t v = 3 * at(x, y, z);
-        const float rgba[4] = {colours[v], colours[v + 1], colours[v + 2], 1.0f};
+        const float rgba[4] = {colors[v], colors[v + 1], colors[v + 2], 1.0f};
         const std::array<float, 3>& c = mixer.linearColor(mixer.pick(rgba, (hashVoxel(x, y, z) + 0.5f) / 4294967296.0f));
         std::copy(c.begin(), c.end(), &out[v]);
       }
@@ -93,14 +93,14 @@ void BM_Dither(benchmark::State& state) {
   const MaterialMixer mixer({{"C", {0, 255, 255, 255}}, {"M", {255, 0, 255, 255}}, {"Y", {255, 255, 0, 255}},
                              {"K", {0, 0, 0, 255}}, {"W", {255, 255, 255, 255}}});
   const DitherBox box{kW, kH, kL, kPitch};
-  const std::vector<float> colours = target(int(state.range(0)));
-  const std::vector<float> printable = reproducedColors(colours, mixer);  // the measures' reference
+  const std::vector<float> colors = target(int(state.range(0)));
+  const std::vector<float> printable = reproducedColors(colors, mixer);  // the measures' reference
   const BlueNoiseVolume noise = blueNoiseVolume(32, kPitch);
   const int method = int(state.range(1));
   std::vector<float> dithered;
   for (auto _ : state)
-    dithered = method == 2 ? whiteNoise(colours, mixer)
-                           : ditherBox(box, colours, mixer, method == 1 ? DitherMode::FloydSteinberg : DitherMode::BlueNoise, &noise);
+    dithered = method == 2 ? whiteNoise(colors, mixer)
+                           : ditherBox(box, colors, mixer, method == 1 ? DitherMode::FloydSteinberg : DitherMode::BlueNoise, &noise);
   const BlockColorError blocks = blockColorError(box, dithered, printable);
   state.counters["block_err"] = blocks.mean;
   state.counters["block_max"] = blocks.worst;

@@ -102,7 +102,7 @@ void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp) {
                                       DWORD(triangles.size())),
         object.p, where);
   // Properties: a texture2d per textured material, one basematerials group for the others.
-  std::map<size_t, DWORD> textures, colours;
+  std::map<size_t, DWORD> textures, colors;
   DWORD groupId = 0;
   for (size_t m = 0; m < mesh.materials.size(); ++m) {
     const Material& material = mesh.materials[m];
@@ -120,7 +120,7 @@ void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp) {
     check(lib3mf_basematerial_addmaterialutf8(group.p, material.name.empty() ? "material" : material.name.c_str(),
                                               byteOf(srgb(c[0])), byteOf(srgb(c[1])), byteOf(srgb(c[2])), &index),
           group.p, where);
-    colours[m] = index;
+    colors[m] = index;
   }
   if (!mesh.materials.empty()) {
     check(lib3mf_meshobject_createpropertyhandler(object.p, properties.out()), object.p, where);
@@ -136,7 +136,7 @@ void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp) {
         }
         check(lib3mf_propertyhandler_settexture(properties.p, DWORD(t), &uv), properties.p, where);
       } else {
-        check(lib3mf_propertyhandler_setbasematerial(properties.p, DWORD(t), groupId, colours.at(m)), properties.p, where);
+        check(lib3mf_propertyhandler_setbasematerial(properties.p, DWORD(t), groupId, colors.at(m)), properties.p, where);
       }
     }
     // 3MF wants an object whose triangles have properties to name a default one: the first
@@ -148,7 +148,7 @@ void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp) {
       const Eigen::Vector2f p = mesh.materials[m0].baseColorTexture.apply(mesh.uvs[0]);
       check(lib3mf_defaultpropertyhandler_settexture(defaults.p, it->second, p.x(), p.y()), defaults.p, where);
     } else {
-      check(lib3mf_defaultpropertyhandler_setbasematerial(defaults.p, groupId, colours.at(m0)), defaults.p, where);
+      check(lib3mf_defaultpropertyhandler_setbasematerial(defaults.p, groupId, colors.at(m0)), defaults.p, where);
     }
   }
   check(lib3mf_model_addbuilditem(model.p, object.p, nullptr, item.out()), model.p, where);

@@ -28,7 +28,7 @@ Vec3 barycentric(const geometry::Mesh& m, size_t t, const Vec3& p) {
 }
 
 // Bilinear base colour (texture times factor, RGB) at barycentric w of triangle t.
-Eigen::Vector3f colourAt(const geometry::Mesh& m, size_t t, const Vec3& w) {
+Eigen::Vector3f colorAt(const geometry::Mesh& m, size_t t, const Vec3& w) {
   const geometry::Material& material = m.materials[m.materialOf(t)];
   const Eigen::Vector3f factor = material.baseColorFactor.head<3>();
   const Image* image = material.baseColorTexture.image.get();
@@ -40,11 +40,11 @@ Eigen::Vector3f colourAt(const geometry::Mesh& m, size_t t, const Vec3& w) {
   auto at = [&](int px, int py, int c) {
     return image->at(std::clamp(px, 0, image->width - 1), std::clamp(py, 0, image->height - 1), std::min(c, image->channels - 1));
   };
-  Eigen::Vector3f colour;
+  Eigen::Vector3f color;
   for (int c = 0; c < 3; ++c)
-    colour[c] = factor[c] * ((1 - fy) * ((1 - fx) * at(x0, y0, c) + fx * at(x0 + 1, y0, c)) +
+    color[c] = factor[c] * ((1 - fy) * ((1 - fx) * at(x0, y0, c) + fx * at(x0 + 1, y0, c)) +
                              fy * ((1 - fx) * at(x0, y0 + 1, c) + fx * at(x0 + 1, y0 + 1, c)));
-  return colour;
+  return color;
 }
 
 double difference(const Eigen::Vector3f& a, const Eigen::Vector3f& b) { return double((a - b).cwiseAbs().mean()); }
@@ -103,23 +103,23 @@ CrackMatch measureCrackMatch(const BrokenModel& model, size_t n) {
     box.min = box.min.cwiseMin(b.min), box.max = box.max.cwiseMax(b.max);
   }
   const float tolerance = 1e-5f * box.diagonal();
-  std::vector<Eigen::Vector3f> colours;
+  std::vector<Eigen::Vector3f> colors;
   for (const SurfaceSample& s : samples) {
     const geometry::Mesh& a = model.pieces[s.piece].mesh;
-    const Eigen::Vector3f own = colourAt(a, s.triangle, barycentric(a, s.triangle, s.point));
-    colours.push_back(own);
+    const Eigen::Vector3f own = colorAt(a, s.triangle, barycentric(a, s.triangle, s.point));
+    colors.push_back(own);
     for (size_t q = 0; q < scenes.size(); ++q) {
       if (q == s.piece) continue;
       const geometry::SurfacePoint hit = scenes[q]->closestPoint(s.point.cast<float>(), tolerance);
       const geometry::Mesh& b = model.pieces[q].mesh;
       if (!hit.found || b.tagOf(hit.triangle) != kCutTag) continue;
-      r.difference += difference(own, colourAt(b, hit.triangle, barycentric(b, hit.triangle, s.point)));
+      r.difference += difference(own, colorAt(b, hit.triangle, barycentric(b, hit.triangle, s.point)));
       ++r.samples;
       break;
     }
   }
-  for (size_t i = 0; i < colours.size(); ++i) r.unrelatedDifference += difference(colours[i], colours[(i + colours.size() / 2) % colours.size()]);
-  r.unrelatedDifference /= double(colours.size());
+  for (size_t i = 0; i < colors.size(); ++i) r.unrelatedDifference += difference(colors[i], colors[(i + colors.size() / 2) % colors.size()]);
+  r.unrelatedDifference /= double(colors.size());
   if (r.samples) r.difference /= double(r.samples);
   return r;
 }
@@ -157,22 +157,22 @@ CrackSeams measureCrackSeams(const BrokenModel& model, double distance, size_t s
   const size_t stride = std::max<size_t>(1, points.size() / std::max<size_t>(samples, 1));
   double within = 0;
   size_t withinCount = 0;
-  auto colour = [&](const Side& s, const Vec3& q, bool& ok) {
+  auto color = [&](const Side& s, const Vec3& q, bool& ok) {
     const geometry::Mesh& m = model.pieces[s.piece].mesh;
     const Vec3 w = barycentric(m, s.triangle, q);
     ok = w.minCoeff() >= 0;
-    return colourAt(m, s.triangle, w);
+    return colorAt(m, s.triangle, w);
   };
   for (size_t i = 0; i < points.size(); i += stride) {
     const auto& [q, outer, cut] = points[i];
     bool ok1, ok2;
-    const Eigen::Vector3f co = colour(outer, q + distance * outer.inward, ok1), cc = colour(cut, q + distance * cut.inward, ok2);
+    const Eigen::Vector3f co = color(outer, q + distance * outer.inward, ok1), cc = color(cut, q + distance * cut.inward, ok2);
     if (!ok1 || !ok2) continue;
     r.acrossDifference += difference(co, cc);
     ++r.samples;
     for (const auto& [side, near] : {std::pair{outer, co}, std::pair{cut, cc}}) {
       bool ok;
-      const Eigen::Vector3f far = colour(side, q + 3 * distance * side.inward, ok);
+      const Eigen::Vector3f far = color(side, q + 3 * distance * side.inward, ok);
       if (ok) within += difference(near, far), ++withinCount;
     }
   }

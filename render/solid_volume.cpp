@@ -44,14 +44,14 @@ SolidVolumeResult synthesizeSolidVolume(const SolidAnalysis& analysis, const Sol
     const VoxelBox box{voxelOf(0), voxelOf(0), voxelOf(z0), side, side, int(voxelOf(z1 - 1) - voxelOf(z0) + 1)};
     const SolidSynthesisResult r = synthesizeSolidBox(analysis, box, options, cache, ctx);
     addLevelStats(result.levels, r);
-    const Image colours = solidColorImage(r.triples, e, box.nx, int(box.count() / box.nx));
+    const Image colors = solidColorImage(r.triples, e, box.nx, int(box.count() / box.nx));
     for (int z = z0; z < z1; ++z) {
-      Image image(n, n, channels, colours.format);
+      Image image(n, n, channels, colors.format);
       for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
           const size_t i = (size_t(voxelOf(z) - box.z) * size_t(box.ny) + size_t(voxelOf(y) - box.y)) * size_t(box.nx) +
                            size_t(voxelOf(x) - box.x);
-          for (int c = 0; c < channels; ++c) image.at(x, y, c) = colours.pixels[i * size_t(channels) + size_t(c)];
+          for (int c = 0; c < channels; ++c) image.at(x, y, c) = colors.pixels[i * size_t(channels) + size_t(c)];
         }
       slice(image);
     }

@@ -12,7 +12,7 @@ using namespace atlas;
 
 namespace {
 
-int colourChannels(const Image& image) { return image.channels >= 3 ? 3 : 1; }
+int colorChannels(const Image& image) { return image.channels >= 3 ? 3 : 1; }
 
 // Toroidal difference b - a of two exemplar coordinates (pixels), in [-size/2, size/2).
 double wrapped(double a, double b, double size) {
@@ -23,7 +23,7 @@ double wrapped(double a, double b, double size) {
 } // namespace
 
 SeamMeasure measureSeams(const synthesis::SurfaceLevel& finest, const Image& image) {
-  const int c = colourChannels(image);
+  const int c = colorChannels(image);
   SeamMeasure m;
   double seamSum = 0, interiorSum = 0;
   for (size_t s = 0; s < finest.size(); ++s)
@@ -110,8 +110,8 @@ ScaleMeasure measureScale(const synthesis::SurfaceLevel& finest, const std::vect
 SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& image,
                                        const Image& exemplar, const AtlasFields& fields, int samples, const Context& ctx) {
   constexpr int r = 3;
-  const int c = colourChannels(exemplar);
-  if (colourChannels(image) != c) throw Error("surface fidelity: image and exemplar differ in colour channels");
+  const int c = colorChannels(exemplar);
+  if (colorChannels(image) != c) throw Error("surface fidelity: image and exemplar differ in colour channels");
   SurfaceFidelity out;
   if (finest.size() == 0 || samples <= 0) return out;
   const size_t stride = std::max<size_t>(1, finest.size() / size_t(samples));

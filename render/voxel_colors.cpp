@@ -108,12 +108,12 @@ void SolidVoxelColors::prepare(std::span<const geometry::LayerSpans> layers, con
   const synthesis::SolidSynthesisResult result = synthesis::synthesizeSolid(analysis_, next.voxels, options_, cache_.get(), ctx);
   requested_ += int64_t(next.voxels.size());
   synthesized_ += result.voxelsSynthesized();
-  std::vector<float> colours;
-  synthesis::solidColors(result.triples, ex_, ey_, ez_, colours);
+  std::vector<float> colors;
+  synthesis::solidColors(result.triples, ex_, ey_, ez_, colors);
   const bool grey = synthesis::solidColorChannels(ex_, ey_, ez_) == 1;
   next.rgb.resize(3 * next.voxels.size());
   for (size_t i = 0; i < next.voxels.size(); ++i)
-    for (size_t c = 0; c < 3; ++c) next.rgb[3 * i + c] = srgbToLinear(colours[grey ? i : 3 * i + c]);
+    for (size_t c = 0; c < 3; ++c) next.rgb[3 * i + c] = srgbToLinear(colors[grey ? i : 3 * i + c]);
   *samples_ = std::move(next);
 }
 

@@ -51,7 +51,7 @@ int mirror(int a, int m) {
 int fold(int a, int m, ExemplarWrap w) { return w == ExemplarWrap::Tile ? wrap(a, m) : mirror(a, m); }
 
 // The channels analysis looks at: RGB, or grey for 1- and 2-channel images. Alpha is ignored.
-Image colourChannels(const Image& exemplar) {
+Image colorChannels(const Image& exemplar) {
   const int c = exemplar.channels >= 3 ? 3 : 1;
   Image out(exemplar.width, exemplar.height, c, PixelFormat::Float);
   for (int y = 0; y < exemplar.height; ++y)
@@ -388,17 +388,17 @@ ValidRegion validRegion(int width, int height, int spacing, ExemplarWrap wrapMod
 }
 
 std::vector<Image> gaussianStack(const Image& exemplar, ExemplarWrap wrapMode) {
-  return gaussianStackOf(colourChannels(exemplar), wrapMode);
+  return gaussianStackOf(colorChannels(exemplar), wrapMode);
 }
 
 Image featureDistance(const Image& exemplar, ExemplarWrap wrapMode) {
   const int w = exemplar.width, h = exemplar.height;
-  const Image colour = colourChannels(exemplar);
+  const Image color = colorChannels(exemplar);
   std::vector<float> luminance(size_t(w) * size_t(h));
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const float* p = colour.pixel(x, y);
-      luminance[size_t(y) * w + x] = colour.channels == 3 ? 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2] : p[0];
+      const float* p = color.pixel(x, y);
+      luminance[size_t(y) * w + x] = color.channels == 3 ? 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2] : p[0];
     }
   auto lum = [&](int x, int y) { return luminance[size_t(fold(y, h, wrapMode)) * w + size_t(fold(x, w, wrapMode))]; };
   std::vector<float> gradient(luminance.size());
@@ -486,7 +486,7 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
 
   // Colour plus (optionally) the feature-distance channel, scaled so that its standard deviation
   // is featureWeight times the mean colour standard deviation (LH06 §3.2).
-  Image base = colourChannels(exemplar);
+  Image base = colorChannels(exemplar);
   if (options.featureWeight > 0) {
     const Image feature = featureDistance(exemplar, options.wrap);
     auto stddev = [&](const Image& img, int c) {
@@ -499,10 +499,10 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
       const double n = double(w) * h;
       return std::sqrt(std::max(0.0, s2 / n - (s / n) * (s / n)));
     };
-    double colourStd = 0;
-    for (int c = 0; c < base.channels; ++c) colourStd += stddev(base, c) / base.channels;
+    double colorStd = 0;
+    for (int c = 0; c < base.channels; ++c) colorStd += stddev(base, c) / base.channels;
     const double featureStd = stddev(feature, 0);
-    const float scale = featureStd > 0 ? float(options.featureWeight * colourStd / featureStd) : 0.0f;
+    const float scale = featureStd > 0 ? float(options.featureWeight * colorStd / featureStd) : 0.0f;
     Image augmented(w, h, base.channels + 1, PixelFormat::Float);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
@@ -543,8 +543,8 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
 }
 
 WrapDiscontinuity wrapDiscontinuity(const Image& exemplar) {
-  const Image colour = colourChannels(exemplar);
-  const int c = colour.channels;
+  const Image color = colorChannels(exemplar);
+  const int c = color.channels;
   // The measure along x on `img` (transposed for y): for block size s, the mean over rows of
   // blocks of |block left of a boundary - block right of it| (colour L1), at the wrap against the
   // mean at every boundary inside.
@@ -579,11 +579,11 @@ WrapDiscontinuity wrapDiscontinuity(const Image& exemplar) {
     }
     return worst;
   };
-  Image transposed(colour.height, colour.width, c, PixelFormat::Float);
-  for (int y = 0; y < colour.height; ++y)
-    for (int x = 0; x < colour.width; ++x)
-      for (int ch = 0; ch < c; ++ch) transposed.at(y, x, ch) = colour.at(x, y, ch);
-  return {alongX(colour), alongX(transposed)};
+  Image transposed(color.height, color.width, c, PixelFormat::Float);
+  for (int y = 0; y < color.height; ++y)
+    for (int x = 0; x < color.width; ++x)
+      for (int ch = 0; ch < c; ++ch) transposed.at(y, x, ch) = color.at(x, y, ch);
+  return {alongX(color), alongX(transposed)};
 }
 
 ExemplarWrap detectExemplarWrap(const Image& exemplar) {

@@ -17,7 +17,7 @@ namespace texfab::synthesis {
 
 namespace {
 
-int colourChannelCount(const Image& image) { return image.channels >= 3 ? 3 : 1; }
+int colorChannelCount(const Image& image) { return image.channels >= 3 ? 3 : 1; }
 
 uint8_t quantize(float v) { return uint8_t(std::lrint(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
 
@@ -48,7 +48,7 @@ double pearson(const std::vector<float>& lum, int w, int h, int dx, int dy) {
 double fidelityOf(std::span<const float> patches, const Image& exemplar, int radius, bool toroidal, const Context& ctx) {
   const int r = radius, side = 2 * r + 1;
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
-  const int c = colourChannelCount(exemplar);
+  const int c = colorChannelCount(exemplar);
   const int dims = side * side * c;
   if (patches.empty() || patches.size() % size_t(dims) != 0)
     throw Error("fidelity: patches must hold a whole number of " + std::to_string(dims) + "-value neighborhoods");
@@ -108,9 +108,9 @@ double neighborhoodFidelity(const Image& image, const Image& exemplar, const Fid
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
   if (image.width < side || image.height < side)
     throw Error("image is smaller than the " + std::to_string(side) + "x" + std::to_string(side) + " fidelity neighborhood");
-  if (colourChannelCount(image) != colourChannelCount(exemplar))
+  if (colorChannelCount(image) != colorChannelCount(exemplar))
     throw Error("image and exemplar differ in colour channels (grey versus RGB)");
-  const int c = colourChannelCount(image);
+  const int c = colorChannelCount(image);
 
   // Output neighborhoods on a regular grid of interior texels.
   const int iw = image.width - 2 * r, ih = image.height - 2 * r;
@@ -129,8 +129,8 @@ double neighborhoodFidelity(const Image& image, const Image& exemplar, const Fid
 }
 
 double histogramDistance(const Image& image, const Image& exemplar) {
-  const int c = colourChannelCount(image);
-  if (c != colourChannelCount(exemplar)) throw Error("image and exemplar differ in colour channels (grey versus RGB)");
+  const int c = colorChannelCount(image);
+  if (c != colorChannelCount(exemplar)) throw Error("image and exemplar differ in colour channels (grey versus RGB)");
   auto histogram = [](const Image& img, int ch) {
     std::vector<double> h(256, 0.0);
     for (int y = 0; y < img.height; ++y)

@@ -362,15 +362,15 @@ void matchHistogram(const std::array<int64_t, kSolidColorSums>& sums, const std:
 }
 
 void matchSearchColors(SolidLevel& level, int w) {
-  auto colours = [&](int e) { return level.colors[level.colors[size_t(e)].empty() ? 0 : size_t(e)].data(); };
-  auto at = [&](int e, uint32_t c) { return colours(e) + (size_t(coordV(c)) * size_t(w) + coordU(c)) * 3; };
+  auto colors = [&](int e) { return level.colors[level.colors[size_t(e)].empty() ? 0 : size_t(e)].data(); };
+  auto at = [&](int e, uint32_t c) { return colors(e) + (size_t(coordV(c)) * size_t(w) + coordU(c)) * 3; };
   const size_t pixels = level.colors[0].size() / 3;
   for (int ch = 0; ch < 3; ++ch) {
     std::array<int64_t, kSolidColorSums> sums{};
     std::array<int64_t, 256> values{};
     for (int e = 0; e < 3; ++e)
       for (size_t p = 0; p < pixels; ++p) {
-        ++values[colours(e)[p * 3 + size_t(ch)]];
+        ++values[colors(e)[p * 3 + size_t(ch)]];
         for (int k = 0; k < kSolidTransferCandidates; ++k) {
           const uint32_t* t = &level.triples[size_t(e)][(p * kSolidMaxCandidates + size_t(k)) * 3];
           ++sums[size_t(at(0, t[0])[ch] + at(1, t[1])[ch] + at(2, t[2])[ch])];

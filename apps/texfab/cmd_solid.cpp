@@ -152,17 +152,17 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
     std::vector<synthesis::Voxel> voxels;
     for (const Vec3& p : *points) voxels.push_back(voxelAt(p, job.scale));
     const synthesis::SolidSynthesisResult r = synthesizeSolid(analysis, voxels, job.options, nullptr, stage.inner());
-    const Image colours = render::solidColorImage(r.triples, e, int(points->size()), 1);
+    const Image colors = render::solidColorImage(r.triples, e, int(points->size()), 1);
     stage.finish(counted(int64_t(points->size()), "point"));
     Stage write(run.ctx(), "write");
     writeFileAtomically(out, [&](std::ostream& file) {
-      file << "# x y z  colour (" << colours.channels << " channels, 0..1)  exemplar coordinates: Ex u v, Ey u v, Ez u v\n";
+      file << "# x y z  colour (" << colors.channels << " channels, 0..1)  exemplar coordinates: Ex u v, Ey u v, Ez u v\n";
       char line[256];
       for (size_t i = 0; i < points->size(); ++i) {
         const Vec3& p = (*points)[i];
         int k = std::snprintf(line, sizeof line, "%.9g %.9g %.9g", p.x(), p.y(), p.z());
-        for (int c = 0; c < colours.channels; ++c)
-          k += std::snprintf(line + k, sizeof line - size_t(k), " %.6f", colours.pixels[i * size_t(colours.channels) + size_t(c)]);
+        for (int c = 0; c < colors.channels; ++c)
+          k += std::snprintf(line + k, sizeof line - size_t(k), " %.6f", colors.pixels[i * size_t(colors.channels) + size_t(c)]);
         for (uint32_t coord : r.triples[i])
           k += std::snprintf(line + k, sizeof line - size_t(k), " %u %u", synthesis::coordU(coord), synthesis::coordV(coord));
         file << line << '\n';

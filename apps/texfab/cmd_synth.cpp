@@ -124,18 +124,18 @@ void runSynth(SynthJob& job) {
   const SynthesisResult result = synthesize2d(analysis, job.window, job.options, synth.inner());
   synth.finish(std::to_string(job.window.width) + "x" + std::to_string(job.window.height));
   Stage resolve(run.ctx(), "resolve");
-  const Image colours = applyCoords(result.coords, exemplar, run.ctx());
+  const Image colors = applyCoords(result.coords, exemplar, run.ctx());
   std::vector<Image> applied;
   for (const Companion& c : companions) applied.push_back(applyCoords(result.coords, c.map, run.ctx()));
   resolve.finish();
   if (run.reporting()) {
     Stage measures(run.ctx(), "measures");
-    run.report()["measures"] = toJson(measureQuality(colours, exemplar, &result.coords, {}, run.ctx()));
+    run.report()["measures"] = toJson(measureQuality(colors, exemplar, &result.coords, {}, run.ctx()));
     measures.finish();
   }
 
   Stage write(run.ctx(), "write");
-  writeImage(colours, out);
+  writeImage(colors, out);
   if (!coordsOut.empty()) writeCoordMap(result.coords, coordsOut);
   for (size_t i = 0; i < companions.size(); ++i) writeImage(applied[i], companions[i].output);
   write.finish(job.output);

@@ -269,14 +269,14 @@ std::vector<uint8_t> encodeImage(const Image& image, ImageCodec codec, int quali
     throw Error("cannot encode an image with " + std::to_string(image.channels) + " channels as " + format);
   checkSize(image.width, image.height, format);
   if (codec == ImageCodec::Webp && image.channels < 3) {  // WebP is RGB(A) only: grey becomes RGB
-    Image colour(image.width, image.height, image.channels + 2, image.format);
+    Image color(image.width, image.height, image.channels + 2, image.format);
     for (size_t i = 0, n = size_t(image.width) * size_t(image.height); i < n; ++i) {
       const float* from = image.pixels.data() + i * size_t(image.channels);
-      float* to = colour.pixels.data() + i * size_t(colour.channels);
+      float* to = color.pixels.data() + i * size_t(color.channels);
       to[0] = to[1] = to[2] = from[0];
       if (image.channels == 2) to[3] = from[1];
     }
-    return encodeImage(colour, codec, quality);
+    return encodeImage(color, codec, quality);
   }
   // JPEG: no alpha (grey+alpha -> grey, RGBA -> RGB).
   const int channels = codec == ImageCodec::Jpeg && (image.channels == 2 || image.channels == 4) ? image.channels - 1

@@ -108,9 +108,9 @@ inline uint64_t solidVolume(Backend backend = Backend::Cpu) {
       synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, synthesisContext(backend));
   std::vector<uint32_t> flat;
   for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
-  std::vector<float> colours;
-  synthesis::solidColors(r.triples, marble32(), marble32(), marble32(), colours);
-  return hashOf(colours, hashOf(flat));
+  std::vector<float> colors;
+  synthesis::solidColors(r.triples, marble32(), marble32(), marble32(), colors);
+  return hashOf(colors, hashOf(flat));
 }
 
 /// The voxels of an oblique 40x40 plane through the solid texture of marble32.

@@ -71,7 +71,7 @@ double interiorNoise(const CutFaceTexture& t) {
   return n ? sum / double(n) : 0;
 }
 
-TEST(BreakModel, TheTwoFacesOfACrackShowTheSameColours) {
+TEST(BreakModel, TheTwoFacesOfACrackShowTheSameColors) {
   const BrokenModel m = fracturedSphere(6, false);
   ASSERT_TRUE(m.interior);
   const CrackMatch match = measureCrackMatch(m);
@@ -117,12 +117,12 @@ TEST(BreakModel, CutFacesAreTheSolidTextureAtTheirPositions) {
                       int64_t(std::floor(double(p.z) * t.textureScale))});
   }
   const synthesis::SolidSynthesisResult direct = synthesis::synthesizeSolid(marble().solid, voxels, m.interiorSolid);
-  std::vector<float> colour;
-  synthesis::solidColors(direct.triples, marble().image, marble().image, marble().image, colour);
+  std::vector<float> color;
+  synthesis::solidColors(direct.triples, marble().image, marble().image, marble().image, color);
   const int channels = t.baseColor->channels;
   for (size_t i = 0; i < picked.size(); ++i)
     for (int c = 0; c < channels; ++c)
-      EXPECT_FLOAT_EQ(t.baseColor->at(t.sites.x[picked[i]], t.sites.y[picked[i]], c), colour[i * size_t(channels) + size_t(c)]);
+      EXPECT_FLOAT_EQ(t.baseColor->at(t.sites.x[picked[i]], t.sites.y[picked[i]], c), color[i * size_t(channels) + size_t(c)]);
 }
 
 // Disabled: z = 0 passes within 1e-16 of the sphere's equator vertices: an open piece (as CutMesh's).
@@ -169,15 +169,15 @@ double hueOf(const float* p) {
 TEST(BreakModel, ExplodedViewShowsEveryPiece) {
   BrokenModel m = fracturedSphere(6, false);
   const size_t n = m.pieces.size();
-  std::vector<geometry::Material> colours(n);
+  std::vector<geometry::Material> colors(n);
   for (size_t i = 0; i < n; ++i) {
     const double h = 360.0 * double(i) / double(n);  // saturated hues, one per piece
     auto channel = [&](double offset) { return float(std::clamp(std::fabs(std::fmod(h / 60 + offset, 6) - 3) - 1, 0.0, 1.0)); };
-    colours[i].baseColorFactor = {channel(0), channel(4), channel(2), 1};
-    colours[i].metallicFactor = 0;
+    colors[i].baseColorFactor = {channel(0), channel(4), channel(2), 1};
+    colors[i].metallicFactor = 0;
   }
   for (size_t i = 0; i < n; ++i) {
-    m.pieces[i].mesh.materials = colours;
+    m.pieces[i].mesh.materials = colors;
     m.pieces[i].mesh.faceMaterials.assign(m.pieces[i].mesh.triangles.size(), uint32_t(i));
   }
   const geometry::Mesh merged = mergedPieces(m, 0.5);

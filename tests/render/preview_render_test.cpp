@@ -87,7 +87,7 @@ RenderOptions frontView(int size) {
 
 } // namespace
 
-TEST(PreviewRenderer, QuadCoverageAndColourMatchTheScene) {
+TEST(PreviewRenderer, QuadCoverageAndColorMatchTheScene) {
   const Mesh quad = texturedQuad(solid(0.8f, 0.2f, 0.1f));
   const PreviewRenderer renderer(quad);
   const RenderOptions o = frontView(128);

@@ -66,7 +66,7 @@ void expectSameFolders(const fs::path& a, const fs::path& b) {
   for (const std::string& name : names) EXPECT_EQ(readBytes(a / name), readBytes(b / name)) << name;
 }
 
-TEST(SliceModel, FaceColoursBeforeDithering) {
+TEST(SliceModel, FaceColorsBeforeDithering) {
   const geometry::Mesh cube = faceColoredCube();
   const PrintGrid grid = gridFor(cube, 0.1);
   const LayerVoxelizer voxelizer(cube, grid);
@@ -108,7 +108,7 @@ Eigen::Vector3f blockMean(const fs::path& folder, int x0, int y0, int height) {
   return sum / float(n);
 }
 
-TEST(SliceModel, DitheredBlocksAverageToTheFaceColours) {
+TEST(SliceModel, DitheredBlocksAverageToTheFaceColors) {
   // 0.05 mm voxels, 1 mm shell (20 voxels): a 16^3 block against each side face is all shell.
   const geometry::Mesh cube = faceColoredCube();
   const PrintGrid grid = gridFor(cube, 0.05);  // 80^3
@@ -133,7 +133,7 @@ TEST(SliceModel, DitheredBlocksAverageToTheFaceColours) {
   }
 }
 
-TEST(SliceModel, SolidColoursAreTheSynthesizersColours) {
+TEST(SliceModel, SolidColorsAreTheSynthesizersColors) {
   const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3);
   const PrintGrid grid = gridFor(sphere, 0.1);
   const LayerVoxelizer voxelizer(sphere, grid);
@@ -155,11 +155,11 @@ TEST(SliceModel, SolidColoursAreTheSynthesizersColours) {
           const Eigen::Vector3d p = grid.center(x, y, spans.layer) * scale;
           const synthesis::Voxel v{int64_t(std::floor(p.x())), int64_t(std::floor(p.y())), int64_t(std::floor(p.z()))};
           const synthesis::SolidSynthesisResult alone = synthesis::synthesizeSolid(golden::solidAnalysis32(), {&v, 1}, options);
-          std::vector<float> colour;
-          synthesis::solidColors(alone.triples, golden::marble32(), golden::marble32(), golden::marble32(), colour);
-          const size_t channels = colour.size();  // 1 for grey exemplars, else 3
+          std::vector<float> color;
+          synthesis::solidColors(alone.triples, golden::marble32(), golden::marble32(), golden::marble32(), color);
+          const size_t channels = color.size();  // 1 for grey exemplars, else 3
           for (size_t c = 0; c < 3; ++c)
-            ASSERT_EQ(rgba[4 * size_t(x - s.begin) + c], srgbToLinear(colour[channels == 1 ? 0 : c]));
+            ASSERT_EQ(rgba[4 * size_t(x - s.begin) + c], srgbToLinear(color[channels == 1 ? 0 : c]));
         }
       }
   EXPECT_GT(checked, 50);

@@ -116,7 +116,7 @@ TEST(PrintMaterials, FileFormsAndErrors) {
   EXPECT_NE(errorOf([] { findPrintMaterial(defaultPrintMaterials(), "gold"); }).find("VeroCyan"), std::string::npos);
 }
 
-TEST(MaterialMixer, ReproducesColoursInsideTheGamut) {
+TEST(MaterialMixer, ReproducesColorsInsideTheGamut) {
   const std::vector<PrintMaterial> materials = defaultPrintMaterials();
   const MaterialMixer mixer(materials);
   std::mt19937 rng(3);

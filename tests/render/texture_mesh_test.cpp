@@ -295,13 +295,13 @@ TEST(TextureMesh, SolidModeTexelsAreTheSolidTextureAtTheirPositions) {
                       int64_t(std::floor(double(p.z) * r.textureScale))});
   }
   const synthesis::SolidSynthesisResult direct = synthesis::synthesizeSolid(solid, voxels, o.solid);
-  std::vector<float> colour;
-  synthesis::solidColors(direct.triples, small, small, small, colour);
+  std::vector<float> color;
+  synthesis::solidColors(direct.triples, small, small, small, color);
   const int channels = r.baseColor->channels;
-  ASSERT_EQ(colour.size(), picked.size() * size_t(channels));
+  ASSERT_EQ(color.size(), picked.size() * size_t(channels));
   for (size_t i = 0; i < picked.size(); ++i)
     for (int c = 0; c < channels; ++c)
-      EXPECT_FLOAT_EQ(r.baseColor->at(r.sites.x[picked[i]], r.sites.y[picked[i]], c), colour[i * size_t(channels) + size_t(c)])
+      EXPECT_FLOAT_EQ(r.baseColor->at(r.sites.x[picked[i]], r.sites.y[picked[i]], c), color[i * size_t(channels) + size_t(c)])
           << "site " << picked[i];
 }
 

@@ -73,11 +73,11 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
   ASSERT_EQ(texfab("solid " + common + " --points " + (dir / "pts.txt").string() + " -o " + (dir / "c.txt").string())
                 .status,
             0);
-  std::ifstream colours(dir / "c.txt");
+  std::ifstream colors(dir / "c.txt");
   std::string line;
-  std::getline(colours, line);  // header
+  std::getline(colors, line);  // header
   for (int i = 0; i < 2; ++i) {
-    ASSERT_TRUE(std::getline(colours, line));
+    ASSERT_TRUE(std::getline(colors, line));
     std::istringstream fields(line);
     double x, y, z, value;
     fields >> x >> y >> z >> value;

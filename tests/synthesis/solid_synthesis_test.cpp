@@ -90,7 +90,7 @@ TEST(SolidAnalysis, CrossbarCandidatesBeatRandomTriples) {
   const Image e = marble(32, 40, 24);
   const SolidAnalysis& a = analysis32();
   const SolidLevel& f = a.levels.back();
-  auto colour = [&](int u, int v, int c) { return e.at(((u % 32) + 32) % 32, ((v % 32) + 32) % 32, e.channels >= 3 ? c : 0); };
+  auto color = [&](int u, int v, int c) { return e.at(((u % 32) + 32) % 32, ((v % 32) + 32) % 32, e.channels >= 3 ? c : 0); };
   // Crossbar of a triple (x, y, z exemplar coordinates) through the voxel: the z line shared by
   // E_x (its v axis) and E_y (its u axis), the x line (E_y v, E_z u), the y line (E_z v, E_x u).
   auto crossbar = [&](const uint32_t* t) {
@@ -99,9 +99,9 @@ TEST(SolidAnalysis, CrossbarCandidatesBeatRandomTriples) {
       for (int c = 0; c < 3; ++c) {
         const int xu = int(coordU(t[0])), xv = int(coordV(t[0])), yu = int(coordU(t[1])), yv = int(coordV(t[1]));
         const int zu = int(coordU(t[2])), zv = int(coordV(t[2]));
-        s += std::pow(colour(xu, xv + d, c) - colour(yu + d, yv, c), 2);
-        s += std::pow(colour(yu, yv + d, c) - colour(zu + d, zv, c), 2);
-        s += std::pow(colour(zu, zv + d, c) - colour(xu + d, xv, c), 2);
+        s += std::pow(color(xu, xv + d, c) - color(yu + d, yv, c), 2);
+        s += std::pow(color(yu, yv + d, c) - color(zu + d, zv, c), 2);
+        s += std::pow(color(zu, zv + d, c) - color(xu + d, xv, c), 2);
       }
     return s;
   };
@@ -320,8 +320,8 @@ TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
   so.interleave = interleave;
   std::printf("[ solid    ] interleave %d (%d sub-passes per pass)\n", interleave, so.subpasses());
   const SolidSynthesisResult r = synthesizeSolidBox(a, {0, 0, 0, n, n, n}, so, nullptr, Context{.threads = 2});
-  std::vector<float> colours;
-  solidColors(r.triples, e, e, e, colours);
+  std::vector<float> colors;
+  solidColors(r.triples, e, e, e, colors);
   const int ch = solidColorChannels(e, e, e);
   auto slice = [&](auto value, int axis, int k) {
     Image s(n, n, ch);
@@ -332,7 +332,7 @@ TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
       }
     return s;
   };
-  auto synthesized = [&](int x, int y, int z, int c) { return colours[((size_t(z) * n + size_t(y)) * n + size_t(x)) * size_t(ch) + size_t(c)]; };
+  auto synthesized = [&](int x, int y, int z, int c) { return colors[((size_t(z) * n + size_t(y)) * n + size_t(x)) * size_t(ch) + size_t(c)]; };
   auto extruded = [&](int x, int y, int, int c) { return e.at(x, y, c); };
   auto random = [&](int x, int y, int z, int c) {
     const uint32_t h = voxelHash(3, 0, x, y, z, 0);
@@ -503,16 +503,16 @@ TEST(SolidSynthesis, ThreeDifferentExemplars) {
   std::vector<Voxel> some(all.begin() + 200, all.begin() + 260);
   const SolidSynthesisResult r = synthesizeSolid(a, some, {}, nullptr, Context{.threads = 1});
   for (size_t i = 0; i < some.size(); ++i) EXPECT_EQ(r.triples[i], fromBox(whole, box, some[i]));
-  std::vector<float> colours;
-  solidColors(whole.triples, ex, ey, ez, colours);
-  EXPECT_EQ(colours.size(), whole.triples.size() * size_t(solidColorChannels(ex, ey, ez)));
+  std::vector<float> colors;
+  solidColors(whole.triples, ex, ey, ez, colors);
+  EXPECT_EQ(colors.size(), whole.triples.size() * size_t(solidColorChannels(ex, ey, ez)));
 }
 
 // Colour transfer in the search (SolidSynthesisOptions::matchColors, the default) against the
 // paper's mean of three, on real exemplars, over axis-aligned and oblique 64^2 slices: the slices
 // keep more of the exemplar's contrast and their histograms come closer to the exemplar's, while
 // their neighborhoods stay far from random pixels'.
-TEST(SolidSynthesis, MatchedSearchColoursKeepContrast) {
+TEST(SolidSynthesis, MatchedSearchColorsKeepContrast) {
   const auto crop = [](const Image& full) {
     Image out(64, 64, full.channels >= 3 ? 3 : 1);
     for (int y = 0; y < 64; ++y)

@@ -174,20 +174,20 @@ void checkCase(vulkan::Device& device, Random& r, const Case& c) {
         const size_t v = size_t((z * kSide + y) * kSide + x), g = chunkIndex(x, y, z);
         if (last[v] < 0) continue;
         const auto triple = [&](const std::vector<uint32_t>& t, size_t i) { return std::array{t[i * 3], t[i * 3 + 1], t[i * 3 + 2]}; };
-        const auto colour = [&](const std::vector<uint32_t>& words) {
+        const auto color = [&](const std::vector<uint32_t>& words) {
           return std::array{int16_t(words[g * 2] & 0xffff), int16_t(words[g * 2] >> 16), int16_t(words[g * 2 + 1] & 0xffff)};
         };
-        const auto cpuColour = [&](const std::vector<int16_t>& c4) { return std::array{c4[v * 4], c4[v * 4 + 1], c4[v * 4 + 2]}; };
+        const auto cpuColor = [&](const std::vector<int16_t>& c4) { return std::array{c4[v * 4], c4[v * 4 + 1], c4[v * 4 + 2]}; };
         ASSERT_EQ(triple(gpuInit, g), triple(init, v)) << "init at " << x << "," << y << "," << z;
         ASSERT_EQ(triple(gpuUp, g), triple(up, v)) << "upsample at " << x << "," << y << "," << z;
-        ASSERT_EQ(colour(colorWords), cpuColour(colors)) << "colour at " << x << "," << y << "," << z;
+        ASSERT_EQ(color(colorWords), cpuColor(colors)) << "colour at " << x << "," << y << "," << z;
         ASSERT_EQ(triple(gpuCommitted, g), triple(committed, v)) << "commit at " << x << "," << y << "," << z;
-        ASSERT_EQ(colour(committedColorWords), cpuColour(committedColors)) << "commit at " << x << "," << y << "," << z;
+        ASSERT_EQ(color(committedColorWords), cpuColor(committedColors)) << "commit at " << x << "," << y << "," << z;
         ++compared[0];
         const bool corrected = last[v] >= step && (c.interleave == 1 || ((x & 1) | (y & 1) << 1 | (z & 1) << 2) == (step - 1) % 8);
         if (!corrected) continue;
         ASSERT_EQ(triple(gpuOut, g), triple(out, v)) << "correct at " << x << "," << y << "," << z;
-        ASSERT_EQ(colour(outColorWords), cpuColour(outColors)) << "correct at " << x << "," << y << "," << z;
+        ASSERT_EQ(color(outColorWords), cpuColor(outColors)) << "correct at " << x << "," << y << "," << z;
         ++compared[1];
         compared[2] += triple(out, v) != triple(up, v);
       }
