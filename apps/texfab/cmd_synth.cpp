@@ -19,6 +19,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A tile only a few times the exemplar's size can converge to the exemplar repeated: on so small
+// a torus the correction passes reach the exact tiling. Above this shifted self-correlation at the
+// exemplar's period (as `texfab stats` measures repetition) synth warns; below it a tile does not
+// look repeated. Tiles larger than kRepetitionCheckedUpTo times the exemplar are not measured.
+constexpr double kRepetitionLimit = 0.25;
+constexpr int kRepetitionCheckedUpTo = 8;
+
 // --exemplar-wrap: the library's modes, or auto (measured on the exemplar).
 enum class WrapChoice { Auto, Tile, Clamp };
 
@@ -68,6 +75,30 @@ synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, con
   return wrap;
 }
 
+bool checksRepetition(const SynthJob& job, int exemplarWidth, int exemplarHeight) {
+  const synthesis::Window& w = job.window;
+  return job.tileable && w.width > exemplarWidth && w.height > exemplarHeight &&
+         w.width <= kRepetitionCheckedUpTo * exemplarWidth && w.height <= kRepetitionCheckedUpTo * exemplarHeight;
+}
+
+// A tileable output's repetition, into the report ("repetition") and, above the limit, a warning.
+void checkRepetition(const SynthJob& job, const Image& colors, const Image& exemplar, Run& run) {
+  if (!checksRepetition(job, exemplar.width, exemplar.height)) return;
+  const double correlation = synthesis::shiftedSelfCorrelation(colors, exemplar.width, exemplar.height);
+  const bool repeats = correlation > kRepetitionLimit;
+  if (run.reporting())
+    run.report()["repetition"] = {{"shifted_correlation", correlation}, {"limit", kRepetitionLimit},
+                                  {"repeats", repeats}};
+  if (!repeats) return;
+  char message[320];
+  std::snprintf(message, sizeof message,
+                "the %dx%d tile repeats its %dx%d exemplar (self-correlation %.2f at the exemplar's period, above "
+                "%.2f): try another --seed, or a tile of at least %dx%d",
+                colors.width, colors.height, exemplar.width, exemplar.height, correlation, kRepetitionLimit,
+                4 * exemplar.width, 4 * exemplar.height);
+  run.ctx().warn(message);
+}
+
 Image load(const SynthJob& job, std::vector<Companion>& companions, const Context& ctx) {
   Stage stage(ctx, "load");
   Image exemplar = readImage(job.exemplar);
@@ -84,6 +115,7 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Contex
                   " but the exemplar is " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
     channels += c.map.channels;
   }
+  if (checksRepetition(job, exemplar.width, exemplar.height)) ++channels;  // the luminance it measures
   checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels) +
                   synthesis::analysisMemoryBytes(exemplar.width, exemplar.height, job.analysis),
               "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " output from a " +
@@ -128,6 +160,7 @@ void runSynth(SynthJob& job) {
   std::vector<Image> applied;
   for (const Companion& c : companions) applied.push_back(applyCoords(result.coords, c.map, run.ctx()));
   resolve.finish();
+  checkRepetition(job, colors, exemplar, run);
   if (run.reporting()) {
     Stage measures(run.ctx(), "measures");
     run.report()["measures"] = toJson(measureQuality(colors, exemplar, &result.coords, {}, run.ctx()));
@@ -183,7 +216,10 @@ Command addSynthCommand(CLI::App& root) {
   f.option("--k", job->analysis.k, "k-coherence candidates per exemplar pixel", {1, 8});
   f.option("--feature-weight", job->analysis.featureWeight,
            "Weight of the feature-distance channel in appearance space (0 = off)", {0, 100});
-  f.flag("--tileable", job->tileable, "Make the output wrap at its size (a tile)");
+  f.flag("--tileable", job->tileable,
+         "Make the output wrap at its size (a tile). A tile of 2-3 times the exemplar's size may repeat the "
+         "exemplar (synth warns when its self-correlation at the exemplar's period exceeds 0.25; try another "
+         "--seed); at 4 times or more it stayed below on the patterns measured");
   f.choice("--exemplar-wrap", job->wrap, Names<WrapChoice>{{"auto", WrapChoice::Auto}, {"tile", WrapChoice::Tile},
                                                           {"clamp", WrapChoice::Clamp}},
            "How the exemplar's borders are treated: tile (it is toroidal: coordinates wrap), clamp (a photograph "

@@ -105,6 +105,42 @@ TEST(CliSynth, CoordsApplyAndReportAgree) {
   EXPECT_EQ(readImage(dir / "again.png").pixels, out.pixels);
 }
 
+// A tileable output a few times the exemplar's size is checked for repetition (the shifted
+// self-correlation at the exemplar's period, as stats measures it): the report says whether it
+// repeats, and exactly then a one-line warning does too.
+TEST(CliSynth, SmallTilesThatRepeatTheExemplarAreReportedAndWarned) {
+  TempDir dir;
+  auto synth = [&](const std::string& args) {
+    const Outcome o = texfab("synth " + kBrick + " -o " + (dir / "t.png").string() + " --tileable -q " + args +
+                             " --report " + (dir / "t.json").string() + cacheArg(dir));
+    EXPECT_EQ(o.status, 0) << o.err;
+    std::ifstream in(dir / "t.json");
+    return std::pair{o.err, nlohmann::json::parse(in)};
+  };
+  auto warned = [](const std::string& err) { return err.find("repeats its 96x96 exemplar") != std::string::npos; };
+  // No jitter: the tile is the exemplar repeated, whatever the synthesis.
+  {
+    const auto [err, report] = synth("--size 192 --jitter 0");
+    EXPECT_GT(report["repetition"]["shifted_correlation"].get<double>(), 0.9);
+    EXPECT_TRUE(report["repetition"]["repeats"].get<bool>());
+    EXPECT_TRUE(warned(err)) << err;
+  }
+  // Twice the exemplar: the warning follows the measure, which is the one stats reports.
+  for (const char* seed : {"1", "2", "3"}) {
+    const auto [err, report] = synth("--size 192 --seed " + std::string(seed));
+    const double repetition = report["repetition"]["shifted_correlation"].get<double>();
+    EXPECT_DOUBLE_EQ(repetition, report["measures"]["shifted_correlation"].get<double>());
+    EXPECT_EQ(report["repetition"]["repeats"].get<bool>(), repetition > report["repetition"]["limit"].get<double>());
+    EXPECT_EQ(warned(err), repetition > 0.25) << "seed " << seed << ": " << err;
+  }
+  // Four times the exemplar, as --help advises: no repetition.
+  {
+    const auto [err, report] = synth("--size 384 --seed 2");
+    EXPECT_LE(report["repetition"]["shifted_correlation"].get<double>(), 0.25);
+    EXPECT_FALSE(warned(err)) << err;
+  }
+}
+
 TEST(CliSynth, WindowsMatchTheFullImage) {
   TempDir dir;
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "full.png").string() + " --window -64,-32,256,192 --threads 2" +
