@@ -101,71 +101,63 @@ bool boundarySelfIntersects(const detail::ChartMesh& cm, const std::vector<Eigen
   return false;
 }
 
-ChartResult parameterizeChart(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces,
-                              const ParameterizeChartsOptions& options) {
-  ChartResult result;
-  const detail::ChartMesh cm = detail::buildChartMesh(mesh, conn, faces);
-  if (!cm.isDisk()) {
-    result.outcome = Outcome::NotDisk;
-    return result;
-  }
+/// The isometric layout of a single triangle.
+std::vector<Eigen::Vector2d> layoutTriangle(const geometry::Mesh& mesh, uint32_t face, const detail::ChartMesh& cm) {
   std::vector<Eigen::Vector2d> vertexUv(cm.vertexSource.size(), Eigen::Vector2d::Zero());
-  if (faces.size() == 1) { // isometric layout of a single triangle
-    const Eigen::Vector3d a = mesh.corner(faces[0], 0).cast<double>(), b = mesh.corner(faces[0], 1).cast<double>(),
-                          c = mesh.corner(faces[0], 2).cast<double>();
-    const Eigen::Vector3d e = (b - a).normalized();
-    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
-    const Eigen::Vector3d f = n.cross(e);
-    vertexUv[cm.triangles[0][0]] = {0, 0};
-    vertexUv[cm.triangles[0][1]] = {(b - a).norm(), 0};
-    vertexUv[cm.triangles[0][2]] = {(c - a).dot(e), (c - a).dot(f)};
-  } else {
-    SurfaceMesh sm;
-    std::vector<SurfaceMesh::Vertex_index> vds;
-    vds.reserve(cm.vertexSource.size());
-    // Coordinates relative to the chart's first vertex: better conditioned far from the origin.
-    const Eigen::Vector3d origin = mesh.positions[cm.vertexSource[0]].cast<double>();
-    for (uint32_t v : cm.vertexSource) {
-      const Eigen::Vector3d p = mesh.positions[v].cast<double>() - origin;
-      vds.push_back(sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z())));
-    }
-    for (const auto& t : cm.triangles)
-      if (sm.add_face(vds[t[0]], vds[t[1]], vds[t[2]]) == SurfaceMesh::null_face()) {
-        result.outcome = Outcome::NotDisk;
-        return result;
-      }
-    SurfaceMesh::Halfedge_index border;
-    bool found = false;
-    for (auto h : sm.halfedges())
-      if (sm.is_border(h)) {
-        border = h;
-        found = true;
-        break;
-      }
-    if (!found) {
-      result.outcome = Outcome::NotDisk;
-      return result;
-    }
-    auto uvmap = sm.add_property_map<SurfaceMesh::Vertex_index, Kernel::Point_2>("v:uv").first;
-    SMP::Error_code err;
-    if (options.parameterizer == Parameterizer::Arap)
-      err = SMP::parameterize(sm, SMP::ARAP_parameterizer_3<SurfaceMesh>(), border, uvmap);
-    else
-      err = SMP::parameterize(sm, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uvmap);
-    if (err != SMP::OK) {
-      result.outcome = Outcome::Solver;
-      return result;
-    }
-    for (size_t v = 0; v < vds.size(); ++v) {
-      const Kernel::Point_2 p = uvmap[vds[v]];
-      vertexUv[v] = {p.x(), p.y()};
-      if (!std::isfinite(p.x()) || !std::isfinite(p.y())) {
-        result.outcome = Outcome::Solver;
-        return result;
-      }
-    }
+  const Eigen::Vector3d a = mesh.corner(face, 0).cast<double>(), b = mesh.corner(face, 1).cast<double>(),
+                        c = mesh.corner(face, 2).cast<double>();
+  const Eigen::Vector3d e = (b - a).normalized();
+  const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+  const Eigen::Vector3d f = n.cross(e);
+  vertexUv[cm.triangles[0][0]] = {0, 0};
+  vertexUv[cm.triangles[0][1]] = {(b - a).norm(), 0};
+  vertexUv[cm.triangles[0][2]] = {(c - a).dot(e), (c - a).dot(f)};
+  return vertexUv;
+}
+
+/// A disk chart's layout by CGAL (LSCM or ARAP); Outcome::NotDisk or Solver when it fails.
+Outcome layoutDisk(const geometry::Mesh& mesh, const detail::ChartMesh& cm, Parameterizer parameterizer,
+                   std::vector<Eigen::Vector2d>& vertexUv) {
+  SurfaceMesh sm;
+  std::vector<SurfaceMesh::Vertex_index> vds;
+  vds.reserve(cm.vertexSource.size());
+  // Coordinates relative to the chart's first vertex: better conditioned far from the origin.
+  const Eigen::Vector3d origin = mesh.positions[cm.vertexSource[0]].cast<double>();
+  for (uint32_t v : cm.vertexSource) {
+    const Eigen::Vector3d p = mesh.positions[v].cast<double>() - origin;
+    vds.push_back(sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z())));
   }
-  // Orientation and scale: counter-clockwise, UV area == surface area.
+  for (const auto& t : cm.triangles)
+    if (sm.add_face(vds[t[0]], vds[t[1]], vds[t[2]]) == SurfaceMesh::null_face()) return Outcome::NotDisk;
+  SurfaceMesh::Halfedge_index border;
+  bool found = false;
+  for (auto h : sm.halfedges())
+    if (sm.is_border(h)) {
+      border = h;
+      found = true;
+      break;
+    }
+  if (!found) return Outcome::NotDisk;
+  auto uvmap = sm.add_property_map<SurfaceMesh::Vertex_index, Kernel::Point_2>("v:uv").first;
+  SMP::Error_code err;
+  if (parameterizer == Parameterizer::Arap)
+    err = SMP::parameterize(sm, SMP::ARAP_parameterizer_3<SurfaceMesh>(), border, uvmap);
+  else
+    err = SMP::parameterize(sm, SMP::LSCM_parameterizer_3<SurfaceMesh>(), border, uvmap);
+  if (err != SMP::OK) return Outcome::Solver;
+  vertexUv.assign(cm.vertexSource.size(), Eigen::Vector2d::Zero());
+  for (size_t v = 0; v < vds.size(); ++v) {
+    const Kernel::Point_2 p = uvmap[vds[v]];
+    vertexUv[v] = {p.x(), p.y()};
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y())) return Outcome::Solver;
+  }
+  return Outcome::Ok;
+}
+
+/// Orientation and scale: counter-clockwise, UV area == surface area, minimum at the origin.
+/// False when the layout has no area.
+bool normalizeLayout(const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces,
+                     const detail::ChartMesh& cm, std::vector<Eigen::Vector2d>& vertexUv) {
   double signedArea = 0, surfaceArea = 0;
   for (size_t i = 0; i < faces.size(); ++i) {
     const auto& t = cm.triangles[i];
@@ -177,50 +169,48 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const geometry::MeshCo
     for (auto& uv : vertexUv) uv.x() = -uv.x();
     signedArea = -signedArea;
   }
-  if (!(signedArea > 0) || !(surfaceArea > 0)) {
-    result.outcome = Outcome::Solver;
-    return result;
-  }
+  if (!(signedArea > 0) || !(surfaceArea > 0)) return false;
   const double scale = std::sqrt(surfaceArea / signedArea);
   Eigen::Vector2d lo = vertexUv[0];
   for (const auto& uv : vertexUv) lo = lo.cwiseMin(uv);
   for (auto& uv : vertexUv) uv = (uv - lo) * scale;
+  return true;
+}
 
-  result.uvs.resize(3 * faces.size());
-  for (size_t i = 0; i < faces.size(); ++i)
-    for (int k = 0; k < 3; ++k) result.uvs[3 * i + size_t(k)] = vertexUv[cm.triangles[i][size_t(k)]];
-  // Validation.
-  // measureStretch over the chart: map corner ids of the chart faces to our local UVs.
-  {
-    StretchStats s;
-    double sum = 0, maxG = 0;
-    for (size_t i = 0; i < faces.size(); ++i) {
-      Eigen::Vector3d q[3];
-      Eigen::Vector2d p[3];
-      for (int k = 0; k < 3; ++k) {
-        q[k] = mesh.corner(faces[i], k).cast<double>();
-        p[k] = result.uvs[3 * i + size_t(k)];
-      }
-      const double area = conn.area[faces[i]];
-      const TriangleStretch ts = triangleStretch(q, p);
-      s.surfaceArea += area;
-      s.uvArea += std::abs(ts.uvArea);
-      if (!(ts.uvArea > 0) || !std::isfinite(ts.gammaMax)) {
-        ++s.flipped;
-        continue;
-      }
-      sum += ts.l2 * ts.l2 * area;
-      maxG = std::max(maxG, ts.gammaMax);
+/// The chart's stretch (measureStretch's normalization), weighted by the connectivity's face areas.
+/// Unlike measureStretch, a triangle of zero surface area counts, and is flipped unless its UV
+/// area is positive: a chart must not fold even where the surface does.
+StretchStats chartStretch(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn,
+                          const std::vector<uint32_t>& faces, const std::vector<Eigen::Vector2d>& uvs) {
+  StretchStats s;
+  double sum = 0, maxG = 0;
+  for (size_t i = 0; i < faces.size(); ++i) {
+    Eigen::Vector3d q[3];
+    Eigen::Vector2d p[3];
+    for (int k = 0; k < 3; ++k) {
+      q[k] = mesh.corner(faces[i], k).cast<double>();
+      p[k] = uvs[3 * i + size_t(k)];
     }
-    const double norm = std::sqrt(s.uvArea / s.surfaceArea);
-    s.l2 = std::sqrt(sum / s.surfaceArea) * norm;
-    s.max = maxG * norm;
-    result.stretch = s;
+    const double area = conn.area[faces[i]];
+    const TriangleStretch ts = triangleStretch(q, p);
+    s.surfaceArea += area;
+    s.uvArea += std::abs(ts.uvArea);
+    if (!(ts.uvArea > 0) || !std::isfinite(ts.gammaMax)) {
+      ++s.flipped;
+      continue;
+    }
+    sum += ts.l2 * ts.l2 * area;
+    maxG = std::max(maxG, ts.gammaMax);
   }
-  if (result.stretch.flipped > 0) {
-    result.outcome = Outcome::Flipped;
-    return result;
-  }
+  const double norm = std::sqrt(s.uvArea / s.surfaceArea);
+  s.l2 = std::sqrt(sum / s.surfaceArea) * norm;
+  s.max = maxG * norm;
+  return s;
+}
+
+/// The chart's boundary edges (vertex pairs of the chart mesh).
+std::vector<std::array<uint32_t, 2>> boundarySegments(const geometry::MeshConnectivity& conn,
+                                                      const std::vector<uint32_t>& faces, const detail::ChartMesh& cm) {
   std::vector<std::array<uint32_t, 2>> segs;
   for (size_t i = 0; i < faces.size(); ++i)
     for (int k = 0; k < 3; ++k) {
@@ -228,15 +218,37 @@ ChartResult parameterizeChart(const geometry::Mesh& mesh, const geometry::MeshCo
       const bool inside = g >= 0 && std::binary_search(faces.begin(), faces.end(), uint32_t(g));
       if (!inside) segs.push_back({cm.triangles[i][size_t(k)], cm.triangles[i][size_t((k + 1) % 3)]});
     }
-  if (boundarySelfIntersects(cm, vertexUv, segs)) {
-    result.outcome = Outcome::Overlap;
+  return segs;
+}
+
+/// Lays out one chart and validates it: a disk, no flip, no boundary overlap, stretch in bounds.
+ChartResult parameterizeChart(const geometry::Mesh& mesh, const geometry::MeshConnectivity& conn, const std::vector<uint32_t>& faces,
+                              const ParameterizeChartsOptions& options) {
+  ChartResult result;
+  const detail::ChartMesh cm = detail::buildChartMesh(mesh, conn, faces);
+  if (!cm.isDisk()) {
+    result.outcome = Outcome::NotDisk;
     return result;
   }
-  if (faces.size() > 1 &&
-      (result.stretch.max > options.maxTriangleStretch || result.stretch.l2 > options.maxChartL2Stretch)) {
+  std::vector<Eigen::Vector2d> vertexUv;
+  if (faces.size() == 1) vertexUv = layoutTriangle(mesh, faces[0], cm);
+  else if (const Outcome o = layoutDisk(mesh, cm, options.parameterizer, vertexUv); o != Outcome::Ok) {
+    result.outcome = o;
+    return result;
+  }
+  if (!normalizeLayout(conn, faces, cm, vertexUv)) {
+    result.outcome = Outcome::Solver;
+    return result;
+  }
+  result.uvs.resize(3 * faces.size());
+  for (size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) result.uvs[3 * i + size_t(k)] = vertexUv[cm.triangles[i][size_t(k)]];
+  result.stretch = chartStretch(mesh, conn, faces, result.uvs);
+  if (result.stretch.flipped > 0) result.outcome = Outcome::Flipped;
+  else if (boundarySelfIntersects(cm, vertexUv, boundarySegments(conn, faces, cm))) result.outcome = Outcome::Overlap;
+  else if (faces.size() > 1 &&
+           (result.stretch.max > options.maxTriangleStretch || result.stretch.l2 > options.maxChartL2Stretch))
     result.outcome = Outcome::Stretch;
-    return result;
-  }
   return result;
 }
 

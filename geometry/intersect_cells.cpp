@@ -9,15 +9,14 @@
 //   corefine_and_compute_intersection).
 #include "geometry/intersect_cells.h"
 
+#include "geometry/cgal_surface_mesh.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
 
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Side_of_triangle_mesh.h>
-#include <CGAL/Surface_mesh.h>
 #include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
@@ -31,13 +30,7 @@
 namespace texfab::geometry {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = Kernel::Point_3;
-using SurfaceMesh = CGAL::Surface_mesh<Point>;
-using VI = SurfaceMesh::Vertex_index;
-using FI = SurfaceMesh::Face_index;
-using HI = SurfaceMesh::Halfedge_index;
-using EI = SurfaceMesh::Edge_index;
+using namespace cgal;
 using SideOfMesh = CGAL::Side_of_triangle_mesh<SurfaceMesh, Kernel>;
 using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, uint32_t>;
 namespace PMP = CGAL::Polygon_mesh_processing;

@@ -3,16 +3,15 @@
 //   self_intersections, orient_to_bound_a_volume).
 #include "geometry/repair_solid.h"
 
+#include "geometry/cgal_surface_mesh.h"
 #include "geometry/mesh_connectivity.h"
 #include "render/image/error.h"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
-#include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
 #include <map>
@@ -20,12 +19,7 @@
 namespace texfab::geometry {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = Kernel::Point_3;
-using SurfaceMesh = CGAL::Surface_mesh<Point>;
-using VI = SurfaceMesh::Vertex_index;
-using FI = SurfaceMesh::Face_index;
-using HI = SurfaceMesh::Halfedge_index;
+using namespace cgal;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 Point toPoint(const Eigen::Vector3f& p) { return {double(p.x()), double(p.y()), double(p.z())}; }
