@@ -205,6 +205,17 @@ Side sideAtEdge(const Point& a, const Point& b, const Point& p, const Point& q1,
   return (convex ? in1 && in2 : in1 || in2) ? Side::Inside : Side::Outside;
 }
 
+// Side of a patch that reaches no intersection edge, from the first of its vertices not on the
+// other surface.
+template <class SideOf>
+Side sideByVertex(const std::vector<Point>& vertices, const SideOf& sideOf) {
+  for (const Point& p : vertices) {
+    const CGAL::Bounded_side s = sideOf(p);
+    if (s != CGAL::ON_BOUNDARY) return s == CGAL::ON_BOUNDED_SIDE ? Side::Inside : Side::Outside;
+  }
+  return Side::Outside;
+}
+
 // A triangle mesh with per-face origins and constrained (intersection) edges, and its patches:
 // the components that the constrained edges separate.
 struct Surface {
@@ -225,6 +236,16 @@ struct Surface {
       if (constrained[e])
         for (VI v : {mesh.vertex(e, 0), mesh.vertex(e, 1)}) map.emplace(mesh.point(v), v);
     return map;
+  }
+  // Classifies the patches still unknown by their vertices (sideByVertex) against `sideOf`.
+  template <class SideOf>
+  void classifyByVertices(const SideOf& sideOf) {
+    std::vector<std::vector<Point>> samples(sides.size());
+    for (FI f : mesh.faces())
+      if (sides[patch[f]] == Side::Unknown)
+        for (VI v : mesh.vertices_around_face(mesh.halfedge(f))) samples[patch[f]].push_back(mesh.point(v));
+    for (size_t p = 0; p < sides.size(); ++p)
+      if (sides[p] == Side::Unknown) sides[p] = sideByVertex(samples[p], sideOf);
   }
   // Classifies the patches that reach a constrained edge against the closed surface `other`.
   void classifyAtEdges(const Surface& other) {
@@ -249,17 +270,6 @@ struct Surface {
     }
   }
 };
-
-// Side of a patch that reaches no intersection edge, from the first of its vertices not on the
-// other surface.
-template <class SideOf>
-Side sideByVertex(const std::vector<Point>& vertices, const SideOf& sideOf) {
-  for (const Point& p : vertices) {
-    const CGAL::Bounded_side s = sideOf(p);
-    if (s != CGAL::ON_BOUNDARY) return s == CGAL::ON_BOUNDED_SIDE ? Side::Inside : Side::Outside;
-  }
-  return Side::Outside;
-}
 
 // What one group's piece is made of, before attributes: positions, triangles and their origin
 // (>= 0: input triangle; < 0: -1 - cell face).
@@ -363,21 +373,8 @@ private:
   // Patches that reach no intersection edge, by their vertices: the model's against the cell, the
   // cell's against the model.
   void classifyByVertices() {
-    std::vector<std::vector<Point>> samples(solidPart_.sides.size());
-    for (FI f : solidPart_.mesh.faces())
-      if (solidPart_.sides[solidPart_.patch[f]] == Side::Unknown)
-        for (VI v : solidPart_.mesh.vertices_around_face(solidPart_.mesh.halfedge(f)))
-          samples[solidPart_.patch[f]].push_back(solidPart_.mesh.point(v));
-    for (size_t p = 0; p < solidPart_.sides.size(); ++p)
-      if (solidPart_.sides[p] == Side::Unknown) solidPart_.sides[p] = sideByVertex(samples[p], sideOfCell());
-    std::vector<std::vector<Point>> cellSamples(cell_.sides.size());
-    for (FI f : cell_.mesh.faces())
-      if (cell_.sides[cell_.patch[f]] == Side::Unknown)
-        for (VI v : cell_.mesh.vertices_around_face(cell_.mesh.halfedge(f)))
-          cellSamples[cell_.patch[f]].push_back(cell_.mesh.point(v));
-    for (size_t p = 0; p < cell_.sides.size(); ++p)
-      if (cell_.sides[p] == Side::Unknown)
-        cell_.sides[p] = sideByVertex(cellSamples[p], [&](const Point& q) { return solid_.side(q); });
+    solidPart_.classifyByVertices(sideOfCell());
+    cell_.classifyByVertices([&](const Point& q) { return solid_.side(q); });
   }
 
   const SideOfMesh& sideOfCell() {
