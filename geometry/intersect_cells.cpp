@@ -25,6 +25,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <unordered_map>
 
 namespace texfab::geometry {
@@ -279,6 +280,47 @@ struct RawPiece {
   std::vector<int32_t> origin;
 };
 
+// CGAL's corefinement reports intersections in an order that depends on where its boxes lie in
+// memory (Box_intersection_d::ID_FROM_BOX_ADDRESS), so the order of the faces and vertices it
+// creates changes from run to run once threads allocate beside it. The piece is put in an order
+// its geometry defines: each triangle starts at its smallest corner (orientation kept), the
+// model's triangles by input triangle then corners, the cut faces after them by cell face then
+// corners, and vertices numbered by first use.
+void canonicalize(RawPiece& piece) {
+  const auto& pos = piece.positions;
+  auto less = [&](uint32_t a, uint32_t b) {
+    return std::lexicographical_compare(pos[a].data(), pos[a].data() + 3, pos[b].data(), pos[b].data() + 3);
+  };
+  for (auto& t : piece.triangles) {
+    const int first = less(t[1], t[0]) ? (less(t[2], t[1]) ? 2 : 1) : (less(t[2], t[0]) ? 2 : 0);
+    std::rotate(t.begin(), t.begin() + first, t.end());
+  }
+  auto rank = [](int32_t origin) { return origin >= 0 ? int64_t(origin) : int64_t(INT32_MAX) - origin; };
+  std::vector<uint32_t> order(piece.triangles.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+    if (piece.origin[x] != piece.origin[y]) return rank(piece.origin[x]) < rank(piece.origin[y]);
+    const auto &a = piece.triangles[x], &b = piece.triangles[y];
+    for (int k = 0; k < 3; ++k) {
+      if (less(a[size_t(k)], b[size_t(k)])) return true;
+      if (less(b[size_t(k)], a[size_t(k)])) return false;
+    }
+    return false;
+  });
+  RawPiece out;
+  std::vector<uint32_t> index(pos.size(), UINT32_MAX);
+  for (uint32_t t : order) {
+    std::array<uint32_t, 3> tri = piece.triangles[t];
+    for (uint32_t& v : tri) {
+      if (index[v] == UINT32_MAX) index[v] = uint32_t(out.positions.size()), out.positions.push_back(pos[v]);
+      v = index[v];
+    }
+    out.triangles.push_back(tri);
+    out.origin.push_back(piece.origin[t]);
+  }
+  piece = std::move(out);
+}
+
 class GroupIntersection {
 public:
   GroupIntersection(const Solid& solid, const CellSurface& cell) : solid_(solid), state_(solid.boxes.size(), kOther) {
@@ -314,7 +356,9 @@ public:
     classifyByVertices();
     flooded = floodFromKept();
     keepUntouchedComponents();
-    return assemble();
+    RawPiece piece = assemble();
+    canonicalize(piece);
+    return piece;
   }
 
 private:
