@@ -71,6 +71,9 @@ public:
     for (size_t t = 0; t < mesh.triangles.size(); ++t)
       for (uint32_t v : mesh.triangles[t]) faces_[count[v]++] = uint32_t(t);
     findComponents();
+    CGAL::Bbox_3 all;
+    for (const auto& b : boxes) all += b;
+    weldStep = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin(), 1e-30}) * 1e-7;
   }
 
   /// The triangle holding the directed edge b -> a (across the edge a -> b of another).
@@ -101,6 +104,9 @@ public:
   std::vector<uint32_t> component;         // per triangle (triangles sharing an edge are connected)
   std::vector<uint32_t> componentTriangle; // per component: its first triangle
   std::vector<CGAL::Bbox_3> componentBox;
+  // About a float's precision at the model's size, and not a power of two: float coordinates do
+  // not fall on its half-steps, where rounding errors would part equal points.
+  double weldStep = 0;
 
 private:
   void findComponents() {
@@ -206,15 +212,18 @@ Side sideAtEdge(const Point& a, const Point& b, const Point& p, const Point& q1,
   return (convex ? in1 && in2 : in1 || in2) ? Side::Inside : Side::Outside;
 }
 
-// Side of a patch that reaches no intersection edge, from the first of its vertices not on the
-// other surface.
+// Side of a patch from the majority of its first few vertices that are not on the other surface;
+// Unknown when every vertex is on it.
 template <class SideOf>
-Side sideByVertex(const std::vector<Point>& vertices, const SideOf& sideOf) {
-  for (const Point& p : vertices) {
-    const CGAL::Bounded_side s = sideOf(p);
-    if (s != CGAL::ON_BOUNDARY) return s == CGAL::ON_BOUNDED_SIDE ? Side::Inside : Side::Outside;
+Side sideByVertices(const std::vector<Point>& vertices, const SideOf& sideOf) {
+  constexpr int kVotes = 5;
+  int inside = 0, outside = 0;
+  for (size_t i = 0; i < vertices.size() && inside + outside < kVotes; ++i) {
+    const CGAL::Bounded_side s = sideOf(vertices[i]);
+    inside += s == CGAL::ON_BOUNDED_SIDE;
+    outside += s == CGAL::ON_UNBOUNDED_SIDE;
   }
-  return Side::Outside;
+  return inside + outside == 0 ? Side::Unknown : inside > outside ? Side::Inside : Side::Outside;
 }
 
 // A triangle mesh with per-face origins and constrained (intersection) edges, and its patches:
@@ -238,15 +247,17 @@ struct Surface {
         for (VI v : {mesh.vertex(e, 0), mesh.vertex(e, 1)}) map.emplace(mesh.point(v), v);
     return map;
   }
-  // Classifies the patches still unknown by their vertices (sideByVertex) against `sideOf`.
-  template <class SideOf>
-  void classifyByVertices(const SideOf& sideOf) {
+  // Classifies the patches still unknown by those of their vertices that `use` accepts
+  // (sideByVertices) against `sideOf`.
+  template <class SideOf, class Use>
+  void classifyByVertices(const SideOf& sideOf, const Use& use) {
     std::vector<std::vector<Point>> samples(sides.size());
     for (FI f : mesh.faces())
       if (sides[patch[f]] == Side::Unknown)
-        for (VI v : mesh.vertices_around_face(mesh.halfedge(f))) samples[patch[f]].push_back(mesh.point(v));
+        for (VI v : mesh.vertices_around_face(mesh.halfedge(f)))
+          if (use(v)) samples[patch[f]].push_back(mesh.point(v));
     for (size_t p = 0; p < sides.size(); ++p)
-      if (sides[p] == Side::Unknown) sides[p] = sideByVertex(samples[p], sideOf);
+      if (sides[p] == Side::Unknown) sides[p] = sideByVertices(samples[p], sideOf);
   }
   // Classifies the patches that reach a constrained edge against the closed surface `other`.
   void classifyAtEdges(const Surface& other) {
@@ -321,6 +332,34 @@ void canonicalize(RawPiece& piece) {
   piece = std::move(out);
 }
 
+// Drops each pair of faces on the same three vertices that face opposite ways.
+void dropFacingPairs(RawPiece& piece) {
+  const uint32_t n = uint32_t(piece.triangles.size());
+  std::vector<std::array<uint32_t, 3>> corners(piece.triangles);
+  for (auto& c : corners) std::sort(c.begin(), c.end());
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return corners[a] < corners[b]; });
+  auto opposite = [&](uint32_t a, uint32_t b) {
+    const auto &x = piece.triangles[a], &y = piece.triangles[b];
+    for (size_t k = 0; k < 3; ++k)
+      if (x[0] == y[k]) return x[1] == y[(k + 2) % 3];
+    return false;
+  };
+  std::vector<uint8_t> dropped(n, 0);
+  for (uint32_t i = 0, j; i < n; i = j) {
+    for (j = i + 1; j < n && corners[order[j]] == corners[order[i]]; ++j) {}
+    for (uint32_t a = i; a < j; ++a)
+      for (uint32_t b = a + 1; b < j && !dropped[order[a]]; ++b)
+        if (!dropped[order[b]] && opposite(order[a], order[b])) dropped[order[a]] = dropped[order[b]] = 1;
+  }
+  size_t out = 0;
+  for (uint32_t t = 0; t < n; ++t)
+    if (!dropped[t]) piece.triangles[out] = piece.triangles[t], piece.origin[out++] = piece.origin[t];
+  piece.triangles.resize(out);
+  piece.origin.resize(out);
+}
+
 class GroupIntersection {
 public:
   GroupIntersection(const Solid& solid, const CellSurface& cell) : solid_(solid), state_(solid.boxes.size(), kOther) {
@@ -351,9 +390,7 @@ public:
     }
     solidPart_.findPatches();
     cell_.findPatches();
-    solidPart_.classifyAtEdges(cell_);
-    cell_.classifyAtEdges(solidPart_);
-    classifyByVertices();
+    classify();
     flooded = floodFromKept();
     keepUntouchedComponents();
     RawPiece piece = assemble();
@@ -414,11 +451,22 @@ private:
 
   int64_t inputOf(VI v) const { return size_t(v) < inputVertex_.size() ? int64_t(inputVertex_[size_t(v)]) : -1; }
 
-  // Patches that reach no intersection edge, by their vertices: the model's against the cell, the
-  // cell's against the model.
-  void classifyByVertices() {
-    solidPart_.classifyByVertices(sideOfCell());
-    cell_.classifyByVertices([&](const Point& q) { return solid_.side(q); });
+  // The model's patches by their input vertices first: those are exact, while the intersection
+  // points are rounded to doubles, so where the cell passes within rounding of model vertices the
+  // faces around an intersection edge can be slivers facing the wrong way (sideAtEdge misleads).
+  // Then the patches at intersection edges, then the rest by any vertex; a patch whose every
+  // vertex lies on the other surface and that reaches no edge is outside.
+  void classify() {
+    const auto& cellSide = sideOfCell();
+    auto modelSide = [&](const Point& q) { return solid_.side(q); };
+    solidPart_.classifyByVertices(cellSide, [&](VI v) { return inputOf(v) >= 0; });
+    solidPart_.classifyAtEdges(cell_);
+    cell_.classifyAtEdges(solidPart_);
+    solidPart_.classifyByVertices(cellSide, [](VI) { return true; });
+    cell_.classifyByVertices(modelSide, [](VI) { return true; });
+    for (Surface* s : {&solidPart_, &cell_})
+      for (Side& side : s->sides)
+        if (side == Side::Unknown) side = Side::Outside;
   }
 
   const SideOfMesh& sideOfCell() {
@@ -463,50 +511,40 @@ private:
   }
 
   // The kept faces: the model's inside the cell or on it with the same orientation, the cell's
-  // inside the model. Intersection vertices of the cell are those of the model (same point).
+  // inside the model, with one vertex per position. That joins the cell's intersection vertices
+  // to the model's, and the intersection points that rounding made equal (where the cell passes
+  // within rounding of a model vertex); a face whose corners it joins is dropped, and so are two
+  // faces it makes into the same face facing both ways.
   RawPiece assemble() const {
     RawPiece piece;
-    std::unordered_map<uint32_t, uint32_t> fromInput, fromPart, fromCell;
-    std::unordered_map<Point, uint32_t, PointHash> atPoint;
-    auto add = [&](const Point& p) {
-      piece.positions.emplace_back(p.x(), p.y(), p.z());
-      return uint32_t(piece.positions.size() - 1);
-    };
-    auto once = [&](std::unordered_map<uint32_t, uint32_t>& map, uint32_t key, const Point& p) {
-      const auto [it, inserted] = map.emplace(key, 0);
-      if (inserted) it->second = add(p);
+    std::unordered_map<Point, uint32_t, PointHash> index;  // by position on the weld grid
+    auto vertex = [&](const Point& p) {
+      const double step = solid_.weldStep;
+      const Point key(std::round(p.x() / step), std::round(p.y() / step), std::round(p.z() / step));
+      const auto [it, inserted] = index.emplace(key, uint32_t(piece.positions.size()));
+      if (inserted) piece.positions.emplace_back(p.x(), p.y(), p.z());
       return it->second;
     };
-    for (FI f : solidPart_.mesh.faces()) {
-      if (!keptPart(f)) continue;
+    auto face = [&](const SurfaceMesh& mesh, FI f) {
       std::array<uint32_t, 3> tri;
       int k = 0;
-      for (VI v : solidPart_.mesh.vertices_around_face(solidPart_.mesh.halfedge(f))) {
-        const Point& p = solidPart_.mesh.point(v);
-        const int64_t input = inputOf(v);
-        tri[size_t(k++)] = input >= 0 ? once(fromInput, uint32_t(input), p) : once(fromPart, uint32_t(v), p);
-        atPoint.emplace(p, tri[size_t(k - 1)]);
-      }
+      for (VI v : mesh.vertices_around_face(mesh.halfedge(f))) tri[size_t(k++)] = vertex(mesh.point(v));
+      return tri;
+    };
+    auto add = [&](const std::array<uint32_t, 3>& tri, int32_t origin) {
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return;
       piece.triangles.push_back(tri);
-      piece.origin.push_back(solidPart_.origin[f]);
-    }
+      piece.origin.push_back(origin);
+    };
+    for (FI f : solidPart_.mesh.faces())
+      if (keptPart(f)) add(face(solidPart_.mesh, f), solidPart_.origin[f]);
     for (uint32_t t : kept_) {
       const auto& in = solid_.mesh.triangles[t];
-      piece.triangles.push_back({once(fromInput, in[0], solid_.points[in[0]]), once(fromInput, in[1], solid_.points[in[1]]),
-                                 once(fromInput, in[2], solid_.points[in[2]])});
-      piece.origin.push_back(int32_t(t));
+      add({vertex(solid_.points[in[0]]), vertex(solid_.points[in[1]]), vertex(solid_.points[in[2]])}, int32_t(t));
     }
-    for (FI f : cell_.mesh.faces()) {
-      if (!keptCell(f)) continue;
-      std::array<uint32_t, 3> tri;
-      int k = 0;
-      for (VI v : cell_.mesh.vertices_around_face(cell_.mesh.halfedge(f))) {
-        const auto shared = atPoint.find(cell_.mesh.point(v));
-        tri[size_t(k++)] = shared != atPoint.end() ? shared->second : once(fromCell, uint32_t(v), cell_.mesh.point(v));
-      }
-      piece.triangles.push_back(tri);
-      piece.origin.push_back(cell_.origin[f]);
-    }
+    for (FI f : cell_.mesh.faces())
+      if (keptCell(f)) add(face(cell_.mesh, f), cell_.origin[f]);
+    dropFacingPairs(piece);
     return piece;
   }
 
