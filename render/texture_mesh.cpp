@@ -31,13 +31,17 @@ void requireSize(const Image* map, const Image& exemplar, const char* what) {
                 ": companion maps must have the exemplar's size");
 }
 
-// Bilinear lookup of `image` at continuous pixel coordinates (pixel centres at whole values), wrapping.
-float bilinearToroidal(const Image& image, float u, float v, int channel) {
+// Pixel x of an image `size` wide: wrapped on a toroidal exemplar, else clamped to it.
+int pixelIndex(int x, int size, bool toroidal) {
+  return toroidal ? ((x % size) + size) % size : std::clamp(x, 0, size - 1);
+}
+
+// Bilinear lookup of `image` at continuous pixel coordinates (pixel centres at whole values).
+float bilinear(const Image& image, float u, float v, int channel, bool toroidal) {
   const int x0 = int(std::floor(u)), y0 = int(std::floor(v));
   const float fx = u - float(x0), fy = v - float(y0);
   auto at = [&](int x, int y) {
-    return image.at(((x % image.width) + image.width) % image.width, ((y % image.height) + image.height) % image.height,
-                    channel);
+    return image.at(pixelIndex(x, image.width, toroidal), pixelIndex(y, image.height, toroidal), channel);
   };
   return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
@@ -200,8 +204,10 @@ float TextureJob::lookup(const Image& map, size_t site, int channel, bool magnif
   channel = std::min(channel, map.channels - 1);
   if (surface_) {
     const float u = synthesis::surfaceU(r_.coords[site]), v = synthesis::surfaceV(r_.coords[site]);
-    if (magnified) return bilinearToroidal(map, u, v, channel);
-    return map.at(int(std::floor(u + 0.5f)) % map.width, int(std::floor(v + 0.5f)) % map.height, channel);
+    const bool toroidal = ex_.analysis->wrap == synthesis::ExemplarWrap::Tile;
+    if (magnified) return bilinear(map, u, v, channel, toroidal);
+    return map.at(pixelIndex(int(std::floor(u + 0.5f)), map.width, toroidal),
+                  pixelIndex(int(std::floor(v + 0.5f)), map.height, toroidal), channel);
   }
   // Solid: the mean over the three exemplar coordinates (as solidColors()).
   float sum = 0;

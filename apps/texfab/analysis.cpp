@@ -1,7 +1,36 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "apps/texfab/analysis.h"
 
+#include <algorithm>
+#include <cstdio>
+
 namespace texfab::cli {
+
+CLI::Option* wrapFlag(Flags& f, WrapChoice& choice) {
+  char threshold[16];
+  std::snprintf(threshold, sizeof threshold, "%.1f", synthesis::kWrapDiscontinuityThreshold);
+  return f.choice("--exemplar-wrap", choice,
+           Names<WrapChoice>{{"auto", WrapChoice::Auto}, {"tile", WrapChoice::Tile}, {"clamp", WrapChoice::Clamp}},
+           std::string("How the exemplar's borders are treated: tile (it is toroidal: coordinates wrap), clamp (a "
+                       "photograph that does not tile: synthesis never reads across its border), or auto: clamp when "
+                       "the color jump across its wrap is more than ") +
+               threshold + " times the largest jump between columns (rows) inside");
+}
+
+synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run) {
+  using synthesis::ExemplarWrap;
+  if (choice != WrapChoice::Auto) return choice == WrapChoice::Tile ? ExemplarWrap::Tile : ExemplarWrap::Clamp;
+  const synthesis::WrapDiscontinuity d = synthesis::wrapDiscontinuity(exemplar);
+  const ExemplarWrap wrap = synthesis::detectExemplarWrap(exemplar);
+  char note[240];
+  std::snprintf(note, sizeof note,
+                "exemplar wrap: %s (auto: the color jump across its wrap is %.2fx (x), %.2fx (y) the largest "
+                "inside; above %.1fx it does not tile%s)",
+                synthesis::toString(wrap), d.x, d.y, synthesis::kWrapDiscontinuityThreshold,
+                std::min(exemplar.width, exemplar.height) < synthesis::kWrapDetectionMinSide ? "; too small to tell" : "");
+  run.note(note);
+  return wrap;
+}
 
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached) {

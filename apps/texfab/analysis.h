@@ -1,13 +1,22 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The exemplar analyses the synthesis commands share, as one "analysis" stage of a Run: through the
-// on-disk cache unless --no-cache, which is then kept within --cache-size.
+// on-disk cache unless --no-cache, which is then kept within --cache-size; and --exemplar-wrap.
 
 #include "apps/texfab/cli.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 
 namespace texfab::cli {
+
+/// --exemplar-wrap: the library's modes, or auto (measured on the exemplar).
+enum class WrapChoice { Auto, Tile, Clamp };
+
+/// Adds --exemplar-wrap to a command.
+CLI::Option* wrapFlag(Flags& f, WrapChoice& choice);
+
+/// The wrap mode the choice asks for; auto measures the exemplar and notes what it chose.
+synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run);
 
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached);

@@ -26,9 +26,6 @@ namespace {
 constexpr double kRepetitionLimit = 0.25;
 constexpr int kRepetitionCheckedUpTo = 8;
 
-// --exemplar-wrap: the library's modes, or auto (measured on the exemplar).
-enum class WrapChoice { Auto, Tile, Clamp };
-
 struct SynthJob {
   std::string exemplar, output, coords;
   std::vector<std::string> apply;
@@ -57,22 +54,6 @@ std::vector<Companion> reserveCompanions(const SynthJob& job, Run& run) {
     companions.push_back({spec.substr(0, colon), run.output(spec.substr(colon + 1)), {}});
   }
   return companions;
-}
-
-// The wrap mode --exemplar-wrap asks for; auto measures the exemplar and says what it chose.
-synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run) {
-  using synthesis::ExemplarWrap;
-  if (choice != WrapChoice::Auto) return choice == WrapChoice::Tile ? ExemplarWrap::Tile : ExemplarWrap::Clamp;
-  const synthesis::WrapDiscontinuity d = synthesis::wrapDiscontinuity(exemplar);
-  const ExemplarWrap wrap = synthesis::detectExemplarWrap(exemplar);
-  char note[240];
-  std::snprintf(note, sizeof note,
-                "exemplar wrap: %s (auto: the colour jump across its wrap is %.2fx (x), %.2fx (y) the largest "
-                "inside; above %.1fx it does not tile%s)",
-                synthesis::toString(wrap), d.x, d.y, synthesis::kWrapDiscontinuityThreshold,
-                std::min(exemplar.width, exemplar.height) < synthesis::kWrapDetectionMinSide ? "; too small to tell" : "");
-  run.note(note);
-  return wrap;
 }
 
 bool checksRepetition(const SynthJob& job, int exemplarWidth, int exemplarHeight) {
@@ -220,11 +201,7 @@ Command addSynthCommand(CLI::App& root) {
          "Make the output wrap at its size (a tile). A tile of 2-3 times the exemplar's size may repeat the "
          "exemplar (synth warns when its self-correlation at the exemplar's period exceeds 0.25; try another "
          "--seed); at 4 times or more it stayed below on the patterns measured");
-  f.choice("--exemplar-wrap", job->wrap, Names<WrapChoice>{{"auto", WrapChoice::Auto}, {"tile", WrapChoice::Tile},
-                                                          {"clamp", WrapChoice::Clamp}},
-           "How the exemplar's borders are treated: tile (it is toroidal: coordinates wrap), clamp (a photograph "
-           "that does not tile: synthesis never reads across its border), or auto: clamp when the colour jump "
-           "across its wrap is more than 1.9 times the largest jump between columns (rows) inside");
+  wrapFlag(f, job->wrap);
   f.text("--coords", job->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
   f.app()->add_option("--apply", job->apply,
                       "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, roughness, "

@@ -28,6 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 using texfab::test::CliResult;
 using texfab::test::quote;
+using texfab::test::readFile;
 using texfab::test::runCli;
 using texfab::test::TempDir;
 
@@ -146,7 +147,7 @@ TEST(Cli, NumbersOutOfRangeNameTheFlagAndTheRange) {
 TEST(Cli, ABadImageGivesOneLine) {
   TempDir d("texfab-cli");
   std::ofstream(d / "bad.png", std::ios::binary) << "\x89PNG\r\n\x1a\n" << std::string(64, 'x');
-  const std::string png = texfab::test::readFile(kExemplar);
+  const std::string png = readFile(kExemplar);
   std::ofstream(d / "truncated.png", std::ios::binary) << png.substr(0, png.size() / 2);
   for (const char* name : {"bad.png", "truncated.png"}) {
     const CliResult r = runCli("synth " + quote(d / name) + " -o " + quote(d / "o.png") + " --no-cache");
@@ -177,6 +178,22 @@ TEST(Cli, TextureRefusesFormatsWithoutTextures) {
     EXPECT_NE(r.err.find("cannot carry the texture"), std::string::npos) << r.err;
     EXPECT_TRUE(fs::is_empty(d.path())) << out;
   }
+}
+
+// texture's --exemplar-wrap: auto picks clamp on a photograph that does not tile and says so; the
+// report names the mode; solid mode refuses clamp before any work.
+TEST(Cli, TextureChoosesTheExemplarWrap) {
+  TempDir d("texfab-cli");
+  const fs::path photo = kSource / "models" / "exemplars" / "photos" / "rock.png";
+  const std::string job = "texture " + quote(kModel) + " -e " + quote(photo) + " --resolution 256 --no-cache";
+  const CliResult r = runCli(job + " -o " + quote(d / "a.glb") + " --report " + quote(d / "a.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("exemplar wrap: clamp"), std::string::npos) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(readFile(d / "a.json"))["parameters"]["exemplar_wrap"], "clamp");
+  const CliResult solid = runCli(job + " -o " + quote(d / "b.glb") + " --mode solid --exemplar-wrap clamp");
+  EXPECT_EQ(solid.status, 1) << solid.err;
+  EXPECT_NE(solid.err.find("--exemplar-wrap clamp"), std::string::npos) << solid.err;
+  EXPECT_FALSE(fs::exists(d / "b.glb"));
 }
 
 // Every output location is checked before any work, and outputs appear only together.
@@ -283,7 +300,7 @@ TEST(Cli, SignalsLeaveNoTemporaries) {
     std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
     ::kill(pid, SIGINT);
     const int status = waitFor(pid);
-    EXPECT_TRUE(status == 130 || status == 0) << delayMs << " ms: " << status << " " << texfab::test::readFile(d / "err.txt");
+    EXPECT_TRUE(status == 130 || status == 0) << delayMs << " ms: " << status << " " << readFile(d / "err.txt");
     EXPECT_TRUE(leftovers(d.path()).empty()) << delayMs << " ms: " << leftovers(d.path()).front();
     if (status == 130) {
       ++stopped;

@@ -94,7 +94,8 @@ geometry::Mesh makeCube(int n) {
 struct Exemplar {
   Image image;
   synthesis::ExemplarAnalysis analysis;
-  explicit Exemplar(Image img) : image(std::move(img)), analysis(synthesis::analyzeExemplar(image, {})) {}
+  explicit Exemplar(Image img, synthesis::ExemplarWrap wrap = synthesis::ExemplarWrap::Tile)
+      : image(std::move(img)), analysis(synthesis::analyzeExemplar(image, {.wrap = wrap})) {}
   TextureExemplar view() const {
     TextureExemplar e;
     e.color = &image;
@@ -247,6 +248,38 @@ TEST(TextureMesh, ThreadCountDoesNotChangeTheTexture) {
   o.surface.seed = 2;
   const TextureMeshResult other = textureMesh(test::makeSphere(32, 16), ex.view(), o);
   EXPECT_NE(one.coords, other.coords);
+}
+
+// Pairs of neighboring chart texels whose exemplar coordinates are continuous only across the
+// exemplar's wrap (as synthesis::wrapCrossings counts them in 2-D).
+int64_t atlasWrapCrossings(const TextureMeshResult& r, int exemplarWidth, int exemplarHeight) {
+  std::map<std::pair<int, int>, uint32_t> coordAt;
+  for (size_t s = 0; s < r.sites.size(); ++s) coordAt[{r.sites.x[s], r.sites.y[s]}] = r.coords[s];
+  auto crosses = [](float a, float b, int size) {
+    const float d = std::fabs(a - b);
+    return d > 2 && float(size) - d <= 2;
+  };
+  int64_t count = 0;
+  for (const auto& [xy, c] : coordAt)
+    for (const auto& next : {std::pair{xy.first + 1, xy.second}, std::pair{xy.first, xy.second + 1}}) {
+      const auto n = coordAt.find(next);
+      if (n != coordAt.end())
+        count += crosses(synthesis::surfaceU(c), synthesis::surfaceU(n->second), exemplarWidth) ||
+                 crosses(synthesis::surfaceV(c), synthesis::surfaceV(n->second), exemplarHeight);
+    }
+  return count;
+}
+
+TEST(TextureMesh, ClampedPhotographIsNeverReadAcrossItsBorder) {
+  const Image photo = bundledExemplar("photos/rock.png");
+  ASSERT_EQ(synthesis::detectExemplarWrap(photo), synthesis::ExemplarWrap::Clamp);
+  TextureMeshOptions o = surfaceOptions(256);
+  o.measure = false;
+  const TextureMeshResult tile = textureMesh(test::makeSphere(32, 16), Exemplar(photo).view(), o);
+  const TextureMeshResult clamp =
+      textureMesh(test::makeSphere(32, 16), Exemplar(photo, synthesis::ExemplarWrap::Clamp).view(), o);
+  EXPECT_GT(atlasWrapCrossings(tile, photo.width, photo.height), 0);
+  EXPECT_EQ(atlasWrapCrossings(clamp, photo.width, photo.height), 0);
 }
 
 TEST(TextureMesh, InconsistentWindingIsRepairedAndReported) {
