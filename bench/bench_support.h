@@ -6,6 +6,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <filesystem>
 
 namespace texfab::bench {
@@ -17,6 +18,26 @@ inline Image marbleExemplar(int side) {
   for (int y = 0; y < side; ++y)
     for (int x = 0; x < side; ++x)
       for (int c = 0; c < marble.channels; ++c) out.at(x, y, c) = marble.at(x, y, c);
+  return out;
+}
+
+/// `image` magnified (bilinear, pixel centres aligned) to side x side.
+inline Image magnified(const Image& image, int side) {
+  Image out(side, side, image.channels, image.format);
+  const double stepX = double(image.width) / side, stepY = double(image.height) / side;
+  for (int y = 0; y < side; ++y) {
+    const double v = std::clamp((y + 0.5) * stepY - 0.5, 0.0, double(image.height - 1));
+    const int y0 = std::min(int(v), image.height - 2);
+    const float fy = float(v - y0);
+    for (int x = 0; x < side; ++x) {
+      const double u = std::clamp((x + 0.5) * stepX - 0.5, 0.0, double(image.width - 1));
+      const int x0 = std::min(int(u), image.width - 2);
+      const float fx = float(u - x0);
+      for (int c = 0; c < image.channels; ++c)
+        out.at(x, y, c) = (1 - fy) * ((1 - fx) * image.at(x0, y0, c) + fx * image.at(x0 + 1, y0, c)) +
+                          fy * ((1 - fx) * image.at(x0, y0 + 1, c) + fx * image.at(x0 + 1, y0 + 1, c));
+    }
+  }
   return out;
 }
 
