@@ -423,6 +423,10 @@ private:
       }
       const FI f = solidPart_.mesh.add_face(v[0], v[1], v[2]);
       if (f == SurfaceMesh::null_face()) throw Error("internal: the corefined part of the model is not a manifold");
+      const auto& tri = solid_.mesh.triangles[t];
+      if (CGAL::collinear(solid_.points[tri[0]], solid_.points[tri[1]], solid_.points[tri[2]]))  // corefine would not end
+        throw Error("a cut meets a triangle whose corners are collinear (earlier cuts crossing close by can leave one); "
+                    "move the cut slightly");
       solidPart_.origin[f] = int32_t(t);
     }
   }
