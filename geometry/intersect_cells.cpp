@@ -371,6 +371,7 @@ public:
       cell_.origin[f] = -1 - int32_t(cell.face[t]);
     }
     for (VI v : cell_.mesh.vertices()) cellBox_ += cell_.mesh.point(v).bbox();
+    cellInput_ = cell_.mesh;
   }
 
   RawPiece run(std::span<const uint32_t> touching, size_t& corefined, size_t& flooded) {
@@ -474,7 +475,7 @@ private:
   }
 
   const SideOfMesh& sideOfCell() {
-    if (!sideOfCell_) sideOfCell_ = std::make_unique<SideOfMesh>(cell_.mesh);
+    if (!sideOfCell_) sideOfCell_ = std::make_unique<SideOfMesh>(cellInput_);
     return *sideOfCell_;
   }
 
@@ -559,6 +560,9 @@ private:
   CGAL::Bbox_3 cellBox_;
   std::vector<uint32_t> inputVertex_; // per corefined-part vertex created from an input vertex
   std::vector<uint32_t> kept_;        // input triangles kept whole
+  // The cell as it was before corefinement, for side queries: corefinement can leave zero-area
+  // triangles (intersection points rounded onto each other), on which CGAL's ray casting never ends.
+  SurfaceMesh cellInput_;
   std::unique_ptr<SideOfMesh> sideOfCell_;
 };
 

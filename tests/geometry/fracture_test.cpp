@@ -151,6 +151,21 @@ TEST(CutMesh, SeveralPlanesCutEveryPiece) {
   EXPECT_EQ(seen, std::vector<int>({1, 1, 1}));
 }
 
+// Planes through each other's lines and through the model's corners: all cuts come from one
+// intersection with the planes' cells, so none meets the rounded corners of another.
+TEST(CutMesh, PlanesThroughEachOtherAndThroughCorners) {
+  const Mesh m = cube();
+  const CutMeshResult star = cut(m, {{{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 1, 0}}, {{0, 0, 0}, {0, 0, 1}}, {{0, 0, 0}, {1, 1, 1}}});
+  EXPECT_EQ(star.pieces.size(), 14u);  // eight octants, six of them halved by the diagonal plane
+  expectPartition(m, meshesOf(star.pieces));
+  // Corefinement rounds intersection points near (1, -1, -1) onto each other: zero-area triangles.
+  const CutMeshResult corners = cut(m, {{{-1, 1, -1}, {-0.4898619485211566, -0.009129825816118098, -0.10101787042252375}},
+                                        {{1, -1, -1}, {-0.8122808264515302, -0.9433050469559874, 0.6715302078397394}},
+                                        {{0, 0, 0}, {-1, 1, 0}}});
+  EXPECT_EQ(corners.pieces.size(), 7u);
+  expectPartition(m, meshesOf(corners.pieces));
+}
+
 TEST(CutMesh, RefusesDegeneratePlanes) {
   const Mesh m = cube();
   EXPECT_NE(errorOf([&] { cut(m, {{{0, 0, 0}, {0, 0, 0}}}); }).find("zero normal"), std::string::npos);
