@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -21,9 +22,10 @@ using Outcome = test::CliResult;
 
 Outcome texfab(const std::string& args) { return test::runCli(args); }
 
-// A 32x32 crop of the bundled marble, written as PNG into `dir`.
-std::string smallExemplar(const TempDir& dir, int side = 32, const std::string& name = "ex.png") {
-  const Image full = readImage(std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/marble.png");
+// A 32x32 crop of a bundled exemplar (marble unless told), written as PNG into `dir`.
+std::string smallExemplar(const TempDir& dir, int side = 32, const std::string& name = "ex.png",
+                          const std::string& source = "marble.png") {
+  const Image full = readImage(std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/" + source);
   Image crop(side, side, full.channels, full.format);
   for (int y = 0; y < side; ++y)
     for (int x = 0; x < side; ++x)
@@ -90,6 +92,24 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
                 .status,
             0);
   EXPECT_EQ(readImage(dir / "o.png").width, 16);
+}
+
+// Solid synthesis treats every exemplar as toroidal: one that does not tile gets a warning.
+TEST(CliSolid, WarnsWhenTheExemplarDoesNotTile) {
+  TempDir dir;
+  Image wave(32, 32, 3);  // periodic in 32 pixels: tiles
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x)
+      for (int c = 0; c < 3; ++c)
+        wave.at(x, y, c) = float(0.5 + 0.4 * std::sin(2 * M_PI * (x + 2 * y + 8 * c) / 32.0) * std::cos(2 * M_PI * y / 16.0));
+  writeImage(wave, dir / "wave.png");
+  const std::string photo = smallExemplar(dir, 48, "rock.png", "photos/rock.png");
+  for (const auto& [exemplar, tiles] : {std::pair{(dir / "wave.png").string(), true}, std::pair{photo, false}}) {
+    const Outcome r = texfab("solid " + exemplar + " --plane 0,0,0,1,0,0,0,1,0 --size 8 -q --no-cache -o " +
+                             (dir / (tiles ? "a.png" : "b.png")).string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err.find("does not tile") == std::string::npos, tiles) << exemplar << ": " << r.err;
+  }
 }
 
 TEST(CliSolid, BadInputIsOneLineNonZeroAndNoOutput) {
