@@ -3,6 +3,8 @@
 #include "geometry/mesh_formats.h"
 #include "render/image/error.h"
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -99,23 +101,22 @@ private:
   Encoding encoding_;
 };
 
-} // namespace
+struct Header {
+  Encoding encoding = Encoding::Ascii;
+  std::vector<Element> elements;
+  size_t bodyStart = 0;  ///< the first byte after end_header's line
+};
 
-Mesh readPly(const fs::path& path) {
-  const std::vector<uint8_t> bytes = readFileBytes(path);
-  const char* text = reinterpret_cast<const char*>(bytes.data());
-  // Header: up to "end_header\n".
-  const std::string_view all(text, bytes.size());
+Header readHeader(const fs::path& path, std::string_view all) {
   if (all.substr(0, 3) != "ply") throw Error(path.string() + ": not a PLY file (no 'ply' magic)");
   const size_t headerEnd = all.find("end_header");
   if (headerEnd == std::string_view::npos) throw Error(path.string() + ": PLY header has no end_header");
-  size_t bodyStart = headerEnd + 10;
-  if (bodyStart < all.size() && all[bodyStart] == '\r') ++bodyStart;
-  if (bodyStart < all.size() && all[bodyStart] == '\n') ++bodyStart;
-  TextCursor cursor(text, text + headerEnd);
-  Encoding encoding = Encoding::Ascii;
+  Header h;
+  h.bodyStart = headerEnd + 10;
+  if (h.bodyStart < all.size() && all[h.bodyStart] == '\r') ++h.bodyStart;
+  if (h.bodyStart < all.size() && all[h.bodyStart] == '\n') ++h.bodyStart;
+  TextCursor cursor(all.data(), all.data() + headerEnd);
   bool haveFormat = false;
-  std::vector<Element> elements;
   while (!cursor.atEnd()) {
     const auto words = splitWords(cursor.nextLine());
     if (words.empty()) continue;
@@ -124,17 +125,17 @@ Mesh readPly(const fs::path& path) {
     };
     if (words[0] == "format") {
       if (words.size() < 2) throw bad("format line without a format");
-      if (words[1] == "ascii") encoding = Encoding::Ascii;
-      else if (words[1] == "binary_little_endian") encoding = Encoding::Little;
-      else if (words[1] == "binary_big_endian") encoding = Encoding::Big;
+      if (words[1] == "ascii") h.encoding = Encoding::Ascii;
+      else if (words[1] == "binary_little_endian") h.encoding = Encoding::Little;
+      else if (words[1] == "binary_big_endian") h.encoding = Encoding::Big;
       else throw bad("unknown PLY format '" + std::string(words[1]) + "'");
       haveFormat = true;
     } else if (words[0] == "element") {
       long long count = 0;
       if (words.size() < 3 || !parseInt(words[2], count) || count < 0) throw bad("bad element line");
-      elements.push_back({std::string(words[1]), uint64_t(count), {}});
+      h.elements.push_back({std::string(words[1]), uint64_t(count), {}});
     } else if (words[0] == "property") {
-      if (elements.empty()) throw bad("property before any element");
+      if (h.elements.empty()) throw bad("property before any element");
       Property prop;
       if (words.size() >= 5 && words[1] == "list") {
         if (!scalarFromName(words[2], prop.countType) || !scalarFromName(words[3], prop.type)) throw bad("bad list property type");
@@ -146,29 +147,21 @@ Mesh readPly(const fs::path& path) {
       } else {
         throw bad("bad property line");
       }
-      elements.back().properties.push_back(prop);
+      h.elements.back().properties.push_back(prop);
     }
   }
   if (!haveFormat) throw Error(path.string() + ": PLY header has no format line");
+  return h;
+}
 
-  BodyReader body(path, bytes.data() + std::min(bodyStart, bytes.size()), bytes.data() + bytes.size(), encoding);
-  Mesh mesh;
-  std::vector<Eigen::Vector2f> vertexUvs;
-  std::vector<Eigen::Vector3f> vertexNormals;
-  std::vector<Eigen::Vector2f> cornerUvs;
-  bool haveCornerUvs = true;
-  std::vector<double> values;
-  std::vector<Eigen::Vector3f> facePositions;
-  std::vector<std::array<uint32_t, 3>> faceCorners;
-  for (const Element& element : elements) {
-    // Every item takes at least one byte (binary) or two (ASCII: digit and separator): a count
-    // larger than the data left is a corrupt header, refused before any allocation.
-    size_t minItem = 0;
-    for (const Property& p : element.properties) minItem += p.list ? scalarSize(p.countType) : scalarSize(p.type);
-    if (encoding == Encoding::Ascii) minItem = 2 * element.properties.size();
-    if (minItem > 0 && element.count > body.remaining() / minItem)
-      throw Error(path.string() + ": PLY element '" + element.name + "' count " + std::to_string(element.count) +
-                  " exceeds the file's data");
+// The body's elements into a mesh: vertices (positions, per-vertex UVs and normals) and faces
+// (triangulated, with per-corner texcoords and material indices); other elements are skipped.
+class MeshBuilder {
+public:
+  MeshBuilder(const fs::path& path, BodyReader& body, Encoding encoding) : path_(path), body_(body), encoding_(encoding) {}
+
+  void read(const Element& element) {
+    checkCount(element);
     const bool isVertex = element.name == "vertex", isFace = element.name == "face";
     auto find = [&](std::initializer_list<const char*> names) -> int {
       for (const char* n : names)
@@ -176,101 +169,142 @@ Mesh readPly(const fs::path& path) {
           if (element.properties[i].name == n && !element.properties[i].list) return int(i);
       return -1;
     };
-    const int ix = find({"x"}), iy = find({"y"}), iz = find({"z"});
-    const int inx = find({"nx"}), iny = find({"ny"}), inz = find({"nz"});
-    const int iu = find({"s", "u", "texture_u", "texture_s"}), iv = find({"t", "v", "texture_v", "texture_t"});
+    const std::array<int, 3> position = {find({"x"}), find({"y"}), find({"z"})};
+    const std::array<int, 3> normal = {find({"nx"}), find({"ny"}), find({"nz"})};
+    const std::array<int, 2> uv = {find({"s", "u", "texture_u", "texture_s"}), find({"t", "v", "texture_v", "texture_t"})};
+    const int material = find({"material_index"});
     if (isVertex) {
-      if (ix < 0 || iy < 0 || iz < 0) throw Error(path.string() + ": PLY vertex element lacks x, y or z");
-      mesh.positions.reserve(element.count);
+      if (*std::min_element(position.begin(), position.end()) < 0)
+        throw Error(path_.string() + ": PLY vertex element lacks x, y or z");
+      mesh_.positions.reserve(element.count);
     }
     for (uint64_t item = 0; item < element.count; ++item) {
-      values.assign(element.properties.size(), 0.0);
-      facePositions.clear();
-      faceCorners.clear();
+      values_.assign(element.properties.size(), 0.0);
+      facePositions_.clear();
+      faceCorners_.clear();
       for (size_t pi = 0; pi < element.properties.size(); ++pi) {
         const Property& prop = element.properties[pi];
-        if (!prop.list) {
-          values[pi] = body.read(prop.type);
-          continue;
-        }
-        const double countValue = body.read(prop.countType);
-        if (!(countValue >= 0) || countValue > 1e6 || countValue != std::floor(countValue))
-          throw Error(path.string() + ": bad list length in PLY element '" + element.name + "'");
-        const size_t count = size_t(countValue);
-        if (encoding != Encoding::Ascii && count * scalarSize(prop.type) > body.remaining())
-          throw Error(path.string() + ": truncated PLY data");
-        std::vector<double> list(count);
-        for (double& v : list) v = body.read(prop.type);
-        if (isFace && (prop.name == "vertex_indices" || prop.name == "vertex_index")) {
-          if (count < 3) throw Error(path.string() + ": PLY face " + std::to_string(item) + " has fewer than 3 vertices");
-          facePositions.clear();
-          for (double idx : list) {
-            if (!(idx >= 0) || idx >= double(mesh.positions.size()))
-              throw Error(path.string() + ": PLY face " + std::to_string(item) + " uses vertex " +
-                          std::to_string((long long)idx) + " but there are " + std::to_string(mesh.positions.size()) +
-                          " vertices");
-            facePositions.push_back(mesh.positions[size_t(idx)]);
-          }
-          faceCorners = triangulatePolygon(facePositions);
-          for (const auto& tri : faceCorners)
-            mesh.triangles.push_back({uint32_t(list[tri[0]]), uint32_t(list[tri[1]]), uint32_t(list[tri[2]])});
-          values[pi] = double(count);
-        } else if (isFace && prop.name == "texcoord") {
-          values[pi] = double(count);
-          if (count % 2 != 0) throw Error(path.string() + ": PLY face texcoord list has an odd length");
-          // Triangulated the same way as the vertex indices (which PLY lists first).
-          if (count / 2 == facePositions.size())
-            for (const auto& tri : faceCorners)
-              for (uint32_t c : tri) cornerUvs.emplace_back(float(list[2 * c]), float(list[2 * c + 1]));
-        }
+        values_[pi] = prop.list ? readList(element, prop, isFace, item) : body_.read(prop.type);
       }
       if (isVertex) {
-        mesh.positions.emplace_back(float(values[size_t(ix)]), float(values[size_t(iy)]), float(values[size_t(iz)]));
-        if (iu >= 0 && iv >= 0) vertexUvs.emplace_back(float(values[size_t(iu)]), float(values[size_t(iv)]));
-        if (inx >= 0 && iny >= 0 && inz >= 0)
-          vertexNormals.emplace_back(float(values[size_t(inx)]), float(values[size_t(iny)]), float(values[size_t(inz)]));
+        auto at = [&](int i) { return float(values_[size_t(i)]); };
+        mesh_.positions.emplace_back(at(position[0]), at(position[1]), at(position[2]));
+        if (uv[0] >= 0 && uv[1] >= 0) vertexUvs_.emplace_back(at(uv[0]), at(uv[1]));
+        if (*std::min_element(normal.begin(), normal.end()) >= 0)
+          vertexNormals_.emplace_back(at(normal[0]), at(normal[1]), at(normal[2]));
       }
       if (isFace) {
-        const int im = find({"material_index"});
-        if (im >= 0) {
-          const double m = values[size_t(im)];
-          const size_t tris = mesh.triangles.size() - mesh.faceMaterials.size();
-          if (!(m >= 0) || m > 65535) throw Error(path.string() + ": bad PLY material_index");
-          mesh.faceMaterials.insert(mesh.faceMaterials.end(), tris, uint32_t(m));
-        }
-        if (cornerUvs.size() != 3 * mesh.triangles.size()) haveCornerUvs = false;
+        if (material >= 0) addMaterial(values_[size_t(material)]);
+        if (cornerUvs_.size() != 3 * mesh_.triangles.size()) haveCornerUvs_ = false;
       }
     }
   }
-  const size_t corners = 3 * mesh.triangles.size();
-  if (haveCornerUvs && !cornerUvs.empty() && cornerUvs.size() == corners) {
-    mesh.uvs = std::move(cornerUvs);
-  } else if (vertexUvs.size() == mesh.positions.size() && !vertexUvs.empty()) {
-    mesh.uvs.resize(corners);
-    for (size_t c = 0; c < corners; ++c) mesh.uvs[c] = vertexUvs[mesh.triangles[c / 3][c % 3]];
-  }
-  if (vertexNormals.size() == mesh.positions.size() && !vertexNormals.empty()) {
-    mesh.normals.resize(corners);
-    for (size_t c = 0; c < corners; ++c) {
-      const Eigen::Vector3f n = vertexNormals[mesh.triangles[c / 3][c % 3]];
-      if (!n.allFinite()) throw Error(path.string() + ": a normal is NaN or infinite");
-      mesh.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh, c / 3);
+
+  // Per-corner UVs (per-face texcoords, else per-vertex UVs), normals and materials.
+  Mesh finish() && {
+    const size_t corners = 3 * mesh_.triangles.size();
+    if (haveCornerUvs_ && !cornerUvs_.empty() && cornerUvs_.size() == corners) {
+      mesh_.uvs = std::move(cornerUvs_);
+    } else if (vertexUvs_.size() == mesh_.positions.size() && !vertexUvs_.empty()) {
+      mesh_.uvs.resize(corners);
+      for (size_t c = 0; c < corners; ++c) mesh_.uvs[c] = vertexUvs_[mesh_.triangles[c / 3][c % 3]];
     }
-  }
-  if (!mesh.faceMaterials.empty()) {
-    if (mesh.faceMaterials.size() != mesh.triangles.size()) {
-      mesh.faceMaterials.clear();
-    } else {
-      uint32_t maxId = 0;
-      for (uint32_t m : mesh.faceMaterials) maxId = std::max(maxId, m);
-      mesh.materials.resize(maxId + 1);
-      for (Material& m : mesh.materials) {
+    if (vertexNormals_.size() == mesh_.positions.size() && !vertexNormals_.empty()) {
+      mesh_.normals.resize(corners);
+      for (size_t c = 0; c < corners; ++c) {
+        const Eigen::Vector3f n = vertexNormals_[mesh_.triangles[c / 3][c % 3]];
+        if (!n.allFinite()) throw Error(path_.string() + ": a normal is NaN or infinite");
+        mesh_.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh_, c / 3);
+      }
+    }
+    if (mesh_.faceMaterials.size() != mesh_.triangles.size()) {
+      mesh_.faceMaterials.clear();
+    } else if (!mesh_.faceMaterials.empty()) {
+      mesh_.materials.resize(*std::max_element(mesh_.faceMaterials.begin(), mesh_.faceMaterials.end()) + 1);
+      for (Material& m : mesh_.materials) {
         m.metallicFactor = 0.0f;
         m.roughnessFactor = 0.8f;
       }
     }
+    return std::move(mesh_);
   }
-  return mesh;
+
+private:
+  // Every item takes at least one byte (binary) or two (ASCII: digit and separator): a count
+  // larger than the data left is a corrupt header, refused before any allocation.
+  void checkCount(const Element& element) const {
+    size_t minItem = 0;
+    for (const Property& p : element.properties) minItem += p.list ? scalarSize(p.countType) : scalarSize(p.type);
+    if (encoding_ == Encoding::Ascii) minItem = 2 * element.properties.size();
+    if (minItem > 0 && element.count > body_.remaining() / minItem)
+      throw Error(path_.string() + ": PLY element '" + element.name + "' count " + std::to_string(element.count) +
+                  " exceeds the file's data");
+  }
+
+  // A list property; faces' vertex indices and texcoords go into the mesh. Returns its length.
+  double readList(const Element& element, const Property& prop, bool isFace, uint64_t item) {
+    const double countValue = body_.read(prop.countType);
+    if (!(countValue >= 0) || countValue > 1e6 || countValue != std::floor(countValue))
+      throw Error(path_.string() + ": bad list length in PLY element '" + element.name + "'");
+    const size_t count = size_t(countValue);
+    if (encoding_ != Encoding::Ascii && count * scalarSize(prop.type) > body_.remaining())
+      throw Error(path_.string() + ": truncated PLY data");
+    list_.resize(count);
+    for (double& v : list_) v = body_.read(prop.type);
+    if (isFace && (prop.name == "vertex_indices" || prop.name == "vertex_index")) addFace(item);
+    if (isFace && prop.name == "texcoord") addTexcoords();
+    return double(count);
+  }
+
+  void addFace(uint64_t item) {
+    if (list_.size() < 3) throw Error(path_.string() + ": PLY face " + std::to_string(item) + " has fewer than 3 vertices");
+    facePositions_.clear();
+    for (double idx : list_) {
+      if (!(idx >= 0) || idx >= double(mesh_.positions.size()))
+        throw Error(path_.string() + ": PLY face " + std::to_string(item) + " uses vertex " +
+                    std::to_string((long long)idx) + " but there are " + std::to_string(mesh_.positions.size()) +
+                    " vertices");
+      facePositions_.push_back(mesh_.positions[size_t(idx)]);
+    }
+    faceCorners_ = triangulatePolygon(facePositions_);
+    for (const auto& tri : faceCorners_)
+      mesh_.triangles.push_back({uint32_t(list_[tri[0]]), uint32_t(list_[tri[1]]), uint32_t(list_[tri[2]])});
+  }
+
+  // Triangulated the same way as the vertex indices (which PLY lists first).
+  void addTexcoords() {
+    if (list_.size() % 2 != 0) throw Error(path_.string() + ": PLY face texcoord list has an odd length");
+    if (list_.size() / 2 == facePositions_.size())
+      for (const auto& tri : faceCorners_)
+        for (uint32_t c : tri) cornerUvs_.emplace_back(float(list_[2 * c]), float(list_[2 * c + 1]));
+  }
+
+  void addMaterial(double m) {
+    if (!(m >= 0) || m > 65535) throw Error(path_.string() + ": bad PLY material_index");
+    mesh_.faceMaterials.insert(mesh_.faceMaterials.end(), mesh_.triangles.size() - mesh_.faceMaterials.size(), uint32_t(m));
+  }
+
+  const fs::path& path_;
+  BodyReader& body_;
+  Encoding encoding_;
+  Mesh mesh_;
+  std::vector<Eigen::Vector2f> vertexUvs_, cornerUvs_;
+  std::vector<Eigen::Vector3f> vertexNormals_;
+  bool haveCornerUvs_ = true;
+  std::vector<double> values_, list_;               // the current item's values, and its current list
+  std::vector<Eigen::Vector3f> facePositions_;       // the current face's corners
+  std::vector<std::array<uint32_t, 3>> faceCorners_; // and its triangulation
+};
+
+} // namespace
+
+Mesh readPly(const fs::path& path) {
+  const std::vector<uint8_t> bytes = readFileBytes(path);
+  const Header header = readHeader(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  BodyReader body(path, bytes.data() + std::min(header.bodyStart, bytes.size()), bytes.data() + bytes.size(), header.encoding);
+  MeshBuilder builder(path, body, header.encoding);
+  for (const Element& element : header.elements) builder.read(element);
+  return std::move(builder).finish();
 }
 
 void writePly(const Mesh& mesh, const fs::path& tmp, bool binary) {
