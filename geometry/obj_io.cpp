@@ -158,130 +158,152 @@ struct CornerRef {
   long long v = 0, vt = 0, vn = 0;
 };
 
+// An OBJ file's statements into a mesh: v, vt, vn, f (polygons triangulated), mtllib, usemtl;
+// o, g, s, l, p and the rest carry nothing texfab keeps.
+class ObjBuilder {
+public:
+  ObjBuilder(const fs::path& path, const Context& ctx) : path_(path), textures_{ctx, {}} {}
+
+  void statement(std::string_view line, const std::vector<std::string_view>& words, size_t lineNumber) {
+    line_ = lineNumber;
+    const std::string_view key = words[0];
+    auto number = [&](size_t i) {
+      float f = 0;
+      if (i >= words.size() || !parseFloat(words[i], f)) throw bad("expected a number in '" + std::string(key) + "' statement");
+      return f;
+    };
+    if (key == "v") mesh_.positions.emplace_back(number(1), number(2), number(3));
+    else if (key == "vt") vts_.emplace_back(number(1), words.size() > 2 ? number(2) : 0.0f);
+    else if (key == "vn") vns_.emplace_back(number(1), number(2), number(3));
+    else if (key == "f") face(words);
+    else if (key == "mtllib") materialLibraries(line, words);
+    else if (key == "usemtl") useMaterial(words.size() > 1 ? std::string(words[1]) : std::string());
+  }
+
+  Mesh finish() && {
+    mesh_.triangles.resize(corners_.size() / 3);
+    bool anyVt = false, anyVn = false;
+    for (const CornerRef& c : corners_) {
+      anyVt |= c.vt != 0;
+      anyVn |= c.vn != 0;
+    }
+    for (size_t t = 0; t < mesh_.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) mesh_.triangles[t][size_t(k)] = uint32_t(corners_[3 * t + size_t(k)].v - 1);
+    if (anyVt) {
+      mesh_.uvs.resize(corners_.size(), Eigen::Vector2f::Zero());
+      for (size_t c = 0; c < corners_.size(); ++c)
+        if (corners_[c].vt) mesh_.uvs[c] = vts_[size_t(corners_[c].vt - 1)];
+    }
+    if (anyVn) {
+      mesh_.normals.resize(corners_.size());
+      for (size_t c = 0; c < corners_.size(); ++c) {
+        Eigen::Vector3f n = corners_[c].vn ? vns_[size_t(corners_[c].vn - 1)] : faceNormal(mesh_, c / 3);
+        if (!n.allFinite()) throw Error(path_.string() + ": a normal is NaN or infinite");
+        mesh_.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh_, c / 3);
+      }
+    }
+    if (mesh_.materials.empty() || !anyMaterialUsed_) mesh_.faceMaterials.clear();
+    return std::move(mesh_);
+  }
+
+private:
+  Error bad(const std::string& what) const { return Error(lineError(path_, line_, what)); }
+
+  // "v", "v/vt", "v//vn" or "v/vt/vn"; negative indices count back from the end of the lists so far.
+  CornerRef corner(std::string_view word) const {
+    CornerRef ref;
+    std::string_view w = word;
+    long long* slots[3] = {&ref.v, &ref.vt, &ref.vn};
+    for (int s = 0; s < 3 && !w.empty(); ++s) {
+      const size_t slash = w.find('/');
+      const std::string_view part = w.substr(0, slash);
+      if (!part.empty() && !parseInt(part, *slots[s])) throw bad("bad face index '" + std::string(word) + "'");
+      if (slash == std::string_view::npos) break;
+      w = w.substr(slash + 1);
+    }
+    auto fix = [&](long long& idx, size_t count, const char* what) {
+      if (idx < 0) idx += (long long)count + 1;
+      else if (idx == 0 && slots[0] == &idx) throw bad("face index 0 (OBJ indices start at 1)");
+      if (idx < 0 || idx > (long long)count)
+        throw bad(std::string(what) + " index " + std::to_string(idx) + " out of range (" + std::to_string(count) + " defined)");
+    };
+    fix(ref.v, mesh_.positions.size(), "vertex");
+    if (ref.v == 0) throw bad("face corner without a vertex index");
+    if (ref.vt != 0) fix(ref.vt, vts_.size(), "texture coordinate");
+    if (ref.vn != 0) fix(ref.vn, vns_.size(), "normal");
+    return ref;
+  }
+
+  void face(const std::vector<std::string_view>& words) {
+    polygon_.clear();
+    for (size_t i = 1; i < words.size(); ++i) polygon_.push_back(corner(words[i]));
+    if (polygon_.size() < 3) throw bad("face with fewer than 3 corners");
+    if (polygon_.size() == 3) {
+      corners_.insert(corners_.end(), polygon_.begin(), polygon_.end());
+      mesh_.faceMaterials.push_back(material_);
+      return;
+    }
+    polygonPositions_.clear();
+    for (const CornerRef& r : polygon_) polygonPositions_.push_back(mesh_.positions[size_t(r.v - 1)]);
+    for (const auto& tri : triangulatePolygon(polygonPositions_)) {
+      for (uint32_t k : tri) corners_.push_back(polygon_[k]);
+      mesh_.faceMaterials.push_back(material_);
+    }
+  }
+
+  // A name may contain spaces; several libraries may be listed, but that is rare: the whole rest
+  // of the line first, then each word.
+  void materialLibraries(std::string_view line, const std::vector<std::string_view>& words) {
+    if (words.size() < 2) return;
+    const std::string rest(line.substr(size_t(words[1].data() - line.data())));
+    if (words.size() == 2 || fs::exists(path_.parent_path() / rest)) {
+      readMtl(path_, words.size() == 2 ? std::string(words[1]) : rest, mesh_.materials, byName_, textures_);
+    } else {
+      for (size_t i = 1; i < words.size(); ++i) readMtl(path_, std::string(words[i]), mesh_.materials, byName_, textures_);
+    }
+  }
+
+  void useMaterial(const std::string& name) {
+    if (!byName_.count(name)) {
+      // Unknown material: a plain grey one (many exporters reference materials they did not write).
+      Material m;
+      m.name = name;
+      m.metallicFactor = 0.0f;
+      m.roughnessFactor = 0.8f;
+      m.baseColorFactor = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);
+      byName_[name] = uint32_t(mesh_.materials.size());
+      mesh_.materials.push_back(std::move(m));
+    }
+    material_ = byName_[name];
+    anyMaterialUsed_ = true;
+  }
+
+  const fs::path& path_;
+  size_t line_ = 0;
+  Mesh mesh_;
+  std::vector<Eigen::Vector2f> vts_;
+  std::vector<Eigen::Vector3f> vns_;
+  std::vector<CornerRef> corners_;  // 3 per triangle
+  std::map<std::string, uint32_t> byName_;
+  TextureCache textures_;
+  uint32_t material_ = 0;
+  bool anyMaterialUsed_ = false;
+  std::vector<CornerRef> polygon_;                // the current face
+  std::vector<Eigen::Vector3f> polygonPositions_;
+};
+
 } // namespace
 
 Mesh readObj(const fs::path& path, const Context& ctx) {
   const std::vector<uint8_t> bytes = readFileBytes(path);
   TextCursor cursor(reinterpret_cast<const char*>(bytes.data()), reinterpret_cast<const char*>(bytes.data() + bytes.size()));
-  Mesh mesh;
-  std::vector<Eigen::Vector2f> vts;
-  std::vector<Eigen::Vector3f> vns;
-  std::vector<CornerRef> corners;            // 3 per triangle
-  std::map<std::string, uint32_t> byName;
-  TextureCache textures{ctx, {}};
-  uint32_t currentMaterial = 0;
-  bool anyMaterialUsed = false;
-  std::vector<CornerRef> polygon;
-  std::vector<Eigen::Vector3f> polygonPositions;
+  ObjBuilder builder(path, ctx);
   while (!cursor.atEnd()) {
     const std::string_view line = cursor.nextLine();
     const auto words = splitWords(line);
-    if (words.empty() || words[0][0] == '#') continue;
-    const std::string_view key = words[0];
-    auto number = [&](size_t i) {
-      float f = 0;
-      if (i >= words.size() || !parseFloat(words[i], f))
-        throw Error(lineError(path, cursor.lineNumber(), "expected a number in '" + std::string(key) + "' statement"));
-      return f;
-    };
-    if (key == "v") {
-      mesh.positions.emplace_back(number(1), number(2), number(3));
-    } else if (key == "vt") {
-      vts.emplace_back(number(1), words.size() > 2 ? number(2) : 0.0f);
-    } else if (key == "vn") {
-      vns.emplace_back(number(1), number(2), number(3));
-    } else if (key == "f") {
-      polygon.clear();
-      for (size_t i = 1; i < words.size(); ++i) {
-        CornerRef ref;
-        std::string_view w = words[i];
-        long long* slots[3] = {&ref.v, &ref.vt, &ref.vn};
-        for (int s = 0; s < 3 && !w.empty(); ++s) {
-          const size_t slash = w.find('/');
-          const std::string_view part = w.substr(0, slash);
-          if (!part.empty() && !parseInt(part, *slots[s]))
-            throw Error(lineError(path, cursor.lineNumber(), "bad face index '" + std::string(words[i]) + "'"));
-          if (slash == std::string_view::npos) break;
-          w = w.substr(slash + 1);
-        }
-        // Negative indices count back from the end of the lists so far.
-        auto fix = [&](long long& idx, size_t count, const char* what) {
-          if (idx < 0) idx += (long long)count + 1;
-          else if (idx == 0 && slots[0] == &idx)
-            throw Error(lineError(path, cursor.lineNumber(), "face index 0 (OBJ indices start at 1)"));
-          if (idx < 0 || idx > (long long)count)
-            throw Error(lineError(path, cursor.lineNumber(), std::string(what) + " index " + std::to_string(idx) +
-                                                                 " out of range (" + std::to_string(count) + " defined)"));
-        };
-        fix(ref.v, mesh.positions.size(), "vertex");
-        if (ref.v == 0) throw Error(lineError(path, cursor.lineNumber(), "face corner without a vertex index"));
-        if (ref.vt != 0) fix(ref.vt, vts.size(), "texture coordinate");
-        if (ref.vn != 0) fix(ref.vn, vns.size(), "normal");
-        polygon.push_back(ref);
-      }
-      if (polygon.size() < 3) throw Error(lineError(path, cursor.lineNumber(), "face with fewer than 3 corners"));
-      if (polygon.size() == 3) {
-        corners.insert(corners.end(), polygon.begin(), polygon.end());
-        mesh.faceMaterials.push_back(currentMaterial);
-      } else {
-        polygonPositions.clear();
-        for (const CornerRef& r : polygon) polygonPositions.push_back(mesh.positions[size_t(r.v - 1)]);
-        for (const auto& tri : triangulatePolygon(polygonPositions)) {
-          for (uint32_t k : tri) corners.push_back(polygon[k]);
-          mesh.faceMaterials.push_back(currentMaterial);
-        }
-      }
-    } else if (key == "mtllib") {
-      // A name may contain spaces; several libraries may be listed, but that is rare: try the whole
-      // rest of the line first, then each word.
-      if (words.size() < 2) continue;
-      const std::string rest(line.substr(size_t(words[1].data() - line.data())));
-      if (words.size() == 2 || fs::exists(path.parent_path() / rest)) {
-        readMtl(path, words.size() == 2 ? std::string(words[1]) : rest, mesh.materials, byName, textures);
-      } else {
-        for (size_t i = 1; i < words.size(); ++i) readMtl(path, std::string(words[i]), mesh.materials, byName, textures);
-      }
-    } else if (key == "usemtl") {
-      const std::string name = words.size() > 1 ? std::string(words[1]) : std::string();
-      const auto it = byName.find(name);
-      if (it == byName.end()) {
-        // Unknown material: a plain grey one (many exporters reference materials they did not write).
-        Material m;
-        m.name = name;
-        m.metallicFactor = 0.0f;
-        m.roughnessFactor = 0.8f;
-        m.baseColorFactor = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);
-        byName[name] = uint32_t(mesh.materials.size());
-        mesh.materials.push_back(std::move(m));
-      }
-      currentMaterial = byName[name];
-      anyMaterialUsed = true;
-    }
-    // o, g, s, l, p and other statements carry nothing texfab keeps.
+    if (!words.empty() && words[0][0] != '#') builder.statement(line, words, cursor.lineNumber());
   }
-  mesh.triangles.resize(corners.size() / 3);
-  bool anyVt = false, anyVn = false;
-  for (const CornerRef& c : corners) {
-    anyVt |= c.vt != 0;
-    anyVn |= c.vn != 0;
-  }
-  for (size_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) mesh.triangles[t][size_t(k)] = uint32_t(corners[3 * t + size_t(k)].v - 1);
-  if (anyVt) {
-    mesh.uvs.resize(corners.size(), Eigen::Vector2f::Zero());
-    for (size_t c = 0; c < corners.size(); ++c)
-      if (corners[c].vt) mesh.uvs[c] = vts[size_t(corners[c].vt - 1)];
-  }
-  if (anyVn) {
-    mesh.normals.resize(corners.size());
-    for (size_t c = 0; c < corners.size(); ++c) {
-      Eigen::Vector3f n = corners[c].vn ? vns[size_t(corners[c].vn - 1)] : faceNormal(mesh, c / 3);
-      if (!n.allFinite()) throw Error(path.string() + ": a normal is NaN or infinite");
-      mesh.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh, c / 3);
-    }
-  }
-  if (mesh.materials.empty() || !anyMaterialUsed) mesh.faceMaterials.clear();
-  return mesh;
+  return std::move(builder).finish();
 }
 
 namespace {
