@@ -24,59 +24,74 @@ void atlasBarycentrics(const Atlas& atlas, uint32_t t, const Eigen::Vector2d& p,
   b2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
 }
 
-AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const Context& ctx) {
-  const int W = atlas.width, H = atlas.height;
-  AtlasFields fields;
-  fields.samples = TexelField<SurfaceSample>(W, H);
-  fields.position = TexelField<Float3>(W, H);
-  fields.normal = TexelField<Float3>(W, H);
-  // Vertex normals when the mesh has none.
-  std::vector<Eigen::Vector3f> vertexNormal;
-  if (!mesh.hasNormals()) {
-    vertexNormal.assign(mesh.vertexCount(), Eigen::Vector3f::Zero());
+namespace {
+
+// Position and smooth normal at barycentrics of a triangle; vertex normals (area-weighted) when
+// the mesh has none.
+class SurfaceEvaluator {
+public:
+  explicit SurfaceEvaluator(const geometry::Mesh& mesh) : mesh_(mesh) {
+    if (mesh.hasNormals()) return;
+    vertexNormal_.assign(mesh.vertexCount(), Eigen::Vector3f::Zero());
     for (size_t t = 0; t < mesh.triangleCount(); ++t) {
       const Eigen::Vector3f n = (mesh.corner(t, 1) - mesh.corner(t, 0)).cross(mesh.corner(t, 2) - mesh.corner(t, 0));
-      for (int k = 0; k < 3; ++k) vertexNormal[mesh.triangles[t][size_t(k)]] += n;
+      for (int k = 0; k < 3; ++k) vertexNormal_[mesh.triangles[t][size_t(k)]] += n;
     }
-    for (auto& n : vertexNormal)
+    for (auto& n : vertexNormal_)
       if (n.squaredNorm() > 0) n.normalize();
   }
-  auto cornerNormal = [&](size_t t, int k) -> Eigen::Vector3f {
-    return mesh.hasNormals() ? mesh.normals[3 * t + size_t(k)] : vertexNormal[mesh.triangles[t][size_t(k)]];
-  };
-  auto evaluate = [&](uint32_t t, float b1, float b2, Float3& pos, Float3& nrm) {
+
+  void operator()(uint32_t t, float b1, float b2, Float3& pos, Float3& nrm) const {
     const float b0 = 1 - b1 - b2;
-    const Eigen::Vector3f p = b0 * mesh.corner(t, 0) + b1 * mesh.corner(t, 1) + b2 * mesh.corner(t, 2);
+    const Eigen::Vector3f p = b0 * mesh_.corner(t, 0) + b1 * mesh_.corner(t, 1) + b2 * mesh_.corner(t, 2);
     Eigen::Vector3f n = b0 * cornerNormal(t, 0) + b1 * cornerNormal(t, 1) + b2 * cornerNormal(t, 2);
     if (n.squaredNorm() > 0) n.normalize();
     pos = {p.x(), p.y(), p.z()};
     nrm = {n.x(), n.y(), n.z()};
-  };
-  // Triangles in chart order; the first to cover a texel centre owns it. Bands of rows are
-  // rasterized in parallel, each over every triangle in that order: the same result on any
-  // number of threads.
-  struct Triangle {
-    uint32_t t;
-    int32_t chart;
-    int x0, x1, y0, y1;  // texel bounds, inclusive
-  };
-  std::vector<Triangle> triangles;
+  }
+
+private:
+  Eigen::Vector3f cornerNormal(size_t t, int k) const {
+    return mesh_.hasNormals() ? mesh_.normals[3 * t + size_t(k)] : vertexNormal_[mesh_.triangles[t][size_t(k)]];
+  }
+  const geometry::Mesh& mesh_;
+  std::vector<Eigen::Vector3f> vertexNormal_;
+};
+
+struct TexelTriangle {
+  uint32_t t;
+  int32_t chart;
+  int x0, x1, y0, y1;  // texel bounds, inclusive
+};
+
+// The charts' triangles in chart order, with the texels their bounding boxes cover.
+std::vector<TexelTriangle> texelTriangles(const Atlas& atlas) {
+  std::vector<TexelTriangle> triangles;
   for (size_t c = 0; c < atlas.charts.size(); ++c)
     for (uint32_t t : atlas.charts[c].faces) {
       Eigen::Vector2d p[3];
       for (int k = 0; k < 3; ++k) p[k] = atlas.texelUvs[3 * size_t(t) + size_t(k)].cast<double>();
       triangles.push_back({t, int32_t(c), std::max(0, int(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}) - 0.5))),
-                           std::min(W - 1, int(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}) - 0.5))),
+                           std::min(atlas.width - 1, int(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}) - 0.5))),
                            std::max(0, int(std::floor(std::min({p[0].y(), p[1].y(), p[2].y()}) - 0.5))),
-                           std::min(H - 1, int(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}) - 0.5)))});
+                           std::min(atlas.height - 1, int(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}) - 0.5)))});
     }
+  return triangles;
+}
+
+// The texels whose centres lie in a chart triangle; the first triangle in chart order to cover a
+// centre owns it. Bands of rows run in parallel, each over every triangle in that order: the
+// same result on any number of threads.
+void rasterizeCharts(const geometry::Mesh& mesh, const Atlas& atlas, AtlasFields& fields, const Context& ctx) {
+  const SurfaceEvaluator evaluate(mesh);
+  const std::vector<TexelTriangle> triangles = texelTriangles(atlas);
   constexpr int kBand = 32;
-  const int bands = (H + kBand - 1) / kBand;
+  const int H = atlas.height, bands = (H + kBand - 1) / kBand;
   std::vector<size_t> chartTexels(size_t(bands), 0), overlapping(size_t(bands), 0);
   parallelFor(0, bands, ctx, [&](int b0, int b1) {
     for (int band = b0; band < b1; ++band) {
       const int rowBegin = band * kBand, rowEnd = std::min(H, rowBegin + kBand);
-      for (const Triangle& tri : triangles) {
+      for (const TexelTriangle& tri : triangles) {
         if (tri.y1 < rowBegin || tri.y0 >= rowEnd) continue;
         for (int y = std::max(tri.y0, rowBegin); y <= std::min(tri.y1, rowEnd - 1); ++y)
           for (int x = tri.x0; x <= tri.x1; ++x) {
@@ -101,7 +116,12 @@ AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const
     fields.chartTexels += chartTexels[size_t(band)];
     fields.overlappingTexels += overlapping[size_t(band)];
   }
-  // Gutter fill: nearest chart texel by two-pass propagation of source coordinates.
+}
+
+// Every texel outside the charts takes the fields of the nearest chart texel (Danielsson's
+// two-pass propagation of source coordinates), keeping chart = -1.
+void fillGutters(AtlasFields& fields) {
+  const int W = fields.samples.width, H = fields.samples.height;
   std::vector<int32_t> srcX(size_t(W) * size_t(H), -1), srcY(size_t(W) * size_t(H), -1);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x)
@@ -135,6 +155,17 @@ AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const
       fields.position.values[i] = fields.position.values[j];
       fields.normal.values[i] = fields.normal.values[j];
     }
+}
+
+} // namespace
+
+AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const Context& ctx) {
+  AtlasFields fields;
+  fields.samples = TexelField<SurfaceSample>(atlas.width, atlas.height);
+  fields.position = TexelField<Float3>(atlas.width, atlas.height);
+  fields.normal = TexelField<Float3>(atlas.width, atlas.height);
+  rasterizeCharts(mesh, atlas, fields, ctx);
+  fillGutters(fields);
   return fields;
 }
 

@@ -27,7 +27,7 @@ struct AtlasFields {
 };
 
 /// Rasterizes the packed atlas (after packCharts). Normals come from mesh.normals when present,
-/// else from area-weighted vertex normals. Deterministic; ctx.threads only spreads the gutter fill.
+/// else from area-weighted vertex normals. Deterministic on any number of threads (ctx.threads).
 AtlasFields rasterizeAtlas(const geometry::Mesh& mesh, const Atlas& atlas, const Context& ctx = {});
 
 /// The triangle id and barycentrics (b1, b2) of atlas point p (texels) in triangle t (extrapolated
