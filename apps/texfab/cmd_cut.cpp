@@ -25,7 +25,7 @@ Command addCutCommand(CLI::App& root) {
             }
           },
           "A cutting plane: a point and a normal (model units; the normal need not be unit). Repeat for more "
-          "planes: each cuts every piece made so far")
+          "planes: the pieces are the model within each cell of all the planes")
       ->type_name("PX,PY,PZ,NX,NY,NZ")
       ->allow_extra_args(false)
       ->required();
