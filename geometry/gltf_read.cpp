@@ -18,6 +18,7 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <optional>
 
 namespace texfab::geometry::detail {
 namespace fs = std::filesystem;
@@ -511,43 +512,40 @@ bool supportedExtension(const std::string& name) {
          name == "EXT_texture_webp";
 }
 
-} // namespace
+// A GLB's JSON text and binary chunk.
+struct GlbChunks {
+  std::string json;
+  std::optional<std::vector<uint8_t>> bin;
+};
 
-Mesh readGltf(const fs::path& path) {
-  const std::string name = path.string();
-  const std::vector<uint8_t> bytes = readFileBytes(path, uint64_t(2) << 30);
-  const bool glb = bytes.size() >= 4 && le32(bytes.data()) == kGlbMagic;
-  std::string jsonText;
-  std::vector<uint8_t> bin;
-  bool hasBin = false;
-  if (glb) {
-    if (bytes.size() < 20) throw Error(name + ": truncated GLB header");
-    if (le32(bytes.data() + 4) != 2) throw Error(name + ": GLB version " + std::to_string(le32(bytes.data() + 4)) + " (expected 2)");
-    const uint64_t length = le32(bytes.data() + 8);
-    if (length > bytes.size()) throw Error(name + ": truncated GLB (header says " + std::to_string(length) + " bytes, file has " +
-                                           std::to_string(bytes.size()) + ")");
-    uint64_t at = 12;
-    while (at + 8 <= length) {
-      const uint64_t chunkLength = le32(bytes.data() + at);
-      const uint32_t type = le32(bytes.data() + at + 4);
-      if (at + 8 + chunkLength > length) throw Error(name + ": GLB chunk overruns the file");
-      const uint8_t* chunk = bytes.data() + at + 8;
-      if (at == 12) {
-        if (type != kChunkJson) throw Error(name + ": GLB does not start with a JSON chunk");
-        jsonText.assign(reinterpret_cast<const char*>(chunk), chunkLength);
-      } else if (type == kChunkBin && !hasBin) {
-        bin.assign(chunk, chunk + chunkLength);
-        hasBin = true;
-      }
-      at += 8 + ((chunkLength + 3) & ~uint64_t(3));
+GlbChunks splitGlb(const std::string& name, const std::vector<uint8_t>& bytes) {
+  if (bytes.size() < 20) throw Error(name + ": truncated GLB header");
+  if (le32(bytes.data() + 4) != 2) throw Error(name + ": GLB version " + std::to_string(le32(bytes.data() + 4)) + " (expected 2)");
+  const uint64_t length = le32(bytes.data() + 8);
+  if (length > bytes.size()) throw Error(name + ": truncated GLB (header says " + std::to_string(length) + " bytes, file has " +
+                                         std::to_string(bytes.size()) + ")");
+  GlbChunks chunks;
+  uint64_t at = 12;
+  while (at + 8 <= length) {
+    const uint64_t chunkLength = le32(bytes.data() + at);
+    const uint32_t type = le32(bytes.data() + at + 4);
+    if (at + 8 + chunkLength > length) throw Error(name + ": GLB chunk overruns the file");
+    const uint8_t* chunk = bytes.data() + at + 8;
+    if (at == 12) {
+      if (type != kChunkJson) throw Error(name + ": GLB does not start with a JSON chunk");
+      chunks.json.assign(reinterpret_cast<const char*>(chunk), chunkLength);
+    } else if (type == kChunkBin && !chunks.bin) {
+      chunks.bin.emplace(chunk, chunk + chunkLength);
     }
-    if (jsonText.empty()) throw Error(name + ": GLB has no JSON chunk");
-  } else {
-    jsonText.assign(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    at += 8 + ((chunkLength + 3) & ~uint64_t(3));
   }
-  json doc = json::parse(jsonText, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) throw Error(name + ": not valid glTF JSON");
-  // Version, required extensions, references: all before tinygltf reads a byte of any buffer.
+  if (chunks.json.empty()) throw Error(name + ": GLB has no JSON chunk");
+  return chunks;
+}
+
+// Version, required extensions, references: all before tinygltf reads a byte of any buffer.
+void checkDocument(const fs::path& path, const json& doc) {
+  const std::string name = path.string();
   const json* asset = member(doc, "asset");
   const json* version = asset ? member(*asset, "version") : nullptr;
   if (!version || !version->is_string() || version->get<std::string>().rfind("2.", 0) != 0)
@@ -562,20 +560,45 @@ Mesh readGltf(const fs::path& path) {
       for (const json& item : *items)
         if (const json* uri = member(item, "uri"); uri && uri->is_string() && !isDataUri(uri->get<std::string>()))
           (void)resolveModelReference(path, uri->get<std::string>(), true);
-  json images = json::array();
-  if (const json* im = member(doc, "images")) images = *im;
+}
+
+// The document tinygltf reads: no images (decoded by texfab), and no "indices" on Draco-compressed
+// primitives (tinygltf 2.7 insists that index accessors have a buffer view, which those
+// legitimately lack: the Draco stream has them).
+std::string loaderDocument(json doc) {
   doc.erase("images");
-  // tinygltf 2.7 insists that index accessors have a buffer view, which Draco-compressed
-  // primitives legitimately lack: it gets those primitives without "indices" (the Draco stream
-  // has them).
-  json forLoader = doc;
-  if (json* meshes = forLoader.contains("meshes") ? &forLoader["meshes"] : nullptr; meshes && meshes->is_array())
+  if (json* meshes = doc.contains("meshes") ? &doc["meshes"] : nullptr; meshes && meshes->is_array())
     for (json& m : *meshes)
       if (m.is_object() && m.contains("primitives") && m["primitives"].is_array())
         for (json& p : m["primitives"])
           if (const json* ext = member(p, "extensions"); ext && member(*ext, "KHR_draco_mesh_compression")) p.erase("indices");
-  const std::string stripped = forLoader.dump();
+  return doc.dump();
+}
 
+// A GLB around `document` and the binary chunk.
+std::string packGlb(const std::string& document, const std::optional<std::vector<uint8_t>>& bin) {
+  std::string packed(12, '\0');
+  std::string jsonChunk = document;
+  while (jsonChunk.size() % 4) jsonChunk += ' ';
+  auto put32 = [&](uint32_t v) {
+    for (int i = 0; i < 4; ++i) packed += char((v >> (8 * i)) & 0xff);
+  };
+  put32(uint32_t(jsonChunk.size()));
+  put32(kChunkJson);
+  packed += jsonChunk;
+  if (bin) {
+    put32(uint32_t(bin->size()));
+    put32(kChunkBin);
+    packed.append(reinterpret_cast<const char*>(bin->data()), bin->size());
+    while (packed.size() % 4) packed += '\0';
+  }
+  const uint32_t header[3] = {kGlbMagic, 2, uint32_t(packed.size())};
+  std::memcpy(packed.data(), header, 12);
+  return packed;
+}
+
+tinygltf::Model loadModel(const fs::path& path, const std::string& document, bool glb,
+                          const std::optional<std::vector<uint8_t>>& bin) {
   tinygltf::TinyGLTF loader;
   FsContext context{path.parent_path().empty() ? fs::path(".") : path.parent_path()};
   loader.SetFsCallbacks(tinygltf::FsCallbacks{&fsFileExists, &fsExpand, &fsRead, &fsWrite, &context});
@@ -585,31 +608,30 @@ Mesh readGltf(const fs::path& path) {
   std::string err, warn;
   bool ok = false;
   if (glb) {
-    // Re-pack the GLB around the document without images.
-    std::string packed(12, '\0');
-    std::string jsonChunk = stripped;
-    while (jsonChunk.size() % 4) jsonChunk += ' ';
-    auto put32 = [&](uint32_t v) {
-      for (int i = 0; i < 4; ++i) packed += char((v >> (8 * i)) & 0xff);
-    };
-    put32(uint32_t(jsonChunk.size()));
-    put32(kChunkJson);
-    packed += jsonChunk;
-    if (hasBin) {
-      put32(uint32_t(bin.size()));
-      put32(kChunkBin);
-      packed.append(reinterpret_cast<const char*>(bin.data()), bin.size());
-      while (packed.size() % 4) packed += '\0';
-    }
-    const uint32_t header[3] = {kGlbMagic, 2, uint32_t(packed.size())};
-    std::memcpy(packed.data(), header, 12);
+    const std::string packed = packGlb(document, bin);
     ok = loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(packed.data()),
                                      uint32_t(packed.size()), context.folder.string());
   } else {
-    ok = loader.LoadASCIIFromString(&model, &err, &warn, stripped.c_str(), uint32_t(stripped.size()), context.folder.string());
+    ok = loader.LoadASCIIFromString(&model, &err, &warn, document.c_str(), uint32_t(document.size()), context.folder.string());
   }
-  if (!ok) throw Error(name + ": " + firstLine(err));
-  GltfReader reader(path, model, doc, images);
+  if (!ok) throw Error(path.string() + ": " + firstLine(err));
+  return model;
+}
+
+} // namespace
+
+Mesh readGltf(const fs::path& path) {
+  const std::vector<uint8_t> bytes = readFileBytes(path, uint64_t(2) << 30);
+  const bool glb = bytes.size() >= 4 && le32(bytes.data()) == kGlbMagic;
+  const GlbChunks chunks = glb ? splitGlb(path.string(), bytes)
+                         : GlbChunks{std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), std::nullopt};
+  const json doc = json::parse(chunks.json, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) throw Error(path.string() + ": not valid glTF JSON");
+  checkDocument(path, doc);
+  const tinygltf::Model model = loadModel(path, loaderDocument(doc), glb, chunks.bin);
+  const json noImages = json::array();
+  const json* images = member(doc, "images");
+  GltfReader reader(path, model, doc, images ? *images : noImages);
   return reader.read();
 }
 
