@@ -472,6 +472,102 @@ uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, con
   return hash.h;
 }
 
+namespace {
+
+// The level's 3-D candidates (crossbar triples, §4.1, through the coherence filter, §4.2), found
+// per distinct exemplar relative to itself and stored with absolute axes for every exemplar that
+// shares them (all three when shared); the finest level's figures go to `stats`.
+void candidateTriples(SolidLevel& level, const std::array<Exemplar8, 3>& ex, bool shared,
+                      const SolidAnalysisOptions& options, bool finest, SolidAnalysisStats& stats, const Context& ctx) {
+  const int w = ex[0].w, h = ex[0].h, n = w * h, distinct = shared ? 1 : 3;
+  auto src = [&](int e) { return shared ? 0 : e; };
+  std::vector<Strips> strips(static_cast<size_t>(distinct));
+  for (int e = 0; e < distinct; ++e) strips[size_t(e)] = stripsOf(ex[size_t(e)], level.spacing);
+  for (int e = 0; e < distinct; ++e) {
+    const Strips& next = strips[size_t(src((e + 1) % 3))];
+    const Strips& prev = strips[size_t(src((e + 2) % 3))];
+    std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, options, ctx);
+    if (finest) {
+      double kept = 0, best = 0;
+      for (const auto& s : sets) {
+        kept += double(s.size());
+        best += s.empty() ? 0.0 : double(s[0].cb);
+      }
+      stats.meanCandidatesBeforeFilter += kept / n / distinct;
+      stats.meanBestCrossbarError += best / n / distinct;
+    }
+    coherenceFilter(sets, w, h, level.spacing, options.coherenceIterations, ctx);
+    if (finest) {
+      double kept = 0;
+      for (const auto& s : sets) kept += double(s.size());
+      stats.meanCandidatesAfterFilter += kept / n / distinct;
+    }
+    for (int target = 0; target < 3; ++target) {
+      if (src(target) != e) continue;
+      std::vector<uint32_t>& out = level.triples[size_t(target)];
+      out.resize(size_t(n) * kSolidMaxCandidates * 3);
+      auto pack = [&](uint32_t index) { return packCoord(index % uint32_t(w), index / uint32_t(w)); };
+      for (int p = 0; p < n; ++p) {
+        const auto& s = sets[size_t(p)];
+        for (int k = 0; k < kSolidMaxCandidates; ++k) {
+          const Triple& t = s[size_t(k) < s.size() ? size_t(k) : 0];
+          uint32_t* slot = &out[(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3];
+          slot[target] = pack(uint32_t(p));
+          slot[(target + 1) % 3] = pack(t.q);
+          slot[(target + 2) % 3] = pack(t.r);
+        }
+      }
+    }
+  }
+}
+
+// PCA of 2-D neighborhoods (all pixels of the distinct exemplars) and of 3-neighborhoods (the two
+// best candidates of every pixel of every exemplar, at most 8192 samples), §6.2.
+void fitProjections(SolidLevel& level, const std::array<Exemplar8, 3>& ex, bool shared) {
+  const int w = ex[0].w, n = w * ex[0].h, distinct = shared ? 1 : 3;
+  std::vector<int32_t> samples;
+  for (int e = 0; e < distinct; ++e)
+    for (int p = 0; p < n; ++p) {
+      samples.resize(samples.size() + 75);
+      exemplarNeighborhood2d(ex[size_t(e)], p % w, p / w, level.spacing, &samples[samples.size() - 75]);
+    }
+  level.projection2d = fitProjection(samples, 75, kSolid2dDims);
+  samples.clear();
+  const int64_t total = int64_t(n) * 3 * 2;
+  const int64_t stride = std::max<int64_t>(1, total / 8192);
+  for (int64_t i = 0; i < total; i += stride) {
+    const int e = int(i / (int64_t(n) * 2)), p = int((i / 2) % n), k = int(i % 2);
+    samples.resize(samples.size() + kSolidCrossVoxels * 3);
+    candidateNeighborhood(ex, &level.triples[size_t(e)][(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3], level.spacing,
+                          &samples[samples.size() - kSolidCrossVoxels * 3]);
+  }
+  level.projection3d = fitProjection(samples, kSolidCrossVoxels * 3, level.dims);
+}
+
+// Every pixel's projected 2-D neighborhood and its candidates' projected 3-neighborhoods.
+void projectNeighborhoods(SolidLevel& level, const std::array<Exemplar8, 3>& ex, const Context& ctx) {
+  const int w = ex[0].w, n = w * ex[0].h;
+  for (int e = 0; e < 3; ++e) {
+    level.descriptors2d[size_t(e)].resize(size_t(n) * kSolid2dDims);
+    level.descriptors3d[size_t(e)].resize(size_t(n) * kSolidMaxCandidates * size_t(level.dims));
+  }
+  parallelFor(0, n, ctx, [&](int begin, int end) {
+    int32_t values[kSolidCrossVoxels * 3];
+    for (int p = begin; p < end; ++p)
+      for (int e = 0; e < 3; ++e) {
+        exemplarNeighborhood2d(ex[size_t(e)], p % w, p / w, level.spacing, values);
+        level.projection2d.project(values, &level.descriptors2d[size_t(e)][size_t(p) * kSolid2dDims]);
+        for (int k = 0; k < kSolidMaxCandidates; ++k) {
+          const size_t slot = size_t(p) * kSolidMaxCandidates + size_t(k);
+          candidateNeighborhood(ex, &level.triples[size_t(e)][slot * 3], level.spacing, values);
+          level.projection3d.project(values, &level.descriptors3d[size_t(e)][slot * size_t(level.dims)]);
+        }
+      }
+  }, 64);
+}
+
+} // namespace
+
 SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ezIn, const SolidAnalysisOptions& options,
                            const Context& ctx) {
   const auto started = std::chrono::steady_clock::now();
@@ -479,7 +575,7 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   validateSolidExemplars(exIn, eyIn, ezIn);
   const Image* inputs[3] = {&exIn, &eyIn, &ezIn};
   const bool shared = samePixels(exIn, eyIn) && samePixels(exIn, ezIn);
-  const int w = exIn.width, h = exIn.height, n = w * h;
+  const int w = exIn.width, h = exIn.height;
 
   SolidAnalysis a;
   a.width = w;
@@ -522,84 +618,9 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
       level.candidates2d[size_t(e)] = analyses2d[size_t(src(e))].levels[size_t(sl)].candidates;
     }
 
-    // Candidate triples, relative to their own exemplar, then stored with absolute axes.
-    std::vector<Strips> strips(static_cast<size_t>(distinct));
-    for (int e = 0; e < distinct; ++e) strips[size_t(e)] = stripsOf(ex[size_t(e)], level.spacing);
-    for (int e = 0; e < distinct; ++e) {
-      const Strips& next = strips[size_t(src((e + 1) % 3))];
-      const Strips& prev = strips[size_t(src((e + 2) % 3))];
-      std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, options, ctx);
-      if (finest) {
-        double kept = 0, best = 0;
-        for (const auto& s : sets) {
-          kept += double(s.size());
-          best += s.empty() ? 0.0 : double(s[0].cb);
-        }
-        a.stats.meanCandidatesBeforeFilter += kept / n / distinct;
-        a.stats.meanBestCrossbarError += best / n / distinct;
-      }
-      coherenceFilter(sets, w, h, level.spacing, options.coherenceIterations, ctx);
-      if (finest) {
-        double kept = 0;
-        for (const auto& s : sets) kept += double(s.size());
-        a.stats.meanCandidatesAfterFilter += kept / n / distinct;
-      }
-      // Every exemplar that shares these candidates (all three when shared) gets them, rotated.
-      for (int target = 0; target < 3; ++target) {
-        if (src(target) != e) continue;
-        std::vector<uint32_t>& out = level.triples[size_t(target)];
-        out.resize(size_t(n) * kSolidMaxCandidates * 3);
-        for (int p = 0; p < n; ++p) {
-          const auto& s = sets[size_t(p)];
-          for (int k = 0; k < kSolidMaxCandidates; ++k) {
-            const Triple& t = s[size_t(k) < s.size() ? size_t(k) : 0];
-            uint32_t* slot = &out[(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3];
-            auto pack = [&](uint32_t index) { return packCoord(index % uint32_t(w), index / uint32_t(w)); };
-            slot[target] = pack(uint32_t(p));
-            slot[(target + 1) % 3] = pack(t.q);
-            slot[(target + 2) % 3] = pack(t.r);
-          }
-        }
-      }
-    }
-
-    // PCA of 2-D neighborhoods (all pixels of the distinct exemplars) and of 3-neighborhoods
-    // (the two best candidates of every pixel of every exemplar, at most 8192 samples).
-    std::vector<int32_t> samples;
-    for (int e = 0; e < distinct; ++e)
-      for (int p = 0; p < n; ++p) {
-        samples.resize(samples.size() + 75);
-        exemplarNeighborhood2d(ex[size_t(e)], p % w, p / w, level.spacing, &samples[samples.size() - 75]);
-      }
-    level.projection2d = fitProjection(samples, 75, kSolid2dDims);
-    samples.clear();
-    const int64_t total = int64_t(n) * 3 * 2;
-    const int64_t stride = std::max<int64_t>(1, total / 8192);
-    for (int64_t i = 0; i < total; i += stride) {
-      const int e = int(i / (int64_t(n) * 2)), p = int((i / 2) % n), k = int(i % 2);
-      samples.resize(samples.size() + kSolidCrossVoxels * 3);
-      candidateNeighborhood(ex, &level.triples[size_t(e)][(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3],
-                            level.spacing, &samples[samples.size() - kSolidCrossVoxels * 3]);
-    }
-    level.projection3d = fitProjection(samples, kSolidCrossVoxels * 3, level.dims);
-
-    for (int e = 0; e < 3; ++e) {
-      level.descriptors2d[size_t(e)].resize(size_t(n) * kSolid2dDims);
-      level.descriptors3d[size_t(e)].resize(size_t(n) * kSolidMaxCandidates * size_t(level.dims));
-    }
-    parallelFor(0, n, ctx, [&](int begin, int end) {
-      int32_t values[kSolidCrossVoxels * 3];
-      for (int p = begin; p < end; ++p)
-        for (int e = 0; e < 3; ++e) {
-          exemplarNeighborhood2d(ex[size_t(e)], p % w, p / w, level.spacing, values);
-          level.projection2d.project(values, &level.descriptors2d[size_t(e)][size_t(p) * kSolid2dDims]);
-          for (int k = 0; k < kSolidMaxCandidates; ++k) {
-            const size_t slot = size_t(p) * kSolidMaxCandidates + size_t(k);
-            candidateNeighborhood(ex, &level.triples[size_t(e)][slot * 3], level.spacing, values);
-            level.projection3d.project(values, &level.descriptors3d[size_t(e)][slot * size_t(level.dims)]);
-          }
-        }
-    }, 64);
+    candidateTriples(level, ex, shared, options, finest, a.stats, ctx);
+    fitProjections(level, ex, shared);
+    projectNeighborhoods(level, ex, ctx);
     deriveTables(level, w);
   }
   a.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
