@@ -83,6 +83,43 @@ class DensitySearch {
                 const SkylinePackerOptions& packer, const Context& ctx)
       : charts_(charts), totalArea_(totalArea), rounding_(rounding), packer_(packer), ctx_(ctx) {}
 
+  /// The largest density whose pass fits W×H with mask padding `pad` (its pass in best();
+  /// density 0 if none). A coarse search on a 4× smaller grid (16× cheaper) finds the density to
+  /// within a few percent (its masks are fatter: the fine density is 0-10 % higher); calibrated by
+  /// the mask areas, one or more rounds of full-resolution pairs finish it (until 98.5 % of the
+  /// height).
+  void fit(int W, int H, int pad, int maxPasses) {
+    double start = std::sqrt(0.72 * double(W) * double(H) / totalArea_);
+    const int k = (W >= 512 && H >= 512) ? 4 : 1;
+    const int rounds = std::max(1, maxPasses / 2);
+    bool calibrated = false;
+    if (k > 1) {
+      const double coarse =
+          run(W / k, H / k, (pad + k - 1) / k, start / k, std::min(rounds, 3), std::min(rounds, 3), {0.97, 1.03}, false);
+      if (coarse > 0) {
+        start = coarse * k;
+        // Calibration: the fine masks at k times the coarse density are thinner than k² coarse
+        // masks (gutters and texel rounding are relatively smaller). At the same packing
+        // efficiency the fine pass would use k·used·ρ rows (ρ: the ratio of the mask areas); the
+        // area grows like the square of the density, which gives the fine density to try.
+        std::vector<size_t> fine(charts_.size(), 0);
+        parallelFor(0, int(charts_.size()), ctx_, [&](int b, int e) {
+          for (int i = b; i < e; ++i) fine[size_t(i)] = rasterizeChartMask(charts_[size_t(i)], start, pad, rounding_).texels();
+        });
+        const double fineTexels = double(std::accumulate(fine.begin(), fine.end(), size_t(0)));
+        if (lastMaskTexels_ > 0 && lastUsed_ > 0 && fineTexels > 0) {
+          const double rho = fineTexels / (double(k) * double(k) * double(lastMaskTexels_));
+          const double rows = double(k) * double(lastUsed_) * rho;
+          start *= std::clamp(std::sqrt(double(H) / rows), 1.0, 1.15);
+          calibrated = true;
+        }
+      }
+    }
+    if (calibrated) run(W, H, pad, start, 1, rounds, {0.99, 1.0}, true);
+    else if (k > 1) run(W, H, pad, start, std::min(rounds, 2), rounds, {1.0, 1.08}, true);
+    else run(W, H, pad, start, rounds, rounds, {0.97, 1.03}, true);
+  }
+
   /// Returns the best fitting density found (0 if none) for a w×h atlas with mask padding p; keeps
   /// its pass in best() when `keep`. The first round packs start·first[0..1]; later rounds pack the
   /// prediction ·0.99 and ·0.997 (just under it: the used height is not quite monotonic in the
@@ -131,9 +168,6 @@ class DensitySearch {
 
   Pass& best() { return best_; }
   int passes() const { return passes_; }
-  /// Used height and mask texels of the best pass of the last run().
-  int lastUsed() const { return lastUsed_; }
-  size_t lastMaskTexels() const { return lastMaskTexels_; }
 
  private:
   const std::vector<OrientedChart>& charts_;
@@ -141,46 +175,9 @@ class DensitySearch {
   SkylinePackerOptions packer_;
   const Context& ctx_;
   Pass best_;
-  int passes_ = 0, lastUsed_ = 0;
+  int passes_ = 0, lastUsed_ = 0;  // and the used height and mask texels of the last run()'s best pass
   size_t lastMaskTexels_ = 0;
 };
-
-/// The largest density whose pass fits W×H (its pass in search.best(); density 0 if none).
-/// A coarse search on a 4× smaller grid (16× cheaper) finds the density to within a few percent
-/// (its masks are fatter: the fine density is 0-10 % higher); calibrated by the mask areas, one or
-/// more rounds of full-resolution pairs finish it (until 98.5 % of the height).
-void searchDensity(DensitySearch& search, const std::vector<OrientedChart>& charts, double totalArea, int W, int H,
-                   int pad, double rounding, int maxPasses, const Context& ctx) {
-  double start = std::sqrt(0.72 * double(W) * double(H) / totalArea);
-  const int k = (W >= 512 && H >= 512) ? 4 : 1;
-  const int rounds = std::max(1, maxPasses / 2);
-  bool calibrated = false;
-  if (k > 1) {
-    const double coarse = search.run(W / k, H / k, (pad + k - 1) / k, start / k, std::min(rounds, 3),
-                                     std::min(rounds, 3), {0.97, 1.03}, false);
-    if (coarse > 0) {
-      start = coarse * k;
-      // Calibration: the fine masks at k times the coarse density are thinner than k² coarse
-      // masks (gutters and texel rounding are relatively smaller). At the same packing efficiency
-      // the fine pass would use k·used·ρ rows (ρ: the ratio of the mask areas); the area grows
-      // like the square of the density, which gives the fine density to try.
-      std::vector<size_t> fine(charts.size(), 0);
-      parallelFor(0, int(charts.size()), ctx, [&](int b, int e) {
-        for (int i = b; i < e; ++i) fine[size_t(i)] = rasterizeChartMask(charts[size_t(i)], start, pad, rounding).texels();
-      });
-      const double fineTexels = double(std::accumulate(fine.begin(), fine.end(), size_t(0)));
-      if (search.lastMaskTexels() > 0 && search.lastUsed() > 0 && fineTexels > 0) {
-        const double rho = fineTexels / (double(k) * double(k) * double(search.lastMaskTexels()));
-        const double rows = double(k) * double(search.lastUsed()) * rho;
-        start *= std::clamp(std::sqrt(double(H) / rows), 1.0, 1.15);
-        calibrated = true;
-      }
-    }
-  }
-  if (calibrated) search.run(W, H, pad, start, 1, rounds, {0.99, 1.0}, true);
-  else if (k > 1) search.run(W, H, pad, start, std::min(rounds, 2), rounds, {1.0, 1.08}, true);
-  else search.run(W, H, pad, start, rounds, rounds, {0.97, 1.03}, true);
-}
 
 /// Each chart's placement and its faces' texel coordinates from the chosen pass.
 void placeCharts(const std::vector<OrientedChart>& charts, const Pass& pass, Atlas& atlas, PackChartsReport& report) {
@@ -255,7 +252,7 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
                   std::to_string(options.texelsPerUnit) + " texels per unit");
   } else {
     DensitySearch search(charts, totalArea, rounding, packer, ctx);
-    searchDensity(search, charts, totalArea, W, H, pad, rounding, options.maxPasses, ctx);
+    search.fit(W, H, pad, options.maxPasses);
     report.passes = search.passes();
     pass = std::move(search.best());
     if (pass.density == 0)
