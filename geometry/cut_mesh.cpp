@@ -82,6 +82,8 @@ CutMeshResult cutMesh(std::span<const Mesh> solids, std::span<const CutPlane> pl
         r.intersect.corefinedTriangles += report.corefinedTriangles;
         r.intersect.keptWhole += report.keptWhole;
         break;
+      } catch (const Cancelled&) {
+        throw;
       } catch (const Error&) {
         if (attempt == 2) throw;
       }

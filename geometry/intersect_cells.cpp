@@ -426,7 +426,7 @@ private:
       if (f == SurfaceMesh::null_face()) throw Error("internal: the corefined part of the model is not a manifold");
       const auto& tri = solid_.mesh.triangles[t];
       if (CGAL::collinear(solid_.points[tri[0]], solid_.points[tri[1]], solid_.points[tri[2]]))  // corefine would not end
-        throw Error("a cut meets a triangle whose corners are collinear (earlier cuts crossing close by can leave one); "
+        throw Error("a cut meets a triangle whose corners are collinear (of the model, or left by an earlier cut); "
                     "move the cut slightly");
       solidPart_.origin[f] = int32_t(t);
     }
