@@ -120,6 +120,10 @@ class DensitySearch {
     else run(W, H, pad, start, rounds, rounds, {0.97, 1.03}, true);
   }
 
+  Pass& best() { return best_; }
+  int passes() const { return passes_; }
+
+ private:
   /// Returns the best fitting density found (0 if none) for a w×h atlas with mask padding p; keeps
   /// its pass in best() when `keep`. The first round packs start·first[0..1]; later rounds pack the
   /// prediction ·0.99 and ·0.997 (just under it: the used height is not quite monotonic in the
@@ -166,10 +170,6 @@ class DensitySearch {
     return lo;
   }
 
-  Pass& best() { return best_; }
-  int passes() const { return passes_; }
-
- private:
   const std::vector<OrientedChart>& charts_;
   double totalArea_, rounding_;
   SkylinePackerOptions packer_;
