@@ -30,18 +30,17 @@ CellPiece whole(const Mesh& solid) {
   return p;
 }
 
-// The parts of `solid` in the cells of the planes that reach it (`across`: their indices), with
-// the plane of each new face in `cut`; one part, or none, when the planes only touch it. Each
-// plane moves by `shift` along its unit normal.
-std::vector<CellPiece> parts(const Mesh& solid, std::span<const CutPlane> planes, std::span<const int> across,
-                             double shift, const IntersectCellsOptions& options, const Context& ctx,
-                             IntersectCellsReport& report, std::vector<std::vector<int32_t>>& cut) {
+// The parts of `solid` (within `box`) in the cells of the planes that reach it (`across`: their
+// indices), with the plane of each new face in `cut`; one part, or none, when the planes only
+// touch it. Each plane moves by `shift` along its unit normal.
+std::vector<CellPiece> parts(const Mesh& solid, const BoundingBox& box, std::span<const CutPlane> planes,
+                             std::span<const int> across, double shift, const IntersectCellsOptions& options,
+                             const Context& ctx, IntersectCellsReport& report, std::vector<std::vector<int32_t>>& cut) {
   std::vector<CutPlane> reaching;
   for (int k : across) {
     const CutPlane& p = planes[size_t(k)];
     reaching.push_back({p.point + shift * p.normal.normalized(), p.normal});
   }
-  const BoundingBox box = boundingBox(solid);
   const Eigen::Vector3d margin = Eigen::Vector3d::Constant(0.0137 * box.diagonal() + 1e-6);
   const PlaneArrangement cells =
       planeArrangement(reaching, {box.min.cast<double>() - margin, box.max.cast<double>() + margin});
@@ -74,11 +73,12 @@ CutMeshResult cutMesh(std::span<const Mesh> solids, std::span<const CutPlane> pl
     // A plane along the model's edges meets them within the rounding of the cells' vertices (which
     // lie on several planes), and can leave a piece open: then every plane moves by a millionth of
     // the model's size, which no one sees and which leaves the model's vertices off the planes.
-    const double nudge = 1e-6 * boundingBox(solids[i]).diagonal();
+    const BoundingBox box = boundingBox(solids[i]);
+    const double nudge = 1e-6 * box.diagonal();
     for (int attempt = 0; !across.empty(); ++attempt) {
       try {
         IntersectCellsReport report;
-        pieces = parts(solids[i], planes, across, attempt * nudge, options, ctx.nested(), report, cut);
+        pieces = parts(solids[i], box, planes, across, attempt * nudge, options, ctx.nested(), report, cut);
         r.intersect.corefinedTriangles += report.corefinedTriangles;
         r.intersect.keptWhole += report.keptWhole;
         break;
