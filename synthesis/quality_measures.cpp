@@ -3,6 +3,7 @@
 
 #include "render/image/error.h"
 #include "render/image/parallel.h"
+#include "synthesis/synthesize_2d.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -261,6 +262,12 @@ QualityReport measureQuality(const Image& image, const Image& exemplar, const Co
     report.coverage = coverage(*coords);
   }
   return report;
+}
+
+QualityReport measureSynthesisBaseline(const ExemplarAnalysis& analysis, const Image& exemplar, int width, int height,
+                                       const FidelityOptions& fidelity, const Context& ctx) {
+  const SynthesisResult r = synthesize2d(analysis, {0, 0, width, height}, {}, ctx);
+  return measureQuality(applyCoords(r.coords, exemplar, ctx), exemplar, nullptr, fidelity, ctx);
 }
 
 } // namespace texfab::synthesis

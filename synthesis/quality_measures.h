@@ -8,6 +8,7 @@
 #include "render/image/context.h"
 #include "render/image/image.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/exemplar_analysis.h"
 
 #include <optional>
 #include <span>
@@ -75,5 +76,11 @@ struct QualityReport {
 };
 QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
                              const FidelityOptions& fidelity = {}, const Context& ctx = {});
+
+/// The measures of a 2-D synthesis (synthesize2d, default options, seed 1) of width x height from
+/// `analysis` of `exemplar`: the baseline a solid texture's slices are held to (a slice should keep
+/// the exemplar as well as 2-D synthesis does; docs/design.md#quality-measures). Deterministic.
+QualityReport measureSynthesisBaseline(const ExemplarAnalysis& analysis, const Image& exemplar, int width, int height,
+                                       const FidelityOptions& fidelity = {}, const Context& ctx = {});
 
 } // namespace texfab::synthesis

@@ -11,15 +11,20 @@
 #include "render/image_stack.h"
 #include "render/solid_volume.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
+#include <span>
 #include <sstream>
+#include <vector>
 
 namespace texfab::cli {
 namespace fs = std::filesystem;
@@ -38,11 +43,45 @@ struct SolidJob {
   CommonFlags common;
 };
 
+// The smallest slice measured: the fidelity measure's 7x7 neighbourhoods must fit.
+constexpr int kMeasuredSide = 8;
+
+// A slice measured for --report against the exemplar of the axis it lies across (0, 1, 2: E_x,
+// E_y, E_z), oriented as that exemplar lies in the volume (solid_analysis.h).
+struct MeasuredSlice {
+  std::string name;
+  int axis = 2;
+  Image image;
+};
+
 // What one mode synthesized, for the report.
 struct Synthesized {
   std::vector<synthesis::SolidLevelStats> levels;
   int64_t requested = 0;
   synthesis::SolidLevelCache cache;
+  std::vector<MeasuredSlice> slices;
+};
+
+// The middle slice of an n^3 volume across each axis, gathered from its z slices as they come.
+class MiddleSlices {
+public:
+  explicit MiddleSlices(int n) : n_(n) {}
+  void add(const Image& slice) {
+    if (x_.empty()) x_ = y_ = Image(n_, n_, slice.channels);
+    const int m = n_ / 2;
+    for (int i = 0; i < n_; ++i)
+      for (int c = 0; c < slice.channels; ++c) {
+        x_.at(i, z_, c) = slice.at(m, i, c);  // E_x: u = y, v = z
+        y_.at(z_, i, c) = slice.at(i, m, c);  // E_y: u = z, v = x
+      }
+    if (z_ == m) middle_ = slice;
+    ++z_;
+  }
+  std::vector<MeasuredSlice> take() { return {{"x", 0, std::move(x_)}, {"y", 1, std::move(y_)}, {"z", 2, std::move(middle_)}}; }
+
+private:
+  int n_, z_ = 0;
+  Image x_, y_, middle_;
 };
 
 // A synthesized voxel of an output position: voxels are `scale` output units wide.
@@ -99,13 +138,20 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
   auto stack = std::make_shared<render::ImageStackWriter>(run.outputs(), job.output, render::ImageStackOptions{.raw = job.raw});
   return [&job, &run, stack, n](const synthesis::SolidAnalysis& analysis, const render::SolidExemplars& e) {
     Synthesized s;
+    std::optional<MiddleSlices> middle;
+    if (run.reporting() && n >= kMeasuredSide) middle.emplace(n);
     Stage stage(run.ctx(), "synthesis");
     // The coarse-level cache pays across slabs; within one slab, whole 8^3 bricks at coarse levels
     // cost more than they save (a 64^3 volume: 7.9 instead of 6.1 voxels synthesized per voxel).
     const render::SolidVolumeResult r = render::synthesizeSolidVolume(
         analysis, e, n, job.scale, job.options, n > 128 ? &s.cache : nullptr,
-        [&](const Image& slice) { stack->write(slice); }, stage.inner());
+        [&](const Image& slice) {
+          stack->write(slice);
+          if (middle) middle->add(slice);
+        },
+        stage.inner());
     stack->finish();
+    if (middle) s.slices = middle->take();
     stage.finish(std::to_string(n) + "^3 voxels, " + counted(stack->count(), "slice"));
     s.levels = r.levels;
     s.requested = r.requestedVoxels;
@@ -133,8 +179,15 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
     const synthesis::SolidSynthesisResult r = synthesizeSolid(analysis, voxels, job.options, nullptr, stage.inner());
     stage.finish(std::to_string(job.width) + "x" + std::to_string(job.height));
     Stage write(run.ctx(), "write");
-    writeImage(render::solidColorImage(r.triples, e, job.width, job.height), out);
+    Image image = render::solidColorImage(r.triples, e, job.width, job.height);
+    writeImage(image, out);
     write.finish(job.output);
+    if (run.reporting() && std::min(job.width, job.height) >= kMeasuredSide) {
+      // Against the exemplar of the axis nearest the plane's normal.
+      Eigen::Index axis = 2;
+      job.u.cross(job.v).cwiseAbs().maxCoeff(&axis);
+      s.slices.push_back({"plane", int(axis), std::move(image)});
+    }
     s.levels = r.levels;
     s.requested = int64_t(voxels.size());
     return s;
@@ -175,6 +228,39 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
   };
 }
 
+// --report: each slice's quality measures against its exemplar, and its fidelity against that of a
+// 2-D synthesis of the same size from that exemplar (the fidelity ratio).
+nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, const render::SolidExemplars& e) {
+  const Image* exemplars[3] = {&e.x, &e.y, &e.z};
+  // One baseline per distinct exemplar: the slices of a request all have one size.
+  std::vector<std::pair<const Image*, synthesis::QualityReport>> baselines;
+  auto baselineOf = [&](const Image& ex, const Image& slice) -> const synthesis::QualityReport& {
+    for (const auto& [image, b] : baselines)
+      if (image->width == ex.width && image->height == ex.height && image->pixels == ex.pixels) return b;
+    bool cached = false;
+    const synthesis::ExemplarAnalysis analysis = analyzeExemplar(run, ex, {}, cached);
+    Stage stage(run.ctx(), "2-D baseline");
+    auto b = synthesis::measureSynthesisBaseline(analysis, ex, slice.width, slice.height, {}, stage.inner());
+    stage.finish("contrast " + figure(b.contrast) + ", fidelity " + figure(b.fidelity));
+    return baselines.emplace_back(&ex, b).second;
+  };
+  nlohmann::json j = nlohmann::json::object();
+  double contrast = 0, ratio = 0;
+  for (const MeasuredSlice& slice : slices) {
+    const Image& ex = *exemplars[slice.axis];
+    const synthesis::QualityReport& b = baselineOf(ex, slice.image);
+    Stage stage(run.ctx(), "measures " + slice.name);
+    const synthesis::QualityReport q = synthesis::measureQuality(slice.image, ex, nullptr, {}, stage.inner());
+    stage.finish("contrast " + figure(q.contrast) + ", fidelity " + figure(q.fidelity / b.fidelity) + "x 2-D synthesis'");
+    j[slice.name] = toJson(q, b);
+    contrast += q.contrast / double(slices.size());
+    ratio += q.fidelity / b.fidelity / double(slices.size());
+  }
+  run.note("slices keep " + figure(100 * contrast) + " % of the exemplar's contrast; their fidelity is " +
+           figure(ratio) + "x a 2-D synthesis' (1 = as faithful)");
+  return {{"slices", j}, {"contrast_ratio", contrast}, {"fidelity_ratio", ratio}};
+}
+
 void runSolid(SolidJob& job) {
   Run run("solid", job.common);
   // One mode, checked with its outputs before any work.
@@ -195,6 +281,7 @@ void runSolid(SolidJob& job) {
   bool cached = false;
   const synthesis::SolidAnalysis analysis = analyzeSolid(run, ex, ey, ez, {}, cached);
   const Synthesized s = synthesize(analysis, {ex, ey, ez});
+  if (!s.slices.empty()) run.report()["measures"] = measureSlices(run, s.slices, {ex, ey, ez});
 
   nlohmann::json& r = run.report();
   r["exemplars"] = {{"x", job.exemplar}, {"y", pathY}, {"z", pathZ}, {"width", ex.width}, {"height", ex.height},

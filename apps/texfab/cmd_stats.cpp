@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab stats: the quality measures (docs/design.md#quality-measures) of an image synthesized
 // from an exemplar.
+#include "apps/texfab/analysis.h"
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "apps/texfab/report_json.h"
@@ -19,6 +20,7 @@ namespace {
 struct StatsJob {
   std::string image, exemplar, coords;
   synthesis::FidelityOptions fidelity;
+  bool baseline = false;
   CommonFlags common;
 };
 
@@ -35,7 +37,17 @@ void runStats(const StatsJob& args) {
                   std::to_string(coords->height) + " but the image is " + std::to_string(image.width) + "x" +
                   std::to_string(image.height));
   }
-  const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, args.fidelity, run.ctx());
+  Stage measure(run.ctx(), "measures");
+  const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, args.fidelity, measure.inner());
+  measure.finish();
+  std::optional<QualityReport> baseline;
+  if (args.baseline) {
+    bool cached = false;
+    const ExemplarAnalysis analysis = analyzeExemplar(run, exemplar, {}, cached);
+    Stage stage(run.ctx(), "2-D baseline");
+    baseline = measureSynthesisBaseline(analysis, exemplar, image.width, image.height, args.fidelity, stage.inner());
+    stage.finish(std::to_string(image.width) + "x" + std::to_string(image.height));
+  }
 
   std::printf("fidelity             %.4f   (7x7 RMS distance to the nearest exemplar neighborhood; lower is better)\n",
               q.fidelity);
@@ -47,8 +59,14 @@ void runStats(const StatsJob& args) {
     std::printf("shifted correlation  %.4f   (1 = repeats with the exemplar's period)\n", q.shiftedCorrelation);
   if (q.coherence) std::printf("coherence            %.4f   (1 = verbatim tiling, 0 = noise)\n", *q.coherence);
   if (q.coverage) std::printf("coverage             %.4f   (fraction of the exemplar used)\n", *q.coverage);
+  if (baseline) {
+    std::printf("fidelity ratio       %.4f   (fidelity / a 2-D synthesis' of the same size, %.4f; 1 = as faithful)\n",
+                q.fidelity / baseline->fidelity, baseline->fidelity);
+    std::printf("2-D histogram dist.  %.4f   (the same 2-D synthesis')\n", baseline->histogramDistance);
+    std::printf("2-D contrast ratio   %.4f   (the same 2-D synthesis')\n", baseline->contrast);
+  }
 
-  run.report() = toJson(q);
+  run.report() = baseline ? toJson(q, *baseline) : toJson(q);
   run.report()["image"] = args.image;
   run.report()["exemplar"] = args.exemplar;
   run.finish();
@@ -65,7 +83,10 @@ Command addStatsCommand(CLI::App& root) {
   f.text("--coords", job->coords, "Its coordinate map (from 'texfab synth --coords'): adds coherence and coverage");
   f.option("--samples", job->fidelity.samples, "Neighborhoods measured for fidelity (0 = all; exact search each)",
            {0, 1e9});
-  f.common(job->common, Common::Threads | Common::Report | Common::Quiet);
+  f.flag("--baseline-2d", job->baseline,
+         "Also measure a 2-D synthesis of the image's size from the exemplar (seed 1, default options) and give "
+         "the image's fidelity relative to it: for slices of a solid texture, 1 = as faithful as 2-D synthesis");
+  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
   return {f.app(), [job] { runStats(*job); }};
 }
 

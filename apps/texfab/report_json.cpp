@@ -75,6 +75,13 @@ json toJson(const synthesis::QualityReport& q) {
   return j;
 }
 
+json toJson(const synthesis::QualityReport& q, const synthesis::QualityReport& baseline) {
+  json j = toJson(q);
+  j["baseline_2d"] = toJson(baseline);
+  j["fidelity_ratio"] = q.fidelity / baseline.fidelity;
+  return j;
+}
+
 json toJson(std::span<const synthesis::LevelStats> levels) {
   json j = json::array();
   for (const synthesis::LevelStats& l : levels) j.push_back({{"level", l.level}, {"texels", l.texels}, {"seconds", l.seconds}});

@@ -25,6 +25,9 @@ nlohmann::json imageJson(const std::string& path, const Image& image);
 nlohmann::json toJson(const atlas::GenerateAtlasResult& atlas);
 nlohmann::json toJson(const render::TextureMeasures& measures, double requestedPixelsPerUnit);
 nlohmann::json toJson(const synthesis::QualityReport& quality);
+/// The measures of `quality`, those of its 2-D synthesis baseline (measureSynthesisBaseline) as
+/// "baseline_2d", and "fidelity_ratio": fidelity / the baseline's (1 = as faithful as 2-D synthesis).
+nlohmann::json toJson(const synthesis::QualityReport& quality, const synthesis::QualityReport& baseline);
 nlohmann::json toJson(std::span<const synthesis::LevelStats> levels);
 nlohmann::json toJson(std::span<const synthesis::SolidLevelStats> levels);
 

@@ -192,14 +192,18 @@ TEST(CliSynth, StatsReportsTheMeasures) {
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "o.png").string() + " --size 256 --coords " +
                        (dir / "c.exr").string() + cacheArg(dir)).status, 0);
   const Outcome o = texfab("stats " + (dir / "o.png").string() + " --exemplar " + kBrick + " --coords " +
-                               (dir / "c.exr").string() + " --report " + (dir / "s.json").string());
+                               (dir / "c.exr").string() + " --baseline-2d --report " + (dir / "s.json").string() +
+                               cacheArg(dir));
   ASSERT_EQ(o.status, 0) << o.err;
-  for (const char* word : {"fidelity", "histogram", "coherence", "coverage", "shifted"})
+  for (const char* word : {"fidelity", "histogram", "coherence", "coverage", "shifted", "fidelity ratio"})
     EXPECT_NE(o.out.find(word), std::string::npos) << word;
   std::ifstream in(dir / "s.json");
   const nlohmann::json s = nlohmann::json::parse(in);
   EXPECT_GT(s["coherence"].get<double>(), 0.0);
   EXPECT_LT(s["coherence"].get<double>(), 1.0);
+  // The 2-D baseline is the synthesis `synth` made with its defaults (seed 1): the same image.
+  EXPECT_EQ(s["fidelity_ratio"].get<double>(), 1.0);
+  EXPECT_EQ(s["baseline_2d"]["histogram_distance"], s["histogram_distance"]);
   // A tiling of the exemplar measures as one.
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "t.png").string() + " --size 256 --jitter 0 --coords " +
                        (dir / "t.png.coords.png").string() + cacheArg(dir)).status, 0);

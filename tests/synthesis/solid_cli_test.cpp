@@ -44,25 +44,43 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
   TempDir dir;
   const std::string ex = smallExemplar(dir);
   const std::string common = ex + " --seed 5 -q --cache-dir " + (dir / "cache").string();
-  ASSERT_EQ(texfab("solid " + common + " --volume 12 -o " + (dir / "vol").string() + " --raw " +
+  ASSERT_EQ(texfab("solid " + common + " --volume 14 -o " + (dir / "vol").string() + " --raw " +
                        (dir / "vol.raw").string() + " --report " + (dir / "r.json").string())
                 .status,
             0);
-  EXPECT_EQ(entries(dir / "vol"), 12u);
-  EXPECT_EQ(fs::file_size(dir / "vol.raw"), size_t(12 * 12 * 12 * 3));
+  EXPECT_EQ(entries(dir / "vol"), 14u);
+  EXPECT_EQ(fs::file_size(dir / "vol.raw"), size_t(14 * 14 * 14 * 3));
   std::ifstream reportFile(dir / "r.json");
   const auto report = nlohmann::json::parse(reportFile);
-  EXPECT_EQ(report["requested_voxels"], 12 * 12 * 12);
+  EXPECT_EQ(report["requested_voxels"], 14 * 14 * 14);
   EXPECT_GT(report["synthesized_per_requested"].get<double>(), 1.0);
   EXPECT_FALSE(report["exemplars"]["analysis_cached"].get<bool>());
 
   // The z = 7 plane as an image equals slice 7 of the volume (and the analysis now is cached).
-  ASSERT_EQ(texfab("solid " + common + " --plane 0,0,7,1,0,0,0,1,0 --size 12x12 -o " + (dir / "p.png").string() +
+  ASSERT_EQ(texfab("solid " + common + " --plane 0,0,7,1,0,0,0,1,0 --size 14x14 -o " + (dir / "p.png").string() +
                        " --report " + (dir / "r2.json").string())
                 .status,
             0);
   std::ifstream report2File(dir / "r2.json");
-  EXPECT_TRUE(nlohmann::json::parse(report2File)["exemplars"]["analysis_cached"].get<bool>());
+  const auto report2 = nlohmann::json::parse(report2File);
+  EXPECT_TRUE(report2["exemplars"]["analysis_cached"].get<bool>());
+
+  // The report measures the volume's middle slices as images of those planes, each oriented as its
+  // exemplar lies in the volume (E_x: u = y, v = z; E_y: u = z, v = x), against a 2-D synthesis.
+  const auto& slices = report["measures"]["slices"];
+  EXPECT_EQ(slices["z"], report2["measures"]["slices"]["plane"]);
+  for (const auto& [axis, plane] : {std::pair{"x", "7,0,0,0,1,0,0,0,1"}, std::pair{"y", "0,7,0,0,0,1,1,0,0"}}) {
+    const fs::path json = dir / (std::string(axis) + ".json");
+    ASSERT_EQ(texfab("solid " + common + " --plane " + plane + " --size 14 -o " + (dir / (std::string(axis) + ".png")).string() +
+                         " --report " + json.string()).status, 0);
+    std::ifstream in(json);
+    EXPECT_EQ(slices[axis], nlohmann::json::parse(in)["measures"]["slices"]["plane"]) << axis;
+  }
+  for (const char* axis : {"x", "y", "z"}) {
+    const auto& m = slices[axis];
+    EXPECT_GT(m["contrast_ratio"].get<double>(), 0.1) << axis;
+    EXPECT_DOUBLE_EQ(m["fidelity_ratio"].get<double>(), m["fidelity"].get<double>() / m["baseline_2d"]["fidelity"].get<double>());
+  }
   const Image plane = readImage(dir / "p.png");
   const Image slice = readImage(dir / "vol" / "slice_00007.png");
   EXPECT_EQ(plane.pixels, slice.pixels);
