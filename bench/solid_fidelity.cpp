@@ -6,7 +6,7 @@
 // synthesis of the same exemplar, histogram distance, and the shifted-self correlation of 256^2
 // planes at the exemplar's period. The 2-D synthesis and a random-pixel image are the baselines.
 //   build/bench/solid_fidelity models/exemplars/marble.png /usr/share/gimp/2.0/patterns/Stone/rock.pat
-// Environment: SIDE (crop), N (plane side), BIG (repetition plane side), JITTER, PASSES, FINEST,
+// Environment: SIDE (crop), N (plane side), BIG (repetition plane side), JITTER, OFFSET, PASSES, FINEST,
 // INTERLEAVE, MATCH (matchColors 0/1), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and synthesis options), FK3D, FK2D,
 // CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
 // (writes the exemplars as PNG and stops),
@@ -107,6 +107,7 @@ int main(int argc, char** argv) {
   const int big = int(env("BIG", 256));
   SolidSynthesisOptions so;
   so.jitter = float(env("JITTER", so.jitter));
+  so.offsetCells = int(env("OFFSET", so.offsetCells));
   so.finestPasses = int(env("FINEST", so.finestPasses));
   so.passes = int(env("PASSES", so.passes));
   so.interleave = int(env("INTERLEAVE", so.interleave));

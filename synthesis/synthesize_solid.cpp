@@ -72,6 +72,10 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
   return t;
 }
 
+cpu::SolidInit initOf(const SolidSynthesisOptions& o) {
+  return {o.seed, int64_t(std::lrint(double(o.jitter) * 256.0)), o.offsetCells};
+}
+
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
@@ -82,6 +86,7 @@ uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   h.add(o.passes);
   h.add(o.interleave);
   h.add(o.matchColors);
+  h.add(o.offsetCells);
   return h.h;
 }
 
@@ -365,8 +370,7 @@ struct Engine {
     const int8_t* last = m.at(slot);
     const VolumeGrid grid{key[0] * kChunk, key[1] * kChunk, key[2] * kChunk, kChunk, kChunk, kChunk};
     if (li == 0) {
-      const auto jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
-      cpu::solidInitKernel(out.triples.get(), last, grid, tables, o.seed, jitter256, 0, grid.rows());
+      cpu::solidInitKernel(out.triples.get(), last, grid, tables, initOf(o), 0, grid.rows());
     } else {
       const Finals& f = finals[size_t(li) - 1];
       const int32_t ps = f.find(key);  // the block of this chunk's parents
@@ -515,8 +519,7 @@ struct Engine {
       };
     level.steps = steps(li);
     level.interleave = o.interleave;
-    level.seed = o.seed;
-    level.jitter256 = int64_t(std::lrint(double(o.jitter) * 256.0));
+    level.init = initOf(o);
     vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li), o.matchColors), level,
                                  [&](uint32_t slot, const uint32_t* triples) { finishChunk(li, slot, triples, emit); },
                                  ctx);
@@ -651,6 +654,8 @@ void SolidSynthesisOptions::validate() const {
     throw Error("finest-level passes must be in [0, 4], got " + std::to_string(finestPasses));
   if (interleave != 1 && interleave != 2)
     throw Error("interleave must be 1 (one sub-pass per pass) or 2 (8 sub-passes), got " + std::to_string(interleave));
+  if (offsetCells < 0 || offsetCells > 1024)
+    throw Error("offset cells must be in [0, 1024], got " + std::to_string(offsetCells));
 }
 
 double synthesizeSolidMemoryBytes(int64_t voxels) { return double(voxels) * 40.0; }

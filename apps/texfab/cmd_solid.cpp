@@ -290,7 +290,8 @@ void runSolid(SolidJob& job) {
                     {"mean_candidates_kept", analysis.stats.meanCandidatesBeforeFilter},
                     {"mean_candidates_coherent", analysis.stats.meanCandidatesAfterFilter}};
   const synthesis::SolidSynthesisOptions& o = job.options;
-  r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"passes", o.passes}, {"finest_passes", o.finestPasses},
+  r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"offset_cells", o.offsetCells}, {"passes", o.passes},
+                     {"finest_passes", o.finestPasses},
                      {"subpasses", o.subpasses()}, {"scale", job.scale}};
   int64_t synthesized = 0;
   for (const synthesis::SolidLevelStats& l : s.levels) synthesized += l.voxels;
@@ -341,6 +342,10 @@ Command addSolidCommand(CLI::App& root) {
   f.option("--seed", o.seed, "Random seed: the only source of variation");
   f.option("--scale", job->scale, "Output units per synthesized voxel (2 = texture twice as large)", positive(1e6));
   f.option("--jitter", o.jitter, "Strength of the random warp applied once after initialization", {0, 4});
+  f.option("--offset-cells", o.offsetCells,
+           "Side, in voxels of the coarsest level, of the cells that each start from the exemplar at their own random "
+           "offset (0 = one tiling, as in the paper, which repeats with the exemplar's period)",
+           {0, 1024});
   f.option("--passes", o.passes, "Correction passes per level above the finest", {0, 4});
   f.option("--finest-passes", o.finestPasses,
            "Correction passes at the finest level (the paper: 2, about 3x the finest level's work)", {0, 4});

@@ -114,12 +114,22 @@ void warp(const int64_t q[3], uint32_t seed, int64_t jitter256, int64_t disp[3])
   }
 }
 
-// The slab (§4.3) at warped position p: the E_z pixel under (x, y), thickened along z by its best
-// candidate's E_x and E_y neighborhoods (E_x's v axis and E_y's u axis are z).
-void slabTriple(const int64_t p[3], const SolidTables& t, uint32_t* out) {
+// The hashed offset of the cell of side `cell` holding p: exemplar pixels (u, v) and slab layers.
+void cellOffset(const int64_t p[3], uint32_t seed, int cell, const SolidTables& t, int64_t offset[3]) {
+  int32_t c[3];
+  for (int a = 0; a < 3; ++a) c[a] = int32_t((p[a] - floorMod(p[a], cell)) / cell);
+  const uint32_t hu = voxelHash(seed, 2, c[0], c[1], c[2], 0), hv = pcgHash(hu), hz = pcgHash(hv);
+  offset[0] = int64_t(hu % uint32_t(t.exemplarWidth));
+  offset[1] = int64_t(hv % uint32_t(t.exemplarHeight));
+  offset[2] = int64_t(hz % uint32_t(kSlabThickness));
+}
+
+// The slab (§4.3) at warped position p, shifted by `offset`: the E_z pixel under (x, y), thickened
+// along z by its best candidate's E_x and E_y neighborhoods (E_x's v axis and E_y's u axis are z).
+void slabTriple(const int64_t p[3], const int64_t offset[3], const SolidTables& t, uint32_t* out) {
   const int w = t.exemplarWidth, h = t.exemplarHeight;
-  const uint32_t pixel = wrapCoord(p[0] * t.spacing, p[1] * t.spacing, w, h);
-  const int64_t dz = floorMod(p[2], kSlabThickness) - kSlabThickness / 2;
+  const uint32_t pixel = wrapCoord(p[0] * t.spacing + offset[0], p[1] * t.spacing + offset[1], w, h);
+  const int64_t dz = floorMod(p[2] + offset[2], kSlabThickness) - kSlabThickness / 2;
   const uint32_t* best = t.triples[2] + (size_t(coordV(pixel)) * size_t(w) + coordU(pixel)) * kSolidMaxCandidates * 3;
   out[0] = wrapCoord(coordU(best[0]), int64_t(coordV(best[0])) + dz * t.spacing, w, h);
   out[1] = wrapCoord(int64_t(coordU(best[1])) + dz * t.spacing, coordV(best[1]), w, h);
@@ -236,8 +246,8 @@ void solidDilateKernel(int8_t* last, const VolumeGrid& g, int interleave, int st
   }
 }
 
-void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& g, const SolidTables& t, uint32_t seed,
-                     int64_t jitter256, int rowBegin, int rowEnd) {
+void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& g, const SolidTables& t, const SolidInit& init,
+                     int rowBegin, int rowEnd) {
   for (int r = rowBegin; r < rowEnd; ++r) {
     const int y = r % g.ny, z = r / g.ny;
     for (int x = 0; x < g.nx; ++x) {
@@ -245,10 +255,11 @@ void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& g, con
       if (last[v] < 0) continue;
       const int64_t q[3] = {g.x0 + x, g.y0 + y, g.z0 + z};
       int64_t disp[3] = {0, 0, 0};  // 1/256 voxel
-      if (jitter256 > 0) warp(q, seed, jitter256, disp);
-      int64_t p[3];
+      if (init.jitter256 > 0) warp(q, init.seed, init.jitter256, disp);
+      int64_t p[3], offset[3] = {0, 0, 0};
       for (int a = 0; a < 3; ++a) p[a] = q[a] + ((disp[a] + 128) >> 8);
-      slabTriple(p, t, out + v * 3);
+      if (init.offsetCells > 0) cellOffset(p, init.seed, init.offsetCells, t, offset);
+      slabTriple(p, offset, t, out + v * 3);
     }
   }
 }

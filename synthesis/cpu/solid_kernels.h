@@ -76,12 +76,22 @@ struct SolidTables {
 /// grid (it writes rows around each row it reads); voxels within 2 of the border are not spread.
 void solidDilateKernel(int8_t* last, const VolumeGrid& grid, int interleave, int step);
 
+/// The random choices of the initialization (SolidSynthesisOptions seed, jitter, offsetCells).
+struct SolidInit {
+  uint32_t seed = 0;
+  int64_t jitter256 = 0;  ///< warp amplitude, 1/256 voxel
+  int offsetCells = 0;    ///< side of the cells reading the slab at their own offset; 0 = one tiling
+};
+
 /// Initialization (§5.1): the candidate slab of E_z (best triple of each pixel, thickened by
 /// +-2 voxels along z, §4.3) tiled over the volume, read through the random warp ("jitter once"):
-/// voxel q shows the slab at round(q + d(q)), d a sum of compactly supported bumps on two hashed
-/// grids (4 and 8 voxels), amplitude jitter256/256 voxels. Writes voxels with last >= 0.
+/// voxel q shows the slab at p = round(q + d(q)), d a sum of compactly supported bumps on two
+/// hashed grids (4 and 8 voxels), amplitude jitter256/256 voxels. With offsetCells = c > 0, the
+/// cell floor(p / c) reads the slab shifted by its own hashed offset (any exemplar pixel, any slab
+/// layer), so that the volume does not repeat with the exemplar's period (a deviation from the
+/// paper). Writes voxels with last >= 0.
 void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& grid, const SolidTables& tables,
-                     uint32_t seed, int64_t jitter256, int rowBegin, int rowEnd);
+                     const SolidInit& init, int rowBegin, int rowEnd);
 
 /// Upsampling by coordinate inheritance with a stack (§5.1, errata §20.2): the child voxel q takes
 /// its parent's triple plus spacing * (bits of q along each exemplar's u and v axes).

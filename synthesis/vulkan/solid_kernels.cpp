@@ -157,10 +157,11 @@ SolidChunks uploadChunks(Commands& commands, uint32_t count, std::span<const int
   return c;
 }
 
-void solidInitKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, uint32_t seed, int64_t jitter256) {
+void solidInitKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, const cpu::SolidInit& init) {
   SolidParams p = paramsOf(c, &t);
-  p.seed = seed;
-  p.jitter256 = jitter256;
+  p.seed = init.seed;
+  p.jitter256 = init.jitter256;
+  p.offsetCells = init.offsetCells;
   commands.dispatch(kInit, p, {c.keys, c.last, t.range(t.triples[2]), c.triples}, voxels(c));
 }
 

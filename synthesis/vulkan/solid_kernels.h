@@ -59,8 +59,8 @@ struct SolidChunks {
 SolidChunks uploadChunks(Commands& commands, uint32_t count, std::span<const int32_t> keys, std::span<const int8_t> last,
                          std::span<const int32_t> neighbours, std::span<const uint32_t> parents);
 
-void solidInitKernel(Commands& commands, const SolidChunks& chunks, const SolidTables& tables, uint32_t seed,
-                     int64_t jitter256);
+void solidInitKernel(Commands& commands, const SolidChunks& chunks, const SolidTables& tables,
+                     const cpu::SolidInit& init);
 
 /// From `chunks.parents`.
 void solidUpsampleKernel(Commands& commands, const SolidChunks& chunks, const SolidTables& tables);

@@ -100,7 +100,7 @@ void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelI
   Commands commands(device);
   const SolidChunks chunks = uploadPart(commands, level, index, part);
   if (level.parents) solidUpsampleKernel(commands, chunks, tables);
-  else solidInitKernel(commands, chunks, tables, level.seed, level.jitter256);
+  else solidInitKernel(commands, chunks, tables, level.init);
   solidColorKernel(commands, chunks, tables, 0);
   for (int t = 1; t <= level.steps; ++t) {
     solidCorrectKernel(commands, chunks, tables, level.interleave, t);

@@ -27,8 +27,7 @@ struct SolidLevelInput {
   std::function<const uint32_t*(uint32_t slot)> parents;    ///< its parents' 8^3 triples; empty at the coarsest level
   int steps = 0;        ///< correction steps T
   int interleave = 1;
-  uint32_t seed = 0;    ///< initialization (coarsest level)
-  int64_t jitter256 = 0;
+  cpu::SolidInit init;  ///< initialization (coarsest level)
 };
 
 /// Receives the final triples (4096 * 3) of chunk `slot`; called from several threads at once.

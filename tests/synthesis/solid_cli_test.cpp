@@ -70,16 +70,19 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
   const auto& slices = report["measures"]["slices"];
   EXPECT_EQ(slices["z"], report2["measures"]["slices"]["plane"]);
   for (const auto& [axis, plane] : {std::pair{"x", "7,0,0,0,1,0,0,0,1"}, std::pair{"y", "0,7,0,0,0,1,1,0,0"}}) {
-    const fs::path json = dir / (std::string(axis) + ".json");
-    ASSERT_EQ(texfab("solid " + common + " --plane " + plane + " --size 14 -o " + (dir / (std::string(axis) + ".png")).string() +
-                         " --report " + json.string()).status, 0);
+    const fs::path json = dir / (std::string(axis) + ".json"), image = dir / (std::string(axis) + ".png");
+    ASSERT_EQ(texfab("solid " + common + " --plane " + plane + " --size 14 -o " + image.string() + " --report " +
+                     json.string())
+                  .status,
+              0);
     std::ifstream in(json);
     EXPECT_EQ(slices[axis], nlohmann::json::parse(in)["measures"]["slices"]["plane"]) << axis;
   }
   for (const char* axis : {"x", "y", "z"}) {
     const auto& m = slices[axis];
     EXPECT_GT(m["contrast_ratio"].get<double>(), 0.1) << axis;
-    EXPECT_DOUBLE_EQ(m["fidelity_ratio"].get<double>(), m["fidelity"].get<double>() / m["baseline_2d"]["fidelity"].get<double>());
+    EXPECT_DOUBLE_EQ(m["fidelity_ratio"].get<double>(),
+                     m["fidelity"].get<double>() / m["baseline_2d"]["fidelity"].get<double>());
   }
   const Image plane = readImage(dir / "p.png");
   const Image slice = readImage(dir / "vol" / "slice_00007.png");

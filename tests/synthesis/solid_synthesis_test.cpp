@@ -19,6 +19,7 @@
 #include <map>
 #include <numeric>
 #include <set>
+#include <utility>
 
 namespace texfab::synthesis {
 namespace {
@@ -508,18 +509,20 @@ TEST(SolidSynthesis, ThreeDifferentExemplars) {
   EXPECT_EQ(colors.size(), whole.triples.size() * size_t(solidColorChannels(ex, ey, ez)));
 }
 
+// The 64x64 top left corner of an exemplar, RGB or grey.
+Image crop64(const Image& full) {
+  Image out(64, 64, full.channels >= 3 ? 3 : 1);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < out.channels; ++c) out.at(x, y, c) = full.at(x, y, c);
+  return out;
+}
+
 // Colour transfer in the search (SolidSynthesisOptions::matchColors, the default) against the
 // paper's mean of three, on real exemplars, over axis-aligned and oblique 64^2 slices: the slices
 // keep more of the exemplar's contrast and their histograms come closer to the exemplar's, while
 // their neighborhoods stay far from random pixels'.
 TEST(SolidSynthesis, MatchedSearchColorsKeepContrast) {
-  const auto crop = [](const Image& full) {
-    Image out(64, 64, full.channels >= 3 ? 3 : 1);
-    for (int y = 0; y < 64; ++y)
-      for (int x = 0; x < 64; ++x)
-        for (int c = 0; c < out.channels; ++c) out.at(x, y, c) = full.at(x, y, c);
-    return out;
-  };
   const int n = 64;
   std::vector<std::vector<Voxel>> planes;  // x, y and z slices, and an oblique plane (normal (1, 2, 3))
   for (int axis = 0; axis < 3; ++axis) {
@@ -538,7 +541,7 @@ TEST(SolidSynthesis, MatchedSearchColorsKeepContrast) {
     }
   const std::filesystem::path models = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars";
   for (const auto& path : {models / "marble.png", models / "brick.png", test::gimpPatterns() / "Stone/cracked.pat"}) {
-    const Image e = crop(readImage(path));
+    const Image e = crop64(readImage(path));
     const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
     const int ch = solidColorChannels(e, e, e);
     Image random(n, n, ch);
@@ -572,6 +575,34 @@ TEST(SolidSynthesis, MatchedSearchColorsKeepContrast) {
   }
 }
 
+// The initialization's offset cells (SolidSynthesisOptions::offsetCells, default 8) against one
+// tiling of the candidate slab (0, the paper's): on a 256^2 plane of a 64^2 crop of GIMP's
+// burlwood, the correlation with itself shifted by the exemplar's size falls far below the
+// tiling's, for the same neighbourhood fidelity.
+TEST(SolidSynthesis, PlanesDoNotRepeatWithTheExemplarsPeriod) {
+  const Image e = crop64(readImage(test::gimpPatterns() / "Wood/burlwood.pat"));
+  const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
+  constexpr int n = 256;
+  std::vector<Voxel> plane;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) plane.push_back({i, j, 40});
+  auto measure = [&](int offsetCells) {
+    SolidSynthesisOptions o;
+    o.offsetCells = offsetCells;
+    Image image(n, n, solidColorChannels(e, e, e));
+    image.pixels.clear();
+    solidColors(synthesizeSolid(a, plane, o, nullptr, Context{.threads = 2}).triples, e, e, e, image.pixels);
+    return std::pair{shiftedSelfCorrelation(image, e.width, e.height), neighborhoodFidelity(image, e)};
+  };
+  const auto [shifted, fidelity] = measure(8);
+  const auto [tiled, tiledFidelity] = measure(0);
+  std::printf("[ solid    ] shifted correlation %.3f (one tiling %.3f), fidelity %.4f (%.4f)\n", shifted, tiled,
+              fidelity, tiledFidelity);
+  EXPECT_LE(shifted, 0.25);
+  EXPECT_GT(tiled, shifted + 0.1);
+  EXPECT_LT(fidelity, 1.1 * tiledFidelity);
+}
+
 TEST(SolidSynthesis, RejectsBadParameters) {
   const SolidAnalysis& a = analysis32();
   SolidSynthesisOptions o;
@@ -582,6 +613,9 @@ TEST(SolidSynthesis, RejectsBadParameters) {
   EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 2, 2, 2}, o), Error);
   o = {};
   o.interleave = 3;
+  EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 2, 2, 2}, o), Error);
+  o = {};
+  o.offsetCells = -1;
   EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 2, 2, 2}, o), Error);
   EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 0, 2, 2}, {}), Error);
   const Voxel far{int64_t(1) << 40, 0, 0};

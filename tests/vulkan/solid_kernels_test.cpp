@@ -116,12 +116,12 @@ void checkCase(vulkan::Device& device, Random& r, const Case& c) {
   const int T = c.interleave == 2 ? 8 : 2;
   const std::vector<int8_t> last = randomMask(r, T);
   const std::vector<uint32_t> parents = r.coords(parentGrid.size() * 3, c.w, c.h);
-  const auto jitter256 = r.between(0, 1024);
+  const cpu::SolidInit initParams{9, r.between(0, 1024), int(r.between(0, 12))};  // offsetCells 0: one tiling
 
   // The CPU: init, upsample, colours, a correction and its commit at a random step.
   std::vector<uint32_t> init(kVoxels * 3, 0), up(kVoxels * 3, 0), out(kVoxels * 3, 0);
   std::vector<int16_t> colors(kVoxels * 4, 0), outColors(kVoxels * 4, 0);
-  cpu::solidInitKernel(init.data(), last.data(), grid, tables.view, 9, jitter256, 0, grid.rows());
+  cpu::solidInitKernel(init.data(), last.data(), grid, tables.view, initParams, 0, grid.rows());
   cpu::solidUpsampleKernel(parents.data(), parentGrid, up.data(), last.data(), grid, c.spacing, c.w, c.h, 0, grid.rows());
   cpu::solidColorKernel(up.data(), colors.data(), last.data(), 0, grid, tables.view, 0, grid.rows());
   const int step = int(r.between(1, T));
@@ -153,7 +153,7 @@ void checkCase(vulkan::Device& device, Random& r, const Case& c) {
   // Voxels outside the mask read as zeros, as the CPU's zero-initialized grids (the engine's masks
   // guarantee that no such voxel is read).
   for (const vulkan::Buffer* b : {&chunks.triples, &chunks.colors}) commands.fill(*b, 0);
-  vulkan::solidInitKernel(commands, chunks, deviceTables, 9, jitter256);
+  vulkan::solidInitKernel(commands, chunks, deviceTables, initParams);
   commands.download(chunks.triples, 0, gpuInit.data(), kVoxels * 12);
   vulkan::solidUpsampleKernel(commands, chunks, deviceTables);
   vulkan::solidColorKernel(commands, chunks, deviceTables, 0);

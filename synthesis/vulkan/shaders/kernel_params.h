@@ -116,6 +116,8 @@ struct SolidParams {
   int32_t k3d;
   int32_t shift2d;
   int32_t shift3d;
+  int32_t offsetCells;
+  int32_t unused;
 };
 
 #ifdef __cplusplus
@@ -126,7 +128,7 @@ static_assert(sizeof(JitterParams) == 64);
 static_assert(sizeof(CorrectParams) == 72);
 static_assert(sizeof(SurfaceParams) == 32);
 static_assert(sizeof(CorrectSurfaceParams) == 32);
-static_assert(sizeof(SolidParams) == 64);
+static_assert(sizeof(SolidParams) == 72);
 } // namespace texfab::synthesis::vulkan
 #endif
 #undef TEXFAB_CONST

@@ -46,12 +46,24 @@ void warp(const int64_t q[3], inout int64_t disp[3]) {
   }
 }
 
-// The slab (§4.3) at warped position q: the E_z pixel under (x, y), thickened along z by its best
-// candidate's E_x and E_y neighborhoods.
-void slabTriple(const int64_t q[3], uint g) {
+// The hashed offset of the cell of side p.offsetCells holding q: exemplar pixels (u, v) and slab
+// layers.
+void cellOffset(const int64_t q[3], out int64_t offset[3]) {
+  const int64_t cell = int64_t(p.offsetCells);
+  int c[3];
+  for (int a = 0; a < 3; ++a) c[a] = int((q[a] - floorMod(q[a], cell)) / cell);
+  const uint hu = voxelHash(p.seed, 2u, c[0], c[1], c[2], 0u), hv = pcgHash(hu), hz = pcgHash(hv);
+  offset[0] = int64_t(hu % uint(p.exemplarWidth));
+  offset[1] = int64_t(hv % uint(p.exemplarHeight));
+  offset[2] = int64_t(hz % 5u);
+}
+
+// The slab (§4.3) at warped position q, shifted by `offset`: the E_z pixel under (x, y), thickened
+// along z by its best candidate's E_x and E_y neighborhoods.
+void slabTriple(const int64_t q[3], const int64_t offset[3], uint g) {
   const int w = p.exemplarWidth, h = p.exemplarHeight;
-  const uint pixel = wrapCoord(q[0] * p.spacing, q[1] * p.spacing, w, h);
-  const int64_t dz = floorMod(q[2], int64_t(5)) - 2;
+  const uint pixel = wrapCoord(q[0] * p.spacing + offset[0], q[1] * p.spacing + offset[1], w, h);
+  const int64_t dz = floorMod(q[2] + offset[2], int64_t(5)) - 2;
   const uint best = (coordV(pixel) * uint(w) + coordU(pixel)) * uint(kSolidMaxCandidates) * 3u;
   const uint b0 = slabTriples.words[best], b1 = slabTriples.words[best + 1u];
   triples.words[3u * g] = wrapCoord(int64_t(coordU(b0)), int64_t(coordV(b0)) + dz * p.spacing, w, h);
@@ -59,7 +71,8 @@ void slabTriple(const int64_t q[3], uint g) {
   triples.words[3u * g + 2u] = pixel;
 }
 
-// Initialization (§5.1): the candidate slab tiled over the volume, read through the random warp.
+// Initialization (§5.1): the candidate slab tiled over the volume, read through the random warp,
+// each cell of p.offsetCells voxels (if > 0) at its own offset.
 void solidInitKernel(uint g) {
   const uint slot = g >> 12;
   const ivec3 l = localPosition(g);
@@ -67,9 +80,10 @@ void solidInitKernel(uint g) {
                         int64_t(int(keys.words[3u * slot + 2u])) * 16 + l.z};
   int64_t disp[3] = {0, 0, 0};  // 1/256 voxel
   if (p.jitter256 > 0) warp(q, disp);
-  int64_t warped[3];
+  int64_t warped[3], offset[3] = {0, 0, 0};
   for (int a = 0; a < 3; ++a) warped[a] = q[a] + ((disp[a] + 128) >> 8);
-  slabTriple(warped, g);
+  if (p.offsetCells > 0) cellOffset(warped, offset);
+  slabTriple(warped, offset, g);
 }
 
 void main() {
