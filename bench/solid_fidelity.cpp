@@ -10,7 +10,8 @@
 // INTERLEAVE, MATCH (matchColors 0/1), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and synthesis options), FK3D, FK2D,
 // CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
 // (writes the exemplars as PNG and stops),
-// RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png).
+// RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png),
+// HISTPEN=lambda with HPITERS, HPBINS, HPBOX, HPALPHA, HPALL (see applyHistogramPenalty).
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
@@ -99,6 +100,67 @@ Plane obliquePlane(int n, int64_t off) {
   return p;
 }
 
+// Experiment (HISTPEN=lambda): Kopf et al. 2007's histogram weights frozen at precomputation. A
+// calibration box is synthesized HPITERS times (HPBOX^3 voxels); after each, per channel and
+// HPBINS bins, log w(bin) += HPALPHA * log(used / exemplar frequency), and each 3-D candidate's
+// descriptor gains one dimension sqrt(lambda * sum over its 3 colours and channels of
+// (log w - min log w)), against which targets project to 0 (a zero projection row): the search
+// then adds that penalty to the SSD. The finest level only, or every level (HPALL=1), with the
+// finest colours. Figures: docs/measurements.md#slice-contrast-and-a-histogram-penalty.
+void applyHistogramPenalty(SolidAnalysis& a, const Image& e, const SolidSynthesisOptions& so, double lambda) {
+  const int bins = int(env("HPBINS", 16)), iters = int(env("HPITERS", 2)), side = int(env("HPBOX", 32));
+  const double alpha = env("HPALPHA", 1.0);
+  const bool allLevels = env("HPALL", 0) > 0;
+  auto bin = [&](uint32_t c, int ch) {
+    const float v = e.at(int(coordU(c)), int(coordV(c)), std::min(ch, e.channels - 1));
+    return size_t(ch * bins + int(std::lrint(v * 255)) * bins / 256);
+  };
+  std::vector<double> exemplar(size_t(3 * bins), 0), logw(size_t(3 * bins), 0);
+  for (int y = 0; y < e.height; ++y)
+    for (int x = 0; x < e.width; ++x)
+      for (int ch = 0; ch < 3; ++ch) exemplar[bin(packCoord(uint32_t(x), uint32_t(y)), ch)] += 1;
+  const std::vector<SolidLevel> original = a.levels;
+  for (int it = 0; it < iters; ++it) {
+    const SolidSynthesisResult cal =
+        synthesizeSolidBox(a, {-5000 - it * 999, 7000, 3000, side, side, side}, so, nullptr, kCtx);
+    std::vector<double> used(size_t(3 * bins), 0);
+    for (const Triple& t : cal.triples)
+      for (int q = 0; q < 3; ++q)
+        for (int ch = 0; ch < 3; ++ch) used[bin(t[size_t(q)], ch)] += 1;
+    const double nu = double(cal.triples.size()) * 3, ne = double(e.width) * e.height;
+    double difference = 0;
+    for (size_t b = 0; b < used.size(); ++b) {
+      const double pu = used[b] / nu, pe = exemplar[b] / ne;
+      difference += std::abs(pu - pe) / 6;
+      if (pe > 0) logw[b] += alpha * std::log(std::max(pu, 1e-4) / pe);
+    }
+    std::printf("  histogram penalty, calibration %d: L1 histogram difference %.3f\n", it, difference);
+    const double lowest = *std::min_element(logw.begin(), logw.end());
+    for (size_t li = 0; li < a.levels.size(); ++li) {
+      if (!allLevels && li + 1 != a.levels.size()) continue;
+      SolidLevel& level = a.levels[li];
+      const SolidLevel& o = original[li];
+      const int d0 = o.dims, d1 = d0 + 1;
+      level.dims = d1;
+      level.projection3d = o.projection3d;
+      level.projection3d.dims = d1;
+      level.projection3d.basis.resize(size_t(d1 * o.projection3d.inputs), 0);
+      for (size_t ex = 0; ex < 3; ++ex) {
+        const size_t n = o.triples[ex].size() / 3;
+        auto& out = level.descriptors3d[ex];
+        out.assign(n * size_t(d1), 0);
+        for (size_t i = 0; i < n; ++i) {
+          std::copy_n(&o.descriptors3d[ex][i * size_t(d0)], d0, &out[i * size_t(d1)]);
+          double penalty = 0;
+          for (int q = 0; q < 3; ++q)
+            for (int ch = 0; ch < 3; ++ch) penalty += logw[bin(o.triples[ex][i * 3 + size_t(q)], ch)] - lowest;
+          out[i * size_t(d1) + size_t(d0)] = int8_t(std::min(127.0, std::round(std::sqrt(lambda * penalty))));
+        }
+      }
+    }
+  }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -133,6 +195,7 @@ int main(int argc, char** argv) {
     if (env("FK3D", 0) > 0) a.levels.back().k3d = int(env("FK3D", 4));
     if (env("FK2D", 0) > 0) a.levels.back().k2d = int(env("FK2D", 2));
     if (env("CK3D", 0) > 0) for (auto& l : a.levels) if (&l != &a.levels.back()) l.k3d = int(env("CK3D", 12));
+    if (const double lambda = env("HISTPEN", 0); lambda > 0) applyHistogramPenalty(a, e, so, lambda);
     const ExemplarAnalysis a2 = analyzeExemplarCached(e, {}, cache, kCtx);
     const int ch = e.channels;
     const double exStd = lumStd(e);
