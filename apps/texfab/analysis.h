@@ -21,7 +21,13 @@ synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, con
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached);
 
+/// Warns when an exemplar does not tile (solid synthesis treats it as toroidal) or when the
+/// exemplars' colours differ (a voxel shows the mean of its three colours, so every slice blends them).
 synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
                                       const synthesis::SolidAnalysisOptions& options, bool& cached);
+
+/// `image` with `channels` (1 or 3) colour channels, as solid synthesis reads it: a grey image's
+/// value in each channel, an RGB image's first three.
+Image solidColorView(const Image& image, int channels);
 
 } // namespace texfab::cli

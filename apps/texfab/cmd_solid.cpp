@@ -77,7 +77,9 @@ public:
     if (z_ == m) middle_ = slice;
     ++z_;
   }
-  std::vector<MeasuredSlice> take() { return {{"x", 0, std::move(x_)}, {"y", 1, std::move(y_)}, {"z", 2, std::move(middle_)}}; }
+  std::vector<MeasuredSlice> take() {
+    return {{"x", 0, std::move(x_)}, {"y", 1, std::move(y_)}, {"z", 2, std::move(middle_)}};
+  }
 
 private:
   int n_, z_ = 0;
@@ -250,7 +252,8 @@ nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, co
     const Image& ex = *exemplars[slice.axis];
     const synthesis::QualityReport& b = baselineOf(ex, slice.image);
     Stage stage(run.ctx(), "measures " + slice.name);
-    const synthesis::QualityReport q = synthesis::measureQuality(slice.image, ex, nullptr, {}, stage.inner());
+    const synthesis::QualityReport q =
+        synthesis::measureQuality(slice.image, solidColorView(ex, slice.image.channels), nullptr, {}, stage.inner());
     stage.finish("contrast " + figure(q.contrast) + ", fidelity " + figure(q.fidelity / b.fidelity) + "x 2-D synthesis'");
     j[slice.name] = toJson(q, b);
     contrast += q.contrast / double(slices.size());
@@ -290,9 +293,9 @@ void runSolid(SolidJob& job) {
                     {"mean_candidates_kept", analysis.stats.meanCandidatesBeforeFilter},
                     {"mean_candidates_coherent", analysis.stats.meanCandidatesAfterFilter}};
   const synthesis::SolidSynthesisOptions& o = job.options;
-  r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"offset_cells", o.offsetCells}, {"passes", o.passes},
-                     {"finest_passes", o.finestPasses},
-                     {"subpasses", o.subpasses()}, {"scale", job.scale}};
+  r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"offset_cells", o.offsetCells},
+                     {"passes", o.passes}, {"finest_passes", o.finestPasses}, {"subpasses", o.subpasses()},
+                     {"scale", job.scale}};
   int64_t synthesized = 0;
   for (const synthesis::SolidLevelStats& l : s.levels) synthesized += l.voxels;
   r["levels"] = toJson(s.levels);

@@ -115,6 +115,31 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
   EXPECT_EQ(readImage(dir / "o.png").width, 16);
 }
 
+// A voxel shows the mean of its three exemplar colours: exemplars of different colours (grey marble
+// and red brick) get a warning, one material along two axes (marble and its transpose) does not.
+// The report measures each axis against its own exemplar, grey or RGB.
+TEST(CliSolid, WarnsWhenTheExemplarsDifferInColour) {
+  TempDir dir;
+  const std::string marble = smallExemplar(dir), brick = smallExemplar(dir, 32, "brick.png", "brick.png");
+  const Image m = readImage(marble);
+  Image transposed(m.width, m.height, m.channels, m.format);
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x)
+      for (int c = 0; c < m.channels; ++c) transposed.at(y, x, c) = m.at(x, y, c);
+  writeImage(transposed, dir / "transposed.png");
+  for (const auto& [other, differ] : {std::pair{brick, true}, std::pair{(dir / "transposed.png").string(), false}}) {
+    const fs::path out = dir / (differ ? "a" : "b"), json = dir / (differ ? "a.json" : "b.json");
+    const Outcome r = texfab("solid " + marble + " --exemplar-y " + other + " --volume 8 -q --no-cache -o " +
+                             out.string() + " --report " + json.string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err.find("differ in colour") != std::string::npos, differ) << other << ": " << r.err;
+    std::ifstream in(json);
+    const auto report = nlohmann::json::parse(in);
+    for (const char* axis : {"x", "y", "z"})
+      EXPECT_GT(report["measures"]["slices"][axis]["fidelity_ratio"].get<double>(), 0.0) << other << " " << axis;
+  }
+}
+
 // Solid synthesis treats every exemplar as toroidal: one that does not tile gets a warning.
 TEST(CliSolid, WarnsWhenTheExemplarDoesNotTile) {
   TempDir dir;
