@@ -26,7 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr uint32_t kGlbMagic = 0x46546C67, kChunkJson = 0x4E4F534A, kChunkBin = 0x004E4942;
 
 uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
 
@@ -532,9 +531,9 @@ GlbChunks splitGlb(const std::string& name, const std::vector<uint8_t>& bytes) {
     if (at + 8 + chunkLength > length) throw Error(name + ": GLB chunk overruns the file");
     const uint8_t* chunk = bytes.data() + at + 8;
     if (at == 12) {
-      if (type != kChunkJson) throw Error(name + ": GLB does not start with a JSON chunk");
+      if (type != kGlbChunkJson) throw Error(name + ": GLB does not start with a JSON chunk");
       chunks.json.assign(reinterpret_cast<const char*>(chunk), chunkLength);
-    } else if (type == kChunkBin && !chunks.bin) {
+    } else if (type == kGlbChunkBin && !chunks.bin) {
       chunks.bin.emplace(chunk, chunk + chunkLength);
     }
     at += 8 + ((chunkLength + 3) & ~uint64_t(3));
@@ -575,28 +574,6 @@ std::string loaderDocument(json doc) {
   return doc.dump();
 }
 
-// A GLB around `document` and the binary chunk.
-std::string packGlb(const std::string& document, const std::optional<std::vector<uint8_t>>& bin) {
-  std::string packed(12, '\0');
-  std::string jsonChunk = document;
-  while (jsonChunk.size() % 4) jsonChunk += ' ';
-  auto put32 = [&](uint32_t v) {
-    for (int i = 0; i < 4; ++i) packed += char((v >> (8 * i)) & 0xff);
-  };
-  put32(uint32_t(jsonChunk.size()));
-  put32(kChunkJson);
-  packed += jsonChunk;
-  if (bin) {
-    put32(uint32_t(bin->size()));
-    put32(kChunkBin);
-    packed.append(reinterpret_cast<const char*>(bin->data()), bin->size());
-    while (packed.size() % 4) packed += '\0';
-  }
-  const uint32_t header[3] = {kGlbMagic, 2, uint32_t(packed.size())};
-  std::memcpy(packed.data(), header, 12);
-  return packed;
-}
-
 tinygltf::Model loadModel(const fs::path& path, const std::string& document, bool glb,
                           const std::optional<std::vector<uint8_t>>& bin) {
   tinygltf::TinyGLTF loader;
@@ -608,7 +585,7 @@ tinygltf::Model loadModel(const fs::path& path, const std::string& document, boo
   std::string err, warn;
   bool ok = false;
   if (glb) {
-    const std::string packed = packGlb(document, bin);
+    const std::string packed = packGlb(document, bin ? &*bin : nullptr, path.string());
     ok = loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(packed.data()),
                                      uint32_t(packed.size()), context.folder.string());
   } else {

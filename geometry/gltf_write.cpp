@@ -364,24 +364,7 @@ void GltfDocument::write() {
   std::vector<uint8_t>& buffer = b_.buffer();
   if (binary_) {
     if (!buffer.empty()) doc["buffers"] = json::array({{{"byteLength", buffer.size()}}});
-    std::string text = doc.dump();
-    while (text.size() % 4) text += ' ';
-    const uint64_t total = 12 + 8 + text.size() + (buffer.empty() ? 0 : 8 + buffer.size());
-    if (total > UINT32_MAX) throw Error(path_.string() + ": the model is too large for a GLB file (4 GiB)");
-    auto put32 = [&](uint32_t v) {
-      for (int i = 0; i < 4; ++i) out += char((v >> (8 * i)) & 0xff);
-    };
-    put32(0x46546C67);
-    put32(2);
-    put32(uint32_t(total));
-    put32(uint32_t(text.size()));
-    put32(0x4E4F534A);
-    out += text;
-    if (!buffer.empty()) {
-      put32(uint32_t(buffer.size()));
-      put32(0x004E4942);
-      out.append(reinterpret_cast<const char*>(buffer.data()), buffer.size());
-    }
+    out = packGlb(doc.dump(), buffer.empty() ? nullptr : &buffer, path_.string());
   } else {
     if (!buffer.empty()) {
       std::string uri;
@@ -400,6 +383,31 @@ void GltfDocument::write() {
 }
 
 } // namespace
+
+std::string packGlb(std::string_view json, const std::vector<uint8_t>* bin, const std::string& shownAs) {
+  const size_t jsonBytes = (json.size() + 3) / 4 * 4, binBytes = bin ? (bin->size() + 3) / 4 * 4 : 0;
+  const uint64_t total = 12 + 8 + uint64_t(jsonBytes) + (bin ? 8 + uint64_t(binBytes) : 0);
+  if (total > UINT32_MAX) throw Error(shownAs + ": the model is too large for a GLB file (4 GiB)");
+  std::string out;
+  out.reserve(size_t(total));
+  auto put32 = [&](uint32_t v) {
+    for (int i = 0; i < 4; ++i) out += char((v >> (8 * i)) & 0xff);
+  };
+  put32(kGlbMagic);
+  put32(2);
+  put32(uint32_t(total));
+  put32(uint32_t(jsonBytes));
+  put32(kGlbChunkJson);
+  out += json;
+  out.append(jsonBytes - json.size(), ' ');
+  if (bin) {
+    put32(uint32_t(binBytes));
+    put32(kGlbChunkBin);
+    out.append(reinterpret_cast<const char*>(bin->data()), bin->size());
+    out.append(binBytes - bin->size(), '\0');
+  }
+  return out;
+}
 
 void writeGltfScene(std::span<const SceneNode> nodes, const fs::path& path, const fs::path& tmp, bool binary,
                     const MeshWriteOptions& options, std::vector<std::pair<fs::path, fs::path>>& sideFiles) {

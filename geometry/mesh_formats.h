@@ -64,6 +64,13 @@ private:
   size_t line_ = 0;
 };
 
+/// A material of an OBJ or PLY file: a dielectric (metallic 0, roughness 0.8) unless the file
+/// says otherwise.
+Material importedMaterial(std::string name = {});
+/// A corner normal as a file gives it: unit length, or triangle t's own normal where it is zero.
+/// Throws texfab::Error naming `path` when it is NaN or infinite.
+Eigen::Vector3f importedNormal(const Eigen::Vector3f& n, const Mesh& mesh, size_t t, const std::filesystem::path& path);
+
 /// Splits on spaces/tabs.
 std::vector<std::string_view> splitWords(std::string_view line);
 /// Strict number parsing; false on garbage or overflow.
@@ -73,6 +80,14 @@ bool parseInt(std::string_view word, long long& value);
 } // namespace texfab::geometry::detail
 
 namespace texfab::geometry::detail {
+
+/// GLB container constants (glTF 2.0 §4.4).
+inline constexpr uint32_t kGlbMagic = 0x46546C67, kGlbChunkJson = 0x4E4F534A, kGlbChunkBin = 0x004E4942;
+
+/// A GLB file: the 12-byte header, the JSON chunk (padded with spaces) and, unless `bin` is null,
+/// the binary chunk (padded with zeros). Throws texfab::Error naming `shownAs` when it would
+/// exceed the format's 4 GiB.
+std::string packGlb(std::string_view json, const std::vector<uint8_t>* bin, const std::string& shownAs);
 
 /// One glTF primitive's vertex data, per vertex (glTF layout), used for Draco coding.
 struct VertexArrays {

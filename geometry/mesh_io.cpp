@@ -160,6 +160,19 @@ std::string_view TextCursor::nextLine() {
   return line;
 }
 
+Material importedMaterial(std::string name) {
+  Material m;
+  m.name = std::move(name);
+  m.metallicFactor = 0.0f;
+  m.roughnessFactor = 0.8f;
+  return m;
+}
+
+Eigen::Vector3f importedNormal(const Eigen::Vector3f& n, const Mesh& mesh, size_t t, const fs::path& path) {
+  if (!n.allFinite()) throw Error(path.string() + ": a normal is NaN or infinite");
+  return n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh, t);
+}
+
 std::vector<std::string_view> splitWords(std::string_view line) {
   std::vector<std::string_view> words;
   size_t i = 0;

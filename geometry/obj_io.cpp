@@ -97,12 +97,8 @@ void readMtl(const fs::path& obj, const std::string& reference, std::vector<Mate
     const std::string_view key = words[0];
     if (key == "newmtl") {
       std::string name = words.size() > 1 ? std::string(words[1]) : std::string();
-      Material m;
-      m.name = name;
-      m.metallicFactor = 0.0f;  // OBJ materials are dielectrics unless Pm says otherwise
-      m.roughnessFactor = 0.8f;
       byName[name] = uint32_t(materials.size());
-      materials.push_back(std::move(m));
+      materials.push_back(importedMaterial(name));  // a dielectric unless Pm says otherwise
       current = &materials.back();
       continue;
     }
@@ -197,9 +193,8 @@ public:
     if (anyVn) {
       mesh_.normals.resize(corners_.size());
       for (size_t c = 0; c < corners_.size(); ++c) {
-        Eigen::Vector3f n = corners_[c].vn ? vns_[size_t(corners_[c].vn - 1)] : faceNormal(mesh_, c / 3);
-        if (!n.allFinite()) throw Error(path_.string() + ": a normal is NaN or infinite");
-        mesh_.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh_, c / 3);
+        const Eigen::Vector3f n = corners_[c].vn ? vns_[size_t(corners_[c].vn - 1)] : faceNormal(mesh_, c / 3);
+        mesh_.normals[c] = importedNormal(n, mesh_, c / 3, path_);
       }
     }
     if (mesh_.materials.empty() || !anyMaterialUsed_) mesh_.faceMaterials.clear();
@@ -266,10 +261,7 @@ private:
   void useMaterial(const std::string& name) {
     if (!byName_.count(name)) {
       // Unknown material: a plain grey one (many exporters reference materials they did not write).
-      Material m;
-      m.name = name;
-      m.metallicFactor = 0.0f;
-      m.roughnessFactor = 0.8f;
+      Material m = importedMaterial(name);
       m.baseColorFactor = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);
       byName_[name] = uint32_t(mesh_.materials.size());
       mesh_.materials.push_back(std::move(m));

@@ -212,19 +212,14 @@ public:
     if (vertexNormals_.size() == mesh_.positions.size() && !vertexNormals_.empty()) {
       mesh_.normals.resize(corners);
       for (size_t c = 0; c < corners; ++c) {
-        const Eigen::Vector3f n = vertexNormals_[mesh_.triangles[c / 3][c % 3]];
-        if (!n.allFinite()) throw Error(path_.string() + ": a normal is NaN or infinite");
-        mesh_.normals[c] = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : faceNormal(mesh_, c / 3);
+        mesh_.normals[c] = importedNormal(vertexNormals_[mesh_.triangles[c / 3][c % 3]], mesh_, c / 3, path_);
       }
     }
     if (mesh_.faceMaterials.size() != mesh_.triangles.size()) {
       mesh_.faceMaterials.clear();
     } else if (!mesh_.faceMaterials.empty()) {
-      mesh_.materials.resize(*std::max_element(mesh_.faceMaterials.begin(), mesh_.faceMaterials.end()) + 1);
-      for (Material& m : mesh_.materials) {
-        m.metallicFactor = 0.0f;
-        m.roughnessFactor = 0.8f;
-      }
+      mesh_.materials.assign(*std::max_element(mesh_.faceMaterials.begin(), mesh_.faceMaterials.end()) + 1,
+                             importedMaterial());
     }
     return std::move(mesh_);
   }
