@@ -814,6 +814,15 @@ int solidColorChannels(const Image& ex, const Image& ey, const Image& ez) {
   return (ex.channels >= 3 || ey.channels >= 3 || ez.channels >= 3) ? 3 : 1;
 }
 
+Image solidColorView(const Image& image, int channels) {
+  if (image.channels == channels) return image;
+  Image out(image.width, image.height, channels, image.format);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c = 0; c < channels; ++c) out.at(x, y, c) = image.at(x, y, image.channels >= 3 ? c : 0);
+  return out;
+}
+
 void solidColors(std::span<const Triple> triples, const Image& ex, const Image& ey, const Image& ez,
                  std::vector<float>& out) {
   const int channels = solidColorChannels(ex, ey, ez);

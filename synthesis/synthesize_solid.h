@@ -172,6 +172,9 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& analysis, const Vox
 /// channels, or grey). `channels` is 3, or 1 when all three exemplars are grey. Values are
 /// appended to `out`, `channels` per triple.
 int solidColorChannels(const Image& ex, const Image& ey, const Image& ez);
+/// `image` with `channels` (1 or 3) colour channels as solidColors reads it: a grey image's value
+/// in each channel, an RGB image's first three (a copy when it has them already).
+Image solidColorView(const Image& image, int channels);
 void solidColors(std::span<const Triple> triples, const Image& ex, const Image& ey, const Image& ez,
                  std::vector<float>& out);
 

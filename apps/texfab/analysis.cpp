@@ -77,8 +77,8 @@ synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey
   for (int a = 0; a < 3; ++a)
     for (int b = a + 1; b < 3; ++b)
       if (axes[size_t(a)] != axes[size_t(b)]) {
-        const double d = synthesis::histogramDistance(solidColorView(*axes[size_t(a)], channels),
-                                                      solidColorView(*axes[size_t(b)], channels));
+        const double d = synthesis::histogramDistance(synthesis::solidColorView(*axes[size_t(a)], channels),
+                                                      synthesis::solidColorView(*axes[size_t(b)], channels));
         if (d > worst) worst = d, pair = {"xyz"[a], "xyz"[b]};
       }
   if (worst > kSolidColorMismatch) {
@@ -98,15 +98,6 @@ synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey
   stage.finish(cached ? "(cached)"
                       : std::to_string(a.levels.size()) + " levels" + (a.shared ? ", candidates shared" : ""));
   return a;
-}
-
-Image solidColorView(const Image& image, int channels) {
-  if (image.channels == channels) return image;
-  Image out(image.width, image.height, channels, image.format);
-  for (int y = 0; y < image.height; ++y)
-    for (int x = 0; x < image.width; ++x)
-      for (int c = 0; c < channels; ++c) out.at(x, y, c) = image.at(x, y, image.channels >= 3 ? c : 0);
-  return out;
 }
 
 } // namespace texfab::cli

@@ -26,8 +26,4 @@ synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, con
 synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
                                       const synthesis::SolidAnalysisOptions& options, bool& cached);
 
-/// `image` with `channels` (1 or 3) colour channels, as solid synthesis reads it: a grey image's
-/// value in each channel, an RGB image's first three.
-Image solidColorView(const Image& image, int channels);
-
 } // namespace texfab::cli

@@ -253,7 +253,8 @@ nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, co
     const synthesis::QualityReport& b = baselineOf(ex, slice.image);
     Stage stage(run.ctx(), "measures " + slice.name);
     const synthesis::QualityReport q =
-        synthesis::measureQuality(slice.image, solidColorView(ex, slice.image.channels), nullptr, {}, stage.inner());
+        synthesis::measureQuality(slice.image, synthesis::solidColorView(ex, slice.image.channels), nullptr, {},
+                                  stage.inner());
     stage.finish("contrast " + figure(q.contrast) + ", fidelity " + figure(q.fidelity / b.fidelity) + "x 2-D synthesis'");
     j[slice.name] = toJson(q, b);
     contrast += q.contrast / double(slices.size());
