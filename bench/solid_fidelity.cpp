@@ -10,6 +10,7 @@
 // INTERLEAVE, MATCH (matchColors 0/1), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and synthesis options), FK3D, FK2D,
 // CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
 // (writes the exemplars as PNG and stops),
+// WRAP=clamp (non-toroidal analyses, 2-D and solid, and fidelity measured without wrap),
 // RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png),
 // HISTPEN=lambda with HPITERS, HPBINS, HPBOX, HPALPHA, HPALL (see applyHistogramPenalty).
 #include "render/image/image_io.h"
@@ -180,6 +181,10 @@ int main(int argc, char** argv) {
   ao.coherenceIterations = int(env("COHIT", ao.coherenceIterations));
   ao.levels = int(env("LEVELS", ao.levels));
   ao.candidates2d = int(env("K2D", ao.candidates2d));
+  const bool clamp = std::getenv("WRAP") && std::string(std::getenv("WRAP")) == "clamp";
+  AnalysisOptions ao2;
+  FidelityOptions fo;
+  if (clamp) ao.wrap = ao2.wrap = ExemplarWrap::Clamp, fo.toroidal = false;
   const std::string cache = "/tmp/solidfid-cache";
   std::map<std::string, std::vector<double>> sums;
   for (int i = 1; i < argc; ++i) {
@@ -196,13 +201,13 @@ int main(int argc, char** argv) {
     if (env("FK2D", 0) > 0) a.levels.back().k2d = int(env("FK2D", 2));
     if (env("CK3D", 0) > 0) for (auto& l : a.levels) if (&l != &a.levels.back()) l.k3d = int(env("CK3D", 12));
     if (const double lambda = env("HISTPEN", 0); lambda > 0) applyHistogramPenalty(a, e, so, lambda);
-    const ExemplarAnalysis a2 = analyzeExemplarCached(e, {}, cache, kCtx);
+    const ExemplarAnalysis a2 = analyzeExemplarCached(e, ao2, cache, kCtx);
     const int ch = e.channels;
     const double exStd = lumStd(e);
     // 2-D synthesis baseline.
     const SynthesisResult s2 = synthesize2d(a2, {0, 0, n, n}, {}, kCtx);
     const Image im2 = applyCoords(s2.coords, e);
-    const double f2 = neighborhoodFidelity(im2, e), h2 = histogramDistance(im2, e);
+    const double f2 = neighborhoodFidelity(im2, e, fo), h2 = histogramDistance(im2, e);
     if (std::getenv("SAVE")) writeImage(im2, "/tmp/solidfid-2d.png"), writeImage(e, "/tmp/solidfid-ex.png");
     const SynthesisResult s2b = synthesize2d(a2, {0, 0, big, big}, {}, kCtx);
     const double sc2 = shiftedSelfCorrelation(applyCoords(s2b.coords, e), e.width, e.height);
@@ -212,7 +217,7 @@ int main(int argc, char** argv) {
         const uint32_t hh = voxelHash(3, 0, x, y, 0, 0);
         for (int c = 0; c < ch; ++c) rnd.at(x, y, c) = e.at(int(hh % uint32_t(e.width)), int((hh >> 12) % uint32_t(e.height)), c);
       }
-    const double fr = neighborhoodFidelity(rnd, e);
+    const double fr = neighborhoodFidelity(rnd, e, fo);
     std::printf("\n%s %dx%d: 2D contrast %.3f fidelity %.4f (random %.4f) hist %.4f shifted %.3f\n", argv[i], e.width,
                 e.height, lumStd(im2) / exStd, f2, fr, h2, sc2);
 
@@ -317,7 +322,7 @@ int main(int argc, char** argv) {
       char buf[256];
       for (const Plane& p : planes) {
         const Image im = image(p);
-        const double c = lumStd(im) / exStd, f = neighborhoodFidelity(im, e), hd = histogramDistance(im, e);
+        const double c = lumStd(im) / exStd, f = neighborhoodFidelity(im, e, fo), hd = histogramDistance(im, e);
         cr += c / 4, fid += f / 4, hist += hd / 4;
         std::snprintf(buf, sizeof buf, " %s:%.2f/%.2f/%.3f", p.name.c_str(), c, f / f2, hd);
         line += buf;

@@ -41,15 +41,6 @@ int wrap(int a, int m) {
   return r < 0 ? r + m : r;
 }
 
-// a mirrored into [0, m): ... 1 0 | 0 1 ... m-1 | m-1 m-2 ... (period 2m).
-int mirror(int a, int m) {
-  const int r = wrap(a, 2 * m);
-  return r < m ? r : 2 * m - 1 - r;
-}
-
-// The exemplar index of a (possibly outside) position, by the border rule.
-int fold(int a, int m, ExemplarWrap w) { return w == ExemplarWrap::Tile ? wrap(a, m) : mirror(a, m); }
-
 // The channels analysis looks at: RGB, or grey for 1- and 2-channel images. Alpha is ignored.
 Image colorChannels(const Image& exemplar) {
   const int c = exemplar.channels >= 3 ? 3 : 1;
@@ -69,7 +60,8 @@ Image binomialPass(const Image& in, int step, bool horizontal, ExemplarWrap w, c
       for (int x = 0; x < in.width; ++x)
         for (int t = 0; t < 5; ++t) {
           const int o = (t - 2) * step;
-          const float* p = horizontal ? in.pixel(fold(x + o, in.width, w), y) : in.pixel(x, fold(y + o, in.height, w));
+          const float* p =
+              horizontal ? in.pixel(foldIndex(x + o, in.width, w), y) : in.pixel(x, foldIndex(y + o, in.height, w));
           float* q = out.pixel(x, y);
           for (int c = 0; c < in.channels; ++c) q[c] += kTaps[t] * p[c];
         }
@@ -150,7 +142,8 @@ void patchOf(const Image& level, int x, int y, int spacing, ExemplarWrap w, cons
   for (int j = -kPatchRadius; j <= kPatchRadius; ++j)
     for (int i = -kPatchRadius; i <= kPatchRadius; ++i) {
       const float wgt = weights[(j + kPatchRadius) * side + i + kPatchRadius];
-      const float* p = level.pixel(fold(x + i * spacing, level.width, w), fold(y + j * spacing, level.height, w));
+      const float* p =
+          level.pixel(foldIndex(x + i * spacing, level.width, w), foldIndex(y + j * spacing, level.height, w));
       for (int ch = 0; ch < level.channels; ++ch) *out++ = wgt * p[ch];
     }
 }
@@ -254,8 +247,8 @@ std::vector<int8_t> runtimeNeighborhoods(const std::vector<int8_t>& appearance, 
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       for (int i = 0; i < kNeighborhoodSamples; ++i) {
-        const int sx = fold(x + kDiagonalX[i] * spacing, w, wrapMode);
-        const int sy = fold(y + kDiagonalY[i] * spacing, h, wrapMode);
+        const int sx = foldIndex(x + kDiagonalX[i] * spacing, w, wrapMode);
+        const int sy = foldIndex(y + kDiagonalY[i] * spacing, h, wrapMode);
         std::memcpy(&out[(size_t(y) * w + x) * kNeighborhoodDims + size_t(i) * kAppearanceDims],
                     &appearance[(size_t(sy) * w + sx) * kAppearanceDims], kAppearanceDims);
       }
@@ -378,6 +371,12 @@ int stackLevelCount(int width, int height) {
   return int(std::bit_width(std::bit_ceil(side)));  // ceil(log2(side)) + 1
 }
 
+int foldIndex(int a, int side, ExemplarWrap wrapMode) {
+  if (wrapMode == ExemplarWrap::Tile) return wrap(a, side);
+  const int r = wrap(a, 2 * side);  // mirrored: period 2 side
+  return r < side ? r : 2 * side - 1 - r;
+}
+
 const char* toString(ExemplarWrap wrapMode) { return wrapMode == ExemplarWrap::Tile ? "tile" : "clamp"; }
 
 ValidRegion validRegion(int width, int height, int spacing, ExemplarWrap wrapMode) {
@@ -400,7 +399,9 @@ Image featureDistance(const Image& exemplar, ExemplarWrap wrapMode) {
       const float* p = color.pixel(x, y);
       luminance[size_t(y) * w + x] = color.channels == 3 ? 0.299f * p[0] + 0.587f * p[1] + 0.114f * p[2] : p[0];
     }
-  auto lum = [&](int x, int y) { return luminance[size_t(fold(y, h, wrapMode)) * w + size_t(fold(x, w, wrapMode))]; };
+  auto lum = [&](int x, int y) {
+    return luminance[size_t(foldIndex(y, h, wrapMode)) * w + size_t(foldIndex(x, w, wrapMode))];
+  };
   std::vector<float> gradient(luminance.size());
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {  // Sobel

@@ -106,6 +106,10 @@ struct AnalysisOptions {
   void validate() const;
 };
 
+/// The exemplar index of a position that may lie outside [0, side): wrapped (Tile) or mirrored,
+/// ... 1 0 | 0 1 ... side-1 | side-1 side-2 ... (Clamp).
+int foldIndex(int a, int side, ExemplarWrap wrap);
+
 /// The exemplar pixels synthesis may use at one level: [x0, x1] x [y0, y1], inclusive.
 struct ValidRegion {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
@@ -122,7 +126,7 @@ struct AnalysisLevel {
   ValidRegion valid;  ///< coordinates synthesis may use at this level
   std::vector<int8_t> appearance;    ///< width*height*kAppearanceDims, quantized PCA coefficients
   std::vector<int8_t> neighborhood;  ///< width*height*kNeighborhoodDims: appearance at u + spacing*(±1,±1)
-  std::vector<uint32_t> candidates;  ///< width*height*k exemplar indices (y*width+x); [0] is the pixel
+  std::vector<uint32_t> candidates;  ///< width*height*k packed coordinates (coord_map.h); [0] is the pixel
 };
 
 /// Everything synthesis reads about an exemplar. Levels go from 0 (coarsest, spacing 2^L)

@@ -9,6 +9,7 @@
 #include "render/image/parallel.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/hash.h"
 
@@ -29,7 +30,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr uint32_t kSolidMagic = 0x444c5354;  // "TSLD"
-constexpr uint32_t kSolidVersion = 3;         // bump whenever the analysis changes
+constexpr uint32_t kSolidVersion = 4;         // bump whenever the analysis changes
 constexpr int kStripLength = kSolidNeighborhoodSide;
 constexpr int kStripDims = kStripLength * 3;
 constexpr int kRadius = kSolidNeighborhoodSide / 2;
@@ -59,8 +60,26 @@ std::vector<uint8_t> levelColors(const Image& level) {
 struct Exemplar8 {
   int w = 0, h = 0;
   const uint8_t* rgb = nullptr;
-  const uint8_t* at(int u, int v) const { return rgb + (size_t(wrap(v, h)) * w + size_t(wrap(u, w))) * 3; }
+  ExemplarWrap border = ExemplarWrap::Tile;  // how positions outside the exemplar are read
+  const uint8_t* at(int u, int v) const {
+    return rgb + (size_t(foldIndex(v, h, border)) * w + size_t(foldIndex(u, w, border))) * 3;
+  }
 };
+
+// A pixel index p = v * w + u moved into `valid` (reflectInto per axis); itself when inside.
+uint32_t reflectPixel(uint32_t p, int w, const ValidRegion& valid) {
+  const int64_t u = cpu::reflectInto(p % uint32_t(w), valid.x0, valid.x1);
+  const int64_t v = cpu::reflectInto(p / uint32_t(w), valid.y0, valid.y1);
+  return uint32_t(v * w + u);
+}
+
+// The indices of the pixels of `valid`, ascending.
+std::vector<uint32_t> pixelsIn(const ValidRegion& valid, int w) {
+  std::vector<uint32_t> out;
+  for (int v = valid.y0; v <= valid.y1; ++v)
+    for (int u = valid.x0; u <= valid.x1; ++u) out.push_back(uint32_t(v * w + u));
+  return out;
+}
 
 // The strip through p along u (row) or v (column), taps `spacing` apart.
 void strip(const Exemplar8& e, int u, int v, bool column, int spacing, int32_t* out) {
@@ -98,18 +117,19 @@ struct Triple {  // relative to the exemplar it belongs to: the pixel, then next
   uint32_t q, r;  // pixel indices in the next and previous exemplars
 };
 
-// For each query strip, the s nearest strips among `points` by exact integer squared distance,
-// ties to the smaller index (an exact search, like the paper's ANN with no approximation). Brute
-// force as blocks of a float matrix product: exact, since every term is an integer below 2^24.
-std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const std::vector<int32_t>& points, int n,
-                                    int s, const Context& ctx) {
+// For each query strip, the s nearest strips among the strips of pixels `allowed` (ascending) of
+// `points` by exact integer squared distance, as pixel indices, ties to the smaller index (an exact
+// search, like the paper's ANN with no approximation). Brute force as blocks of a float matrix
+// product: exact, since every term is an integer below 2^24.
+std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const std::vector<int32_t>& points,
+                                    const std::vector<uint32_t>& allowed, int s, const Context& ctx) {
   using Rows = Eigen::Matrix<float, Eigen::Dynamic, kStripDims, Eigen::RowMajor>;
-  Rows p(n, kStripDims), q(n, kStripDims);
+  const int n = int(queries.size() / kStripDims), np = int(allowed.size());
+  Rows p(np, kStripDims), q(n, kStripDims);
+  for (int i = 0; i < np; ++i)
+    for (int d = 0; d < kStripDims; ++d) p(i, d) = float(points[size_t(allowed[size_t(i)]) * kStripDims + size_t(d)]);
   for (int i = 0; i < n; ++i)
-    for (int d = 0; d < kStripDims; ++d) {
-      p(i, d) = float(points[size_t(i) * kStripDims + size_t(d)]);
-      q(i, d) = float(queries[size_t(i) * kStripDims + size_t(d)]);
-    }
+    for (int d = 0; d < kStripDims; ++d) q(i, d) = float(queries[size_t(i) * kStripDims + size_t(d)]);
   const Eigen::VectorXf pn = p.rowwise().squaredNorm();
   std::vector<uint32_t> out(size_t(n) * size_t(s));
   constexpr int kBlock = 32;
@@ -117,19 +137,19 @@ std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const s
     Eigen::MatrixXf dot;
     std::vector<uint64_t> heap;
     heap.reserve(size_t(s));
-    std::vector<int32_t> dist(static_cast<size_t>(n));
+    std::vector<int32_t> dist(static_cast<size_t>(np));
     for (int b = b0; b < b1; ++b) {
       const int r0 = b * kBlock, rows = std::min(kBlock, n - r0);
-      dot.noalias() = p * q.middleRows(r0, rows).transpose();  // n x rows: one column per query
+      dot.noalias() = p * q.middleRows(r0, rows).transpose();  // np x rows: one column per query
       for (int j = 0; j < rows; ++j) {
         const float qn = q.row(r0 + j).squaredNorm();
         const float* column = dot.col(j).data();
         const float* norms = pn.data();
         int32_t* d = dist.data();
-        for (int i = 0; i < n; ++i) d[i] = int32_t(qn + norms[i] - 2.0f * column[i]);  // < 2^24: exact
+        for (int i = 0; i < np; ++i) d[i] = int32_t(qn + norms[i] - 2.0f * column[i]);  // < 2^24: exact
         heap.clear();
         int32_t threshold = INT32_MAX;  // the worst distance kept, once the heap is full
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i < np; ++i) {
           if (dist[size_t(i)] > threshold) continue;
           const uint64_t key = (uint64_t(uint32_t(dist[size_t(i)])) << 32) | uint32_t(i);
           if (heap.size() < size_t(s)) {
@@ -144,7 +164,8 @@ std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const s
           }
         }
         std::sort_heap(heap.begin(), heap.end());
-        for (int k = 0; k < s; ++k) out[size_t(r0 + j) * size_t(s) + size_t(k)] = uint32_t(heap[size_t(k)]);
+        for (int k = 0; k < s; ++k)
+          out[size_t(r0 + j) * size_t(s) + size_t(k)] = allowed[size_t(uint32_t(heap[size_t(k)]))];
       }
     }
   }, 1);
@@ -152,12 +173,13 @@ std::vector<uint32_t> nearestStrips(const std::vector<int32_t>& queries, const s
 }
 
 // §4.1: in every pixel of exemplar `self`, the `kept` triples of least crossbar error built from
-// the S best strips of the next and previous exemplars.
+// the S best strips of the next and previous exemplars centred on pixels `allowed`.
 std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strips& next, const Strips& prev, int n,
-                                                 const SolidAnalysisOptions& o, const Context& ctx) {
-  const size_t s = std::min<size_t>(size_t(o.strips), size_t(n));
-  const std::vector<uint32_t> nearestNext = nearestStrips(self.cols, next.rows, n, int(s), ctx);
-  const std::vector<uint32_t> nearestPrev = nearestStrips(self.rows, prev.cols, n, int(s), ctx);
+                                                 const std::vector<uint32_t>& allowed, const SolidAnalysisOptions& o,
+                                                 const Context& ctx) {
+  const size_t s = std::min<size_t>(size_t(o.strips), allowed.size());
+  const std::vector<uint32_t> nearestNext = nearestStrips(self.cols, next.rows, allowed, int(s), ctx);
+  const std::vector<uint32_t> nearestPrev = nearestStrips(self.rows, prev.cols, allowed, int(s), ctx);
   std::vector<std::vector<Triple>> out(static_cast<size_t>(n));
   parallelFor(0, n, ctx, [&](int begin, int end) {
     std::vector<int32_t> d1(s), d2(s);
@@ -213,15 +235,22 @@ std::vector<std::vector<Triple>> crossbarTriples(const Strips& self, const Strip
 }
 
 // §4.2: keep a triple only if, for each foreign coordinate, a candidate of a 4-neighbor pixel has
-// that coordinate one tap (h) away. Iterates until no pixel has more than 12 candidates.
-void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int spacing, int iterations, const Context& ctx) {
+// that coordinate one tap (h) away. Iterates until no pixel has more than 12 candidates. Steps
+// wrap (Tile) or stop at the exemplar's border (Clamp).
+void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int spacing, ExemplarWrap border,
+                     int iterations, const Context& ctx) {
   const int n = w * h;
+  constexpr uint32_t kNone = UINT32_MAX;  // a step off a non-toroidal exemplar
   auto stepsOf = [&](uint32_t a, uint32_t* out) {
     const int u = int(a % uint32_t(w)), v = int(a / uint32_t(w));
-    out[0] = uint32_t(v * w + wrap(u + spacing, w));
-    out[1] = uint32_t(v * w + wrap(u - spacing, w));
-    out[2] = uint32_t(wrap(v + spacing, h) * w + u);
-    out[3] = uint32_t(wrap(v - spacing, h) * w + u);
+    const int du[4] = {spacing, -spacing, 0, 0}, dv[4] = {0, 0, spacing, -spacing};
+    for (int i = 0; i < 4; ++i) {
+      const int su = u + du[i], sv = v + dv[i];
+      const bool inside = su >= 0 && su < w && sv >= 0 && sv < h;
+      out[i] = border == ExemplarWrap::Tile ? uint32_t(wrap(sv, h) * w + wrap(su, w))
+               : inside                     ? uint32_t(sv * w + su)
+                                            : kNone;
+    }
   };
   for (int it = 0; it < iterations; ++it) {
     bool over = false;
@@ -245,16 +274,15 @@ void coherenceFilter(std::vector<std::vector<Triple>>& sets, int w, int h, int s
     std::vector<std::vector<Triple>> next(static_cast<size_t>(n));
     parallelFor(0, n, ctx, [&](int begin, int end) {
       for (int p = begin; p < end; ++p) {
-        const int u = p % w, v = p / w;
-        const int neighbors[4] = {v * w + wrap(u + spacing, w), v * w + wrap(u - spacing, w),
-                                  wrap(v + spacing, h) * w + u, wrap(v - spacing, h) * w + u};
+        uint32_t neighbors[4];
+        stepsOf(uint32_t(p), neighbors);
         auto found = [&](const std::vector<uint32_t>& flat, uint32_t coord) {
           uint32_t steps[4];
           stepsOf(coord, steps);
-          for (int nb : neighbors)
+          for (uint32_t nb : neighbors)
             for (uint32_t s : steps)
-              if (std::binary_search(flat.begin() + std::ptrdiff_t(offsets[size_t(nb)]),
-                                     flat.begin() + std::ptrdiff_t(offsets[size_t(nb) + 1]), s))
+              if (nb != kNone && std::binary_search(flat.begin() + std::ptrdiff_t(offsets[size_t(nb)]),
+                                                    flat.begin() + std::ptrdiff_t(offsets[size_t(nb) + 1]), s))
                 return true;
           return false;
         };
@@ -469,24 +497,46 @@ uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, con
   hash.add(o.coherenceIterations);
   hash.add(o.levels);
   hash.add(o.candidates2d);
+  hash.add(o.wrap);
   return hash.h;
 }
 
 namespace {
 
+// Stack levels solid synthesis may use: all, or (Clamp) those whose valid region is one tap
+// spacing inside the exemplar (spacing <= (side - 1) / 4, validRegion's bound).
+int solidLevelLimit(int w, int h, ExemplarWrap wrap) {
+  const int stackLevels = stackLevelCount(w, h);
+  if (wrap == ExemplarWrap::Tile) return stackLevels;
+  return std::min(stackLevels, int(std::bit_width(unsigned((std::min(w, h) - 1) / 4))));
+}
+
+// A level's 2-D k-coherence candidates, each moved into `valid` (reflectPixel), in place of
+// pixel p's own when p lies outside it.
+std::vector<uint32_t> candidatesIn(const AnalysisLevel& level2d, const ValidRegion& valid) {
+  std::vector<uint32_t> out = level2d.candidates;
+  for (uint32_t& c : out)
+    c = packCoord(uint32_t(cpu::reflectInto(coordU(c), valid.x0, valid.x1)),
+                  uint32_t(cpu::reflectInto(coordV(c), valid.y0, valid.y1)));
+  return out;
+}
+
 // The level's 3-D candidates (crossbar triples, §4.1, through the coherence filter, §4.2), found
 // per distinct exemplar relative to itself and stored with absolute axes for every exemplar that
-// shares them (all three when shared); the finest level's figures go to `stats`.
+// shares them (all three when shared); the finest level's figures go to `stats`. Foreign
+// coordinates come from the level's valid region; a pixel outside it takes the set of its
+// reflection into it.
 void candidateTriples(SolidLevel& level, const std::array<Exemplar8, 3>& ex, bool shared,
                       const SolidAnalysisOptions& options, bool finest, SolidAnalysisStats& stats, const Context& ctx) {
   const int w = ex[0].w, h = ex[0].h, n = w * h, distinct = shared ? 1 : 3;
   auto src = [&](int e) { return shared ? 0 : e; };
+  const std::vector<uint32_t> allowed = pixelsIn(level.valid, w);  // foreign coordinates
   std::vector<Strips> strips(static_cast<size_t>(distinct));
   for (int e = 0; e < distinct; ++e) strips[size_t(e)] = stripsOf(ex[size_t(e)], level.spacing);
   for (int e = 0; e < distinct; ++e) {
     const Strips& next = strips[size_t(src((e + 1) % 3))];
     const Strips& prev = strips[size_t(src((e + 2) % 3))];
-    std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, options, ctx);
+    std::vector<std::vector<Triple>> sets = crossbarTriples(strips[size_t(e)], next, prev, n, allowed, options, ctx);
     if (finest) {
       double kept = 0, best = 0;
       for (const auto& s : sets) {
@@ -496,7 +546,7 @@ void candidateTriples(SolidLevel& level, const std::array<Exemplar8, 3>& ex, boo
       stats.meanCandidatesBeforeFilter += kept / n / distinct;
       stats.meanBestCrossbarError += best / n / distinct;
     }
-    coherenceFilter(sets, w, h, level.spacing, options.coherenceIterations, ctx);
+    coherenceFilter(sets, w, h, level.spacing, options.wrap, options.coherenceIterations, ctx);
     if (finest) {
       double kept = 0;
       for (const auto& s : sets) kept += double(s.size());
@@ -508,11 +558,12 @@ void candidateTriples(SolidLevel& level, const std::array<Exemplar8, 3>& ex, boo
       out.resize(size_t(n) * kSolidMaxCandidates * 3);
       auto pack = [&](uint32_t index) { return packCoord(index % uint32_t(w), index / uint32_t(w)); };
       for (int p = 0; p < n; ++p) {
-        const auto& s = sets[size_t(p)];
+        const uint32_t self = reflectPixel(uint32_t(p), w, level.valid);  // p, unless in the margin
+        const auto& s = sets[self];
         for (int k = 0; k < kSolidMaxCandidates; ++k) {
           const Triple& t = s[size_t(k) < s.size() ? size_t(k) : 0];
           uint32_t* slot = &out[(size_t(p) * kSolidMaxCandidates + size_t(k)) * 3];
-          slot[target] = pack(uint32_t(p));
+          slot[target] = pack(self);
           slot[(target + 1) % 3] = pack(t.q);
           slot[(target + 2) % 3] = pack(t.r);
         }
@@ -582,9 +633,10 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   a.height = h;
   a.shared = shared;
   a.key = solidAnalysisKey(exIn, eyIn, ezIn, options);
+  a.wrap = options.wrap;
   const int stackLevels = stackLevelCount(w, h);
   a.finestStackLevel = stackLevels - 1;
-  const int levelCount = std::min(options.levels, stackLevels);
+  const int levelCount = std::min(options.levels, solidLevelLimit(w, h, options.wrap));
 
   // Stacks and 2-D k-coherence candidates, once per distinct exemplar.
   const int distinct = shared ? 1 : 3;
@@ -593,19 +645,24 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   AnalysisOptions options2d;
   options2d.k = options.candidates2d;
   options2d.searchNeighbors = std::max(options2d.searchNeighbors, options.candidates2d);
+  options2d.wrap = options.wrap;
   for (int e = 0; e < distinct; ++e) {
-    stacks[size_t(e)] = gaussianStack(*inputs[e]);
-    analyses2d[size_t(e)] = analyzeExemplar(*inputs[e], options2d, ctx);
+    Stage stage(ctx, distinct == 1 ? std::string("2-D analysis") : std::string("2-D analysis of E_") + "xyz"[e]);
+    stacks[size_t(e)] = gaussianStack(*inputs[e], options.wrap);
+    analyses2d[size_t(e)] = analyzeExemplar(*inputs[e], options2d, stage.inner());
+    stage.finish();
   }
   auto src = [&](int e) { return shared ? 0 : e; };
 
   a.levels.resize(size_t(levelCount));
   for (int li = 0; li < levelCount; ++li) {
+    Stage stage(ctx, "3-D candidates, level " + std::to_string(li + 1) + "/" + std::to_string(levelCount));
     SolidLevel& level = a.levels[size_t(li)];
     const int sl = a.finestStackLevel - (levelCount - 1 - li);
     const bool finest = li == levelCount - 1;
     level.stackLevel = sl;
     level.spacing = 1 << (a.finestStackLevel - sl);
+    level.valid = validRegion(w, h, level.spacing, options.wrap);
     level.dims = finest ? 8 : kSolidMaxDims;
     level.k2d = finest ? std::min(2, options.candidates2d) : options.candidates2d;
     level.k3d = finest ? 4 : kSolidMaxCandidates;
@@ -613,15 +670,17 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
     for (int e = 0; e < distinct; ++e) colors[size_t(e)] = levelColors(stacks[size_t(e)][size_t(sl)]);
     std::array<Exemplar8, 3> ex;
     for (int e = 0; e < 3; ++e) {
-      ex[size_t(e)] = {w, h, colors[size_t(src(e))].data()};
+      ex[size_t(e)] = {w, h, colors[size_t(src(e))].data(), options.wrap};
       level.colors[size_t(e)] = colors[size_t(src(e))];
-      level.candidates2d[size_t(e)] = analyses2d[size_t(src(e))].levels[size_t(sl)].candidates;
+      level.candidates2d[size_t(e)] = candidatesIn(analyses2d[size_t(src(e))].levels[size_t(sl)], level.valid);
     }
 
-    candidateTriples(level, ex, shared, options, finest, a.stats, ctx);
+    candidateTriples(level, ex, shared, options, finest, a.stats, stage.inner());
+    stage.advance(0.8);
     fitProjections(level, ex, shared);
-    projectNeighborhoods(level, ex, ctx);
+    projectNeighborhoods(level, ex, stage.inner());
     deriveTables(level, w);
+    stage.finish();
   }
   a.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return a;
@@ -686,6 +745,7 @@ void writeSolidAnalysis(const SolidAnalysis& a, const fs::path& path) {
     w.value(a.width);
     w.value(a.height);
     w.value(uint8_t(a.shared));
+    w.value(a.wrap);
     w.value(a.finestStackLevel);
     w.value(int32_t(a.levels.size()));
     w.value(a.stats);
@@ -722,12 +782,15 @@ std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t ex
   r.value(a.width);
   r.value(a.height);
   r.value(shared);
+  r.value(a.wrap);
   r.value(a.finestStackLevel);
   r.value(count);
   r.value(a.stats);
   if (!r.ok || magic != kSolidMagic || version != kSolidVersion || a.key != expectedKey) return std::nullopt;
   if (a.width < 8 || a.height < 8 || a.width > 1024 || a.height > 1024 ||
-      a.finestStackLevel != stackLevelCount(a.width, a.height) - 1 || count < 1 || count > a.finestStackLevel + 1)
+      (a.wrap != ExemplarWrap::Tile && a.wrap != ExemplarWrap::Clamp) ||
+      a.finestStackLevel != stackLevelCount(a.width, a.height) - 1 || count < 1 ||
+      count > solidLevelLimit(a.width, a.height, a.wrap))
     return std::nullopt;
   a.shared = shared != 0;
   const size_t n = size_t(a.width) * size_t(a.height);
@@ -742,6 +805,7 @@ std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t ex
     if (l.stackLevel != a.finestStackLevel - (count - 1 - li) || l.spacing != 1 << (a.finestStackLevel - l.stackLevel) ||
         l.dims < 1 || l.dims > kSolidMaxDims || l.k2d < 1 || l.k2d > 8 || l.k3d < 1 || l.k3d > kSolidMaxCandidates)
       return std::nullopt;
+    l.valid = validRegion(a.width, a.height, l.spacing, a.wrap);
     for (int e = 0; e < 3; ++e) {
       r.vec(l.colors[size_t(e)], n * 3);
       uint64_t k2 = 0;

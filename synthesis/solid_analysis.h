@@ -32,9 +32,19 @@
 //     exemplar colours) can go through a per-level histogram-matching table (searchColors), in
 //     the spirit of the histogram matching Kopf et al. 2007 (Solid Texture Synthesis from 2D
 //     Exemplars, §3.3) run inside their optimization, learned here once from the candidates.
+//
+// Non-toroidal exemplars (SolidAnalysisOptions::wrap = Clamp; the paper assumes toroidal ones):
+// the stack, strips and neighborhoods read mirrored borders instead of wrapped ones, and every
+// coordinate a table holds (3-D triples, 2-D candidates) lies in the level's valid region, a margin
+// of one tap spacing h_l inside the exemplar; a pixel of the margin takes the tables of its
+// reflection into the region. Synthesis then never wraps: a voxel's coordinates stay in the region
+// (they come from the tables), a step-1 shift by one tap stays in the exemplar, and upsampling
+// adds h_l / 2 to a coordinate at least h_l from the border. Only the levels whose h_l is at most
+// (side - 1) / 4 are synthesized (a 32x32 exemplar: 3 levels instead of 4).
 
 #include "render/image/context.h"
 #include "render/image/image.h"
+#include "synthesis/exemplar_analysis.h"
 
 #include <array>
 #include <cstdint>
@@ -65,6 +75,7 @@ struct SolidAnalysisOptions {
   int coherenceIterations = 3;  ///< coherence filter iterations at most (stops at <= 12 per pixel); 0..8
   int levels = 4;               ///< synthesized levels: the finest and those above it (paper: l_start = L-3); 1..8
   int candidates2d = 4;         ///< k-coherence 2-D candidates per pixel (coarse levels; finest uses 2); 1..8
+  ExemplarWrap wrap = ExemplarWrap::Tile;  ///< toroidal exemplars or not (detectExemplarWrap() decides for users)
 
   /// Throws texfab::Error naming the field when a value is out of range.
   void validate() const;
@@ -86,6 +97,7 @@ struct SolidProjection {
 struct SolidLevel {
   int stackLevel = 0;  ///< index into the Gaussian stack (L = finest)
   int spacing = 1;     ///< h_l = 2^(L - stackLevel): exemplar pixels between neighboring voxels
+  ValidRegion valid;   ///< every coordinate the tables hold: the whole exemplar, or (Clamp) h_l inside it
   int dims = 0;        ///< dimensions of the projected 3-neighborhoods at this level
   int k2d = 0;         ///< 2-D candidates used per pixel at this level
   int k3d = 0;         ///< 3-D candidates used per pixel at this level
@@ -122,6 +134,7 @@ struct SolidAnalysis {
   int width = 0;    ///< all three exemplars share this size
   int height = 0;
   bool shared = false;  ///< one image for the three axes: one candidate computation (§6.1)
+  ExemplarWrap wrap = ExemplarWrap::Tile;
   int finestStackLevel = 0;  ///< L
   std::vector<SolidLevel> levels;  ///< synthesized levels, coarsest (l_start) first
   SolidAnalysisStats stats;

@@ -56,6 +56,7 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
   t.k2d = l.k2d;
   t.k2dStride = int(l.candidates2d[0].size() / (size_t(a.width) * size_t(a.height)));
   t.k3d = l.k3d;
+  t.clampMargin = a.wrap == ExemplarWrap::Clamp ? l.valid.x0 : 0;
   for (int e = 0; e < 3; ++e) {
     // One image for the three axes: its per-pixel tables are identical; read one copy (cache).
     const size_t s = a.shared ? 0 : size_t(e);

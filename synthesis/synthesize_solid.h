@@ -34,7 +34,8 @@
 //     are still the mean of three;
 //   * the initialization reads the slab at a hashed offset per cell of 8 start-level voxels
 //     (SolidSynthesisOptions::offsetCells) instead of one tiling, whose period survived every level;
-//   * the volume has no size and nothing wraps: only exemplar coordinates wrap.
+//   * the volume has no size and nothing wraps: only exemplar coordinates wrap, and only those of a
+//     toroidal exemplar (for one that does not tile, see solid_analysis.h: they never need to).
 
 #include "render/image/context.h"
 #include "render/image/image.h"

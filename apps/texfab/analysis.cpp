@@ -56,20 +56,12 @@ synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, con
 }
 
 synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
-                                      const synthesis::SolidAnalysisOptions& options, bool& cached) {
+                                      synthesis::SolidAnalysisOptions options, WrapChoice wrap, bool& cached) {
   const std::array<const Image*, 3> axes = {&ex, &ey, &ez};
-  for (auto e = axes.begin(); e != axes.end(); ++e) {
-    if (std::find(axes.begin(), e, *e) != e) continue;  // one image for several axes: warn once
-    if (synthesis::detectExemplarWrap(**e) == synthesis::ExemplarWrap::Tile) continue;
-    const synthesis::WrapDiscontinuity d = synthesis::wrapDiscontinuity(**e);
-    char warning[320];
-    std::snprintf(warning, sizeof warning,
-                  "the exemplar does not tile (the color jump across its wrap is %.1fx the largest inside), and solid "
-                  "synthesis treats it as toroidal: its opposite borders can meet inside the solid; use a tileable "
-                  "exemplar (or surface mode, which can --exemplar-wrap clamp)",
-                  std::max(d.x, d.y));
-    run.ctx().warn(warning);
-  }
+  options.wrap = synthesis::ExemplarWrap::Tile;
+  for (auto e = axes.begin(); e != axes.end(); ++e)
+    if (std::find(axes.begin(), e, *e) == e && chooseWrap(wrap, **e, run) == synthesis::ExemplarWrap::Clamp)
+      options.wrap = synthesis::ExemplarWrap::Clamp;  // one image for several axes is measured once
   // The most different pair of distinct exemplars, as synthesis reads their colours.
   const int channels = synthesis::solidColorChannels(ex, ey, ez);
   double worst = 0;

@@ -21,9 +21,10 @@ synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, con
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached);
 
-/// Warns when an exemplar does not tile (solid synthesis treats it as toroidal) or when the
-/// exemplars' colours differ (a voxel shows the mean of its three colours, so every slice blends them).
+/// `options.wrap` is the choice's; auto: clamp when any of the exemplars does not tile. Warns when
+/// the exemplars' colours differ (a voxel shows the mean of its three colours, so every slice
+/// blends them).
 synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
-                                      const synthesis::SolidAnalysisOptions& options, bool& cached);
+                                      synthesis::SolidAnalysisOptions options, WrapChoice wrap, bool& cached);
 
 } // namespace texfab::cli

@@ -26,10 +26,10 @@ struct Exemplars {
   render::InteriorExemplar interiorView;
 };
 
-synthesis::SolidAnalysis solidAnalysis(Run& run, const Image& image) {
+synthesis::SolidAnalysis solidAnalysis(Run& run, const Image& image, WrapChoice wrap) {
   bool cached = false;
   synthesis::validateSolidExemplars(image, image, image);
-  return analyzeSolid(run, image, image, image, {}, cached);
+  return analyzeSolid(run, image, image, image, {}, wrap, cached);
 }
 
 void analyze(Run& run, const BreakJob& job, Exemplars& e) {
@@ -37,18 +37,20 @@ void analyze(Run& run, const BreakJob& job, Exemplars& e) {
     e.outerView.color = &*e.outer;
     if (job.options.outer.mode == render::TextureMode::Surface) {
       bool cached = false;
-      e.surface = analyzeExemplar(run, *e.outer, {}, cached);
+      synthesis::AnalysisOptions options;
+      options.wrap = chooseWrap(job.wrap, *e.outer, run);
+      e.surface = analyzeExemplar(run, *e.outer, options, cached);
       e.outerView.analysis = &*e.surface;
     } else {
-      e.outerSolid = solidAnalysis(run, *e.outer);
+      e.outerSolid = solidAnalysis(run, *e.outer, job.wrap);
       e.outerView.solidAnalysis = &*e.outerSolid;
     }
   }
   if (e.interior) {
-    e.interiorSolid = solidAnalysis(run, *e.interior);
+    e.interiorSolid = solidAnalysis(run, *e.interior, job.wrap);
     e.interiorView = {&*e.interior, &*e.interiorSolid};
   } else {
-    if (!e.outerSolid) e.outerSolid = solidAnalysis(run, *e.outer);
+    if (!e.outerSolid) e.outerSolid = solidAnalysis(run, *e.outer, job.wrap);
     e.interiorView = {&*e.outer, &*e.outerSolid};
   }
 }
@@ -125,6 +127,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   f.option("--gutter", o.interior.atlas.pack.gutter, "Minimum empty texels between charts",
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", job.seed, "Random seed of the textures (and of the fracture's sites)");
+  wrapFlag(f, job.wrap);
   f.option("--explode", job.explode, "Move the pieces apart by this factor of their offset from the centre", {0, 100});
   f.text("--separate", job.separate, "Also write each piece to its own file in this new (or empty) folder");
   f.modelOutput(job.write);

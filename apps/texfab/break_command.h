@@ -4,6 +4,7 @@
 // output, and the run (render/break_model.h): load, analyses, the job, one glTF node per piece,
 // --separate, --preview and the report. Each command adds its geometry flags.
 
+#include "apps/texfab/analysis.h"
 #include "apps/texfab/cli.h"
 #include "render/break_model.h"
 #include "render/preview_renderer.h"
@@ -20,6 +21,7 @@ struct BreakJob {
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;
   UpAxis up = UpAxis::Auto;
+  WrapChoice wrap = WrapChoice::Auto;
   CommonFlags common;
 };
 

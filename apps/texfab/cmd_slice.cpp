@@ -39,6 +39,7 @@ struct SliceJob {
   uint32_t seed = 1;
   int resolution = 2048;
   bool force = false;
+  WrapChoice wrap = WrapChoice::Auto;
   CommonFlags common;
 };
 
@@ -74,7 +75,9 @@ geometry::Mesh surfaceTextured(const SliceJob& job, Run& run, const geometry::Me
   o.measure = false;
   o.textureScale = job.featureSize > 0 ? std::max(exemplar.width, exemplar.height) / job.featureSize : job.textureScale;
   bool cached = false;
-  const synthesis::ExemplarAnalysis analysis = analyzeExemplar(run, exemplar, {}, cached);
+  synthesis::AnalysisOptions options;
+  options.wrap = chooseWrap(job.wrap, exemplar, run);
+  const synthesis::ExemplarAnalysis analysis = analyzeExemplar(run, exemplar, options, cached);
   render::TextureExemplar ex;
   ex.color = &exemplar;
   ex.analysis = &analysis;
@@ -92,7 +95,7 @@ std::unique_ptr<render::VoxelColorSource> colorSource(const SliceJob& job, Run& 
   if (exemplar && job.mode == ColorMode::Solid) {
     synthesis::validateSolidExemplars(*exemplar, *exemplar, *exemplar);
     bool cached = false;
-    solid = analyzeSolid(run, *exemplar, *exemplar, *exemplar, {}, cached);
+    solid = analyzeSolid(run, *exemplar, *exemplar, *exemplar, {}, job.wrap, cached);
     synthesis::SolidSynthesisOptions so;
     so.seed = job.seed;
     // Default: one exemplar spans a quarter of the model's height.
@@ -217,6 +220,7 @@ Command addSliceCommand(CLI::App& root) {
            "height)", {0, 1e9});
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", {0, 1e9});
   f.option("--seed", job->seed, "Random seed of the synthesis");
+  wrapFlag(f, job->wrap);
   f.option("--resolution", job->resolution, "Atlas size for --mode surface", {64, 16384});
   f.text("--preview", job->preview, "Also write a picture of the print (front, side, four layers) to this PNG");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");

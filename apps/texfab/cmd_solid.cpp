@@ -40,6 +40,7 @@ struct SolidJob {
   int width = 0, height = 0;
   double scale = 1.0;
   synthesis::SolidSynthesisOptions options;
+  WrapChoice wrap = WrapChoice::Auto;
   CommonFlags common;
 };
 
@@ -283,7 +284,7 @@ void runSolid(SolidJob& job) {
   synthesis::validateSolidExemplars(ex, ey, ez, {job.exemplar, pathY, pathZ});
   load.finish(job.exemplar + " " + std::to_string(ex.width) + "x" + std::to_string(ex.height));
   bool cached = false;
-  const synthesis::SolidAnalysis analysis = analyzeSolid(run, ex, ey, ez, {}, cached);
+  const synthesis::SolidAnalysis analysis = analyzeSolid(run, ex, ey, ez, {}, job.wrap, cached);
   const Synthesized s = synthesize(analysis, {ex, ey, ez});
   if (!s.slices.empty()) run.report()["measures"] = measureSlices(run, s.slices, {ex, ey, ez});
 
@@ -296,7 +297,7 @@ void runSolid(SolidJob& job) {
   const synthesis::SolidSynthesisOptions& o = job.options;
   r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"offset_cells", o.offsetCells},
                      {"passes", o.passes}, {"finest_passes", o.finestPasses}, {"subpasses", o.subpasses()},
-                     {"scale", job.scale}};
+                     {"scale", job.scale}, {"exemplar_wrap", toString(analysis.wrap)}};
   int64_t synthesized = 0;
   for (const synthesis::SolidLevelStats& l : s.levels) synthesized += l.voxels;
   r["levels"] = toJson(s.levels);
@@ -350,6 +351,7 @@ Command addSolidCommand(CLI::App& root) {
            "Side, in voxels of the coarsest level, of the cells that each start from the exemplar at their own random "
            "offset (0 = one tiling, as in the paper, which repeats with the exemplar's period)",
            {0, 1024});
+  wrapFlag(f, job->wrap);
   f.option("--passes", o.passes, "Correction passes per level above the finest", {0, 4});
   f.option("--finest-passes", o.finestPasses,
            "Correction passes at the finest level (the paper: 2, about 3x the finest level's work)", {0, 4});

@@ -89,8 +89,6 @@ void runTexture(TextureJob& job) {
   render::TextureMeshOptions& o = job.options;
   // Everything checkable is checked, and every output reserved, before any work.
   if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --scale or --feature-size, not both");
-  if (o.mode == render::TextureMode::Solid && job.wrap == WrapChoice::Clamp)
-    throw UsageError("--exemplar-wrap clamp: solid mode treats the exemplar as toroidal (clamp is for surface mode)");
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
                      " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
@@ -115,7 +113,7 @@ void runTexture(TextureJob& job) {
     options.wrap = chooseWrap(job.wrap, in.exemplar, run);
     analysis = analyzeExemplar(run, in.exemplar, options, cached);
   } else {
-    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, cached);
+    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, job.wrap, cached);
   }
   if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
   render::TextureExemplar ex = in.view();
@@ -140,7 +138,7 @@ void runTexture(TextureJob& job) {
   r["exemplar"] = imageJson(job.exemplar, in.exemplar);
   r["exemplar"]["analysis_cached"] = cached;
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},
-                     {"exemplar_wrap", analysis ? toString(analysis->wrap) : "tile"},
+                     {"exemplar_wrap", toString(analysis ? analysis->wrap : solidAnalysis->wrap)},
                      {"texture_scale", result.textureScale}, {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel}};
   r["atlas"] = toJson(result.atlas);
   r["measures"] = toJson(result.measures, result.textureScale);
@@ -177,8 +175,7 @@ Command addTextureCommand(CLI::App& root) {
   f.option("--gutter", o.atlas.pack.gutter, "Minimum empty texels between charts (filtering reads across borders)",
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", o.surface.seed, "Random seed: the only source of variation");
-  CLI::Option* wrap = wrapFlag(f, job->wrap);
-  wrap->description(wrap->get_description() + " (surface mode)");
+  wrapFlag(f, job->wrap);
   f.text("--maps", job->maps,
          "Companion maps of the exemplar's size, synthesized with the same coordinates: "
          "normal=N.png,roughness=R.png,height=H.png (height is written as OUTPUT_height.png)");

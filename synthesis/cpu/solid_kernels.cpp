@@ -127,13 +127,16 @@ void cellOffset(const int64_t p[3], uint32_t seed, int cell, const SolidTables& 
 // The slab (§4.3) at warped position p, shifted by `offset`: the E_z pixel under (x, y), thickened
 // along z by its best candidate's E_x and E_y neighborhoods (E_x's v axis and E_y's u axis are z).
 void slabTriple(const int64_t p[3], const int64_t offset[3], const SolidTables& t, uint32_t* out) {
-  const int w = t.exemplarWidth, h = t.exemplarHeight;
+  const int w = t.exemplarWidth, h = t.exemplarHeight, m = t.clampMargin;
   const uint32_t pixel = wrapCoord(p[0] * t.spacing + offset[0], p[1] * t.spacing + offset[1], w, h);
   const int64_t dz = floorMod(p[2] + offset[2], kSlabThickness) - kSlabThickness / 2;
   const uint32_t* best = t.triples[2] + (size_t(coordV(pixel)) * size_t(w) + coordU(pixel)) * kSolidMaxCandidates * 3;
-  out[0] = wrapCoord(coordU(best[0]), int64_t(coordV(best[0])) + dz * t.spacing, w, h);
-  out[1] = wrapCoord(int64_t(coordU(best[1])) + dz * t.spacing, coordV(best[1]), w, h);
-  out[2] = pixel;
+  auto layer = [&](int64_t c, int side) {
+    return uint32_t(m > 0 ? reflectInto(c, m, side - 1 - m) : floorMod(c, side));
+  };
+  out[0] = packCoord(coordU(best[0]), layer(int64_t(coordV(best[0])) + dz * t.spacing, h));
+  out[1] = packCoord(layer(int64_t(coordU(best[1])) + dz * t.spacing, w), coordV(best[1]));
+  out[2] = best[2];  // the pixel itself, or (clamp) its reflection into the valid region
 }
 
 std::atomic<SolidSimd> gSimd{SolidSimd::Avx2};

@@ -55,6 +55,9 @@ struct SolidTables {
   int k2d = 1;          ///< 2-D candidates compared per pixel
   int k2dStride = 1;    ///< 2-D candidates stored per pixel
   int k3d = 1;          ///< 3-D candidates compared per pixel
+  /// Non-toroidal exemplar (SolidLevel::valid): coordinates stay at least this many pixels inside
+  /// the exemplar; 0 = they wrap.
+  int clampMargin = 0;
   const uint8_t* colors[3] = {};         ///< per exemplar: w*h*3 8-bit colours of this level
   const uint32_t* candidates2d[3] = {};  ///< per exemplar: w*h*k2dStride packed coordinates
   const int8_t* candidateDescriptors2d[3] = {};  ///< per exemplar: w*h*k2dStride*8, each candidate's descriptor
@@ -89,7 +92,8 @@ struct SolidInit {
 /// hashed grids (4 and 8 voxels), amplitude jitter256/256 voxels. With offsetCells = c > 0, the
 /// cell floor(p / c) reads the slab shifted by its own hashed offset (any exemplar pixel, any slab
 /// layer), so that the volume does not repeat with the exemplar's period (a deviation from the
-/// paper). Writes voxels with last >= 0.
+/// paper). The slab's layers shift E_x's and E_y's coordinates along z, wrapped, or with
+/// clampMargin reflected into the valid region. Writes voxels with last >= 0.
 void solidInitKernel(uint32_t* out, const int8_t* last, const VolumeGrid& grid, const SolidTables& tables,
                      const SolidInit& init, int rowBegin, int rowEnd);
 

@@ -83,6 +83,7 @@ SolidParams paramsOf(const SolidChunks& c, const SolidTables* t) {
     p.k3d = t->k3d;
     p.shift2d = t->shift2d;
     p.shift3d = t->shift3d;
+    p.clampMargin = t->clampMargin;
   }
   return p;
 }
@@ -102,6 +103,7 @@ SolidTables uploadSolidTables(Commands& commands, const cpu::SolidTables& t) {
   d.k2d = t.k2d;
   d.k2dStride = t.k2dStride;
   d.k3d = t.k3d;
+  d.clampMargin = t.clampMargin;
   d.shift2d = t.projection2d->shift;
   d.shift3d = t.projection3d->shift;
   const uint64_t pixels = uint64_t(t.exemplarWidth) * uint64_t(t.exemplarHeight);

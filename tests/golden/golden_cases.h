@@ -34,6 +34,7 @@ namespace texfab::golden {
 inline constexpr const char* kWindow2d = "72908d5d3414dcbb";
 inline constexpr const char* kSolidVolume = "27aa583fe74a68f6";
 inline constexpr const char* kSolidObliquePlane = "88431cfed679a0dd";
+inline constexpr const char* kSolidClampVolume = "8908ef52a00c4752";
 inline constexpr const char* kAtlasTexelUvs = "66752b2be1750fd4";
 inline constexpr const char* kSurfaceTexture = "0b8d074efefb46ee";
 inline constexpr const char* kSolidTexture = "4f002f2f76713f1f";
@@ -86,6 +87,27 @@ inline const synthesis::SolidAnalysis& solidAnalysis32() {
   return a;
 }
 
+/// A 40x40 crop of the bundled photograph rock.png (it does not tile), analysed with wrap Clamp.
+inline const Image& rock40() {
+  static const Image crop = [] {
+    const Image full = readImage(bundled("exemplars/photos/rock.png"));
+    Image out(40, 40, full.channels, full.format);
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 40; ++x)
+        for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(70 + x, 9 + y, c);
+    return out;
+  }();
+  return crop;
+}
+inline const synthesis::SolidAnalysis& solidClampAnalysis40() {
+  static const synthesis::SolidAnalysis a = [] {
+    synthesis::SolidAnalysisOptions options;
+    options.wrap = synthesis::ExemplarWrap::Clamp;
+    return synthesis::analyzeSolid(rock40(), rock40(), rock40(), options, Context{.threads = 2});
+  }();
+  return a;
+}
+
 /// The context of the synthesis of a case.
 inline Context synthesisContext(Backend backend) { return Context{.threads = 2, .backend = backend}; }
 
@@ -111,6 +133,17 @@ inline uint64_t solidVolume(Backend backend = Backend::Cpu) {
   std::vector<float> colors;
   synthesis::solidColors(r.triples, marble32(), marble32(), marble32(), colors);
   return hashOf(colors, hashOf(flat));
+}
+
+/// A 12^3 box of the solid texture of rock40, which does not tile (clamp).
+inline uint64_t solidClampVolume(Backend backend = Backend::Cpu) {
+  synthesis::SolidSynthesisOptions options;
+  options.seed = 5;
+  const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolidBox(
+      solidClampAnalysis40(), {-9, 30, 4, 12, 12, 12}, options, nullptr, synthesisContext(backend));
+  std::vector<uint32_t> flat;
+  for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
+  return hashOf(flat);
 }
 
 /// The voxels of an oblique 40x40 plane through the solid texture of marble32.

@@ -14,6 +14,7 @@ namespace {
 TEST(Golden, Window2d) { EXPECT_EQ(hex(window2d()), kWindow2d); }
 TEST(Golden, SolidVolume) { EXPECT_EQ(hex(solidVolume()), kSolidVolume); }
 TEST(Golden, SolidObliquePlane) { EXPECT_EQ(hex(solidPlane()), kSolidObliquePlane); }
+TEST(Golden, SolidClampVolume) { EXPECT_EQ(hex(solidClampVolume()), kSolidClampVolume); }
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 TEST(Golden, AtlasTexelUvs) { EXPECT_EQ(hex(atlasTexelUvs()), kAtlasTexelUvs); }
 TEST(Golden, SurfaceTexture) { EXPECT_EQ(hex(surfaceTexture()), kSurfaceTexture); }

@@ -140,8 +140,9 @@ TEST(CliSolid, WarnsWhenTheExemplarsDifferInColour) {
   }
 }
 
-// Solid synthesis treats every exemplar as toroidal: one that does not tile gets a warning.
-TEST(CliSolid, WarnsWhenTheExemplarDoesNotTile) {
+// --exemplar-wrap auto (the default) keeps a periodic exemplar toroidal and clamps a crop of a
+// photograph; the report names the mode; tile and clamp are taken as given.
+TEST(CliSolid, AutoClampsAnExemplarThatDoesNotTile) {
   TempDir dir;
   Image wave(32, 32, 3);  // periodic in 32 pixels: tiles
   for (int y = 0; y < 32; ++y)
@@ -150,11 +151,18 @@ TEST(CliSolid, WarnsWhenTheExemplarDoesNotTile) {
         wave.at(x, y, c) = float(0.5 + 0.4 * std::sin(2 * M_PI * (x + 2 * y + 8 * c) / 32.0) * std::cos(2 * M_PI * y / 16.0));
   writeImage(wave, dir / "wave.png");
   const std::string photo = smallExemplar(dir, 48, "rock.png", "photos/rock.png");
-  for (const auto& [exemplar, tiles] : {std::pair{(dir / "wave.png").string(), true}, std::pair{photo, false}}) {
-    const Outcome r = texfab("solid " + exemplar + " --plane 0,0,0,1,0,0,0,1,0 --size 8 -q --no-cache -o " +
-                             (dir / (tiles ? "a.png" : "b.png")).string());
-    ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_EQ(r.err.find("does not tile") == std::string::npos, tiles) << exemplar << ": " << r.err;
+  struct Case {
+    std::string exemplar, flag, mode;
+  };
+  const std::string periodic = (dir / "wave.png").string();
+  for (const Case& c : {Case{periodic, "", "tile"}, Case{photo, "", "clamp"}, Case{photo, " --exemplar-wrap tile", "tile"},
+                        Case{periodic, " --exemplar-wrap clamp", "clamp"}}) {
+    const fs::path report = dir / "r.json";
+    const Outcome r = texfab("solid " + c.exemplar + c.flag + " --plane 0,0,0,1,0,0,0,1,0 --size 8 -q --no-cache -o " +
+                             (dir / "a.png").string() + " --report " + report.string());
+    ASSERT_EQ(r.status, 0) << c.exemplar << c.flag << ": " << r.err;
+    const auto json = nlohmann::json::parse(test::readFile(report));
+    EXPECT_EQ(json["parameters"]["exemplar_wrap"], c.mode) << c.exemplar << c.flag;
   }
 }
 

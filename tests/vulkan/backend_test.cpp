@@ -35,6 +35,10 @@ TEST(VulkanGolden, SolidObliquePlane) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
   EXPECT_EQ(hex(solidPlane(Backend::Vulkan)), kSolidObliquePlane);
 }
+TEST(VulkanGolden, SolidClampVolume) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  EXPECT_EQ(hex(solidClampVolume(Backend::Vulkan)), kSolidClampVolume);
+}
 TEST(VulkanGolden, SurfaceTextureAndGlb) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
   EXPECT_EQ(hex(surfaceTexture(Backend::Vulkan)), kSurfaceTexture);

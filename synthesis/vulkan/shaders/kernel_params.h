@@ -117,7 +117,7 @@ struct SolidParams {
   int32_t shift2d;
   int32_t shift3d;
   int32_t offsetCells;
-  int32_t unused;
+  int32_t clampMargin;  ///< cpu::SolidTables::clampMargin
 };
 
 #ifdef __cplusplus

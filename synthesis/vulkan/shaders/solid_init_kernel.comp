@@ -58,6 +58,16 @@ void cellOffset(const int64_t q[3], out int64_t offset[3]) {
   offset[2] = int64_t(hz % 5u);
 }
 
+// A slab layer's coordinate c along one exemplar axis: wrapped, or reflected into the valid region
+// [m, side - 1 - m] (reflectInto, synthesis/cpu/synthesis_kernels.h).
+uint layerCoord(int64_t c, int side) {
+  const int64_t m = int64_t(p.clampMargin), hi = int64_t(side - 1) - m;
+  if (m == 0) return uint(floorMod(c, int64_t(side)));
+  if (c < m) c = 2 * m - c;
+  if (c > hi) c = 2 * hi - c;
+  return uint(c < m ? m : c > hi ? hi : c);
+}
+
 // The slab (§4.3) at warped position q, shifted by `offset`: the E_z pixel under (x, y), thickened
 // along z by its best candidate's E_x and E_y neighborhoods.
 void slabTriple(const int64_t q[3], const int64_t offset[3], uint g) {
@@ -66,9 +76,9 @@ void slabTriple(const int64_t q[3], const int64_t offset[3], uint g) {
   const int64_t dz = floorMod(q[2] + offset[2], int64_t(5)) - 2;
   const uint best = (coordV(pixel) * uint(w) + coordU(pixel)) * uint(kSolidMaxCandidates) * 3u;
   const uint b0 = slabTriples.words[best], b1 = slabTriples.words[best + 1u];
-  triples.words[3u * g] = wrapCoord(int64_t(coordU(b0)), int64_t(coordV(b0)) + dz * p.spacing, w, h);
-  triples.words[3u * g + 1u] = wrapCoord(int64_t(coordU(b1)) + dz * p.spacing, int64_t(coordV(b1)), w, h);
-  triples.words[3u * g + 2u] = pixel;
+  triples.words[3u * g] = packCoord(coordU(b0), layerCoord(int64_t(coordV(b0)) + dz * p.spacing, h));
+  triples.words[3u * g + 1u] = packCoord(layerCoord(int64_t(coordU(b1)) + dz * p.spacing, w), coordV(b1));
+  triples.words[3u * g + 2u] = slabTriples.words[best + 2u];  // the pixel, or its reflection (clamp)
 }
 
 // Initialization (§5.1): the candidate slab tiled over the volume, read through the random warp,
