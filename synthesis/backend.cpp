@@ -50,13 +50,4 @@ std::shared_ptr<vulkan::Device> deviceFor(const Context& ctx) {
 
 #endif
 
-std::shared_ptr<vulkan::Device> deviceFor(const Context& ctx, ExemplarWrap wrap) {
-  if (wrap == ExemplarWrap::Tile || ctx.backend == Backend::Cpu) return deviceFor(ctx);
-  if (ctx.backend == Backend::Vulkan)
-    throw Error("the Vulkan backend cannot synthesize from an exemplar that does not tile (exemplar wrap clamp) "
-                "yet: use the CPU backend or exemplar wrap tile");
-  note(ctx, "CPU (the exemplar does not tile: the Vulkan kernels only wrap)");
-  return nullptr;
-}
-
 } // namespace texfab::synthesis

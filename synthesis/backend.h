@@ -5,7 +5,6 @@
 // the same bytes (the determinism contract); only speed differs.
 
 #include "render/image/context.h"
-#include "synthesis/exemplar_analysis.h"
 #include "synthesis/vulkan/runtime.h"
 
 #include <memory>
@@ -20,11 +19,6 @@ namespace texfab::synthesis {
 ///   Backend::Auto: the device when one can be opened; otherwise null, and a note through
 ///     ctx.progress (a stage "backend" whose detail says why the CPU runs instead).
 std::shared_ptr<vulkan::Device> deviceFor(const Context& ctx);
-
-/// deviceFor(ctx), for synthesis from an exemplar wrapped as `wrap`: the Vulkan kernels treat the
-/// exemplar as toroidal only, so a non-toroidal one (ExemplarWrap::Clamp) runs on the CPU (Auto:
-/// with a note) and Backend::Vulkan is refused with an Error.
-std::shared_ptr<vulkan::Device> deviceFor(const Context& ctx, ExemplarWrap wrap);
 
 /// Whether this texfab was built with the Vulkan backend.
 bool vulkanBuilt();

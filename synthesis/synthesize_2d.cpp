@@ -162,12 +162,14 @@ std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const ExemplarA
     const LevelGrid& grid = plan.grid(l);
     const int spacing = plan.spacing(l);
     const int64_t periodX = plan.period(options.periodX, l), periodY = plan.period(options.periodY, l);
+    const ValidRegion* clampTo = clampOf(analysis, l);
     current = vulkan::levelBuffer(device, grid);
     scratch = vulkan::levelBuffer(device, grid);
     const vulkan::LevelTables tables = vulkan::uploadTables(commands, tablesOf(analysis, l));
-    if (l == plan.first) vulkan::initKernel(commands, current, grid, spacing, ew, eh, periodX, periodY);
-    else vulkan::upsampleKernel(commands, previous, plan.grid(l - 1), current, grid, spacing, ew, eh);
-    vulkan::jitterKernel(commands, current, grid, options.seed, l, plan.amplitude256(l), periodX, periodY, ew, eh);
+    if (l == plan.first) vulkan::initKernel(commands, current, grid, spacing, ew, eh, periodX, periodY, clampTo);
+    else vulkan::upsampleKernel(commands, previous, plan.grid(l - 1), current, grid, spacing, ew, eh, clampTo);
+    vulkan::jitterKernel(commands, current, grid, options.seed, l, plan.amplitude256(l), periodX, periodY, ew, eh,
+                         clampTo);
     forSubpasses(options, [&](int cx, int cy, int inset) {
       vulkan::correctKernel(commands, current, scratch, grid, tables, options.interleave, cx, cy, inset,
                             grid.width - inset, inset, grid.height - inset);
@@ -289,7 +291,7 @@ SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& win
   if (std::abs(window.x) > kMaxPosition || std::abs(window.y) > kMaxPosition)
     throw Error("window position is out of range (|x|, |y| <= 2^40)");
   if (analysis.levels.empty()) throw Error("exemplar analysis is empty");
-  const auto device = deviceFor(ctx, analysis.wrap);
+  const auto device = deviceFor(ctx);
   SynthesisResult result;
   CoordMap& out = result.coords;
   out.width = window.width;

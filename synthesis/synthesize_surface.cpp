@@ -114,11 +114,12 @@ std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const Plan& pla
     const auto start = Clock::now();
     const vulkan::SurfaceSites sites = vulkan::uploadSites(commands, plan.domain.levels[size_t(a)]);
     const vulkan::LevelTables tables = vulkan::uploadTables(commands, plan.tableView(a));
+    const ValidRegion* clampTo = plan.clampTo(a);
     current = vulkan::coordBuffer(device, sites);
     scratch = vulkan::coordBuffer(device, sites);
-    if (a == plan.top) vulkan::initSurfaceKernel(commands, sites, current, ew, eh);
-    else vulkan::upsampleSurfaceKernel(commands, sites, previous, current, ew, eh);
-    vulkan::jitterSurfaceKernel(commands, sites, current, plan.options.seed, a, plan.amplitude256(a), ew, eh);
+    if (a == plan.top) vulkan::initSurfaceKernel(commands, sites, current, ew, eh, clampTo);
+    else vulkan::upsampleSurfaceKernel(commands, sites, previous, current, ew, eh, clampTo);
+    vulkan::jitterSurfaceKernel(commands, sites, current, plan.options.seed, a, plan.amplitude256(a), ew, eh, clampTo);
     for (int k = 0; k < plan.subpasses(); ++k) {
       vulkan::correctSurfaceKernel(commands, sites, current, scratch, tables, k % 4);
       std::swap(current, scratch);
@@ -178,12 +179,12 @@ SurfaceSynthesisResult synthesizeSurface(const ExemplarAnalysis& analysis, const
   SurfaceSynthesisResult result;
   result.exemplarPixelsPerTexel = plan.pixelsPerTexel;
 #if TEXFAB_HAS_VULKAN
-  if (const auto device = deviceFor(ctx, analysis.wrap)) {
+  if (const auto device = deviceFor(ctx)) {
     result.coords = synthesizeOnDevice(*device, plan, ctx, result.levels);
     return result;
   }
 #else
-  deviceFor(ctx, analysis.wrap);
+  deviceFor(ctx);
 #endif
   result.coords = synthesizeOnCpu(plan, ctx, result.levels);
   return result;

@@ -75,9 +75,10 @@ Buffer coordBuffer(Device& device, const SurfaceSites& sites) {
   return Buffer(device, std::max<uint64_t>(uint64_t(sites.count) * 4, 4));
 }
 
-void initSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer& out, int ew, int eh) {
+void initSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer& out, int ew, int eh,
+                       const ValidRegion* clampTo) {
   forWindows(commands.device(), s.count, [&](uint32_t first, uint32_t count) {
-    const SurfaceParams p{0, first, count, ew, eh, 0, 0};
+    const SurfaceParams p{0, first, count, ew, eh, 0, 0, regionParams(clampTo), 0};
     commands.dispatch(kInit, p,
                       {window(s, s.x, 4, first, count), window(s, s.y, 4, first, count),
                        window(s, s.jacobian, 16, first, count), out},
@@ -86,9 +87,9 @@ void initSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer& 
 }
 
 void upsampleSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer& parent, const Buffer& out, int ew,
-                           int eh) {
+                           int eh, const ValidRegion* clampTo) {
   forWindows(commands.device(), s.count, [&](uint32_t first, uint32_t count) {
-    const SurfaceParams p{0, first, count, ew, eh, 0, 0};
+    const SurfaceParams p{0, first, count, ew, eh, 0, 0, regionParams(clampTo), 0};
     commands.dispatch(kUpsample, p,
                       {window(s, s.x, 4, first, count), window(s, s.y, 4, first, count),
                        window(s, s.jacobian, 16, first, count), window(s, s.parent, 4, first, count), parent, out},
@@ -97,10 +98,10 @@ void upsampleSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buff
 }
 
 void jitterSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer& coords, uint32_t seed, int atlasLevel,
-                         int64_t amplitude256, int ew, int eh) {
+                         int64_t amplitude256, int ew, int eh, const ValidRegion* clampTo) {
   if (amplitude256 == 0) return;
   forWindows(commands.device(), s.count, [&](uint32_t first, uint32_t count) {
-    const SurfaceParams p{amplitude256, first, count, ew, eh, seed, atlasLevel};
+    const SurfaceParams p{amplitude256, first, count, ew, eh, seed, atlasLevel, regionParams(clampTo), 0};
     commands.dispatch(kJitter, p,
                       {window(s, s.x, 4, first, count), window(s, s.y, 4, first, count),
                        window(s, s.chart, 4, first, count), coords},
@@ -111,7 +112,7 @@ void jitterSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer
 void correctSurfaceKernel(Commands& commands, const SurfaceSites& s, const Buffer& in, const Buffer& out,
                           const LevelTables& t, int cls) {
   forWindows(commands.device(), s.count, [&](uint32_t first, uint32_t count) {
-    const CorrectSurfaceParams p{first, count, cls, t.spacing, t.exemplarWidth, t.exemplarHeight, t.k, 0};
+    const CorrectSurfaceParams p{first, count, cls, t.spacing, t.exemplarWidth, t.exemplarHeight, t.k, t.region};
     commands.dispatch(kCorrect, p,
                       {window(s, s.x, 4, first, count), window(s, s.y, 4, first, count),
                        window(s, s.jacobian, 16, first, count), window(s, s.neighbors, kWidestSite, first, count), in,

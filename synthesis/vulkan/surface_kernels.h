@@ -4,7 +4,8 @@
 // the GLSL twin (shaders/<name>.comp) of the CPU kernel of the same name in
 // synthesis/cpu/surface_kernels.h over all sites of a level, and gives the same bytes. A level's
 // per-site arrays are read through windows of sites, each within a binding's range; its
-// coordinate buffers (one word per site) must fit one binding.
+// coordinate buffers (one word per site) must fit one binding. `clampTo` (and LevelTables::region)
+// as there: a non-toroidal exemplar's valid region at the level, null when it tiles.
 
 #include "synthesis/synthesize_surface.h"
 #include "synthesis/vulkan/runtime.h"
@@ -28,13 +29,14 @@ SurfaceSites uploadSites(Commands& commands, const SurfaceLevel& level);
 Buffer coordBuffer(Device& device, const SurfaceSites& sites);
 
 void initSurfaceKernel(Commands& commands, const SurfaceSites& sites, const Buffer& out, int exemplarWidth,
-                       int exemplarHeight);
+                       int exemplarHeight, const ValidRegion* clampTo = nullptr);
 
 void upsampleSurfaceKernel(Commands& commands, const SurfaceSites& sites, const Buffer& parent, const Buffer& out,
-                           int exemplarWidth, int exemplarHeight);
+                           int exemplarWidth, int exemplarHeight, const ValidRegion* clampTo = nullptr);
 
 void jitterSurfaceKernel(Commands& commands, const SurfaceSites& sites, const Buffer& coords, uint32_t seed,
-                         int atlasLevel, int64_t amplitude256, int exemplarWidth, int exemplarHeight);
+                         int atlasLevel, int64_t amplitude256, int exemplarWidth, int exemplarHeight,
+                         const ValidRegion* clampTo = nullptr);
 
 void correctSurfaceKernel(Commands& commands, const SurfaceSites& sites, const Buffer& in, const Buffer& out,
                           const LevelTables& tables, int cls);

@@ -46,6 +46,10 @@ template <class T> Buffer table(Commands& commands, const T* values, size_t coun
 
 } // namespace
 
+RegionParams regionParams(const ValidRegion* r) {
+  return r ? RegionParams{1, r->x0, r->y0, r->x1, r->y1} : RegionParams{};
+}
+
 LevelTables uploadTables(Commands& commands, const cpu::LevelTables& t) {
   const size_t pixels = size_t(t.exemplarWidth) * size_t(t.exemplarHeight);
   LevelTables d;
@@ -56,6 +60,7 @@ LevelTables uploadTables(Commands& commands, const cpu::LevelTables& t) {
   d.appearance = table(commands, t.appearance, pixels * kAppearanceDims, "appearance");
   d.neighborhood = table(commands, t.neighborhood, pixels * kNeighborhoodDims, "neighborhood");
   d.candidates = table(commands, t.candidates, pixels * size_t(t.k), "candidate");
+  d.region = regionParams(t.clampTo);
   return d;
 }
 
@@ -68,21 +73,25 @@ Buffer levelBuffer(Device& device, const cpu::LevelGrid& grid) {
 }
 
 void initKernel(Commands& commands, const Buffer& out, const cpu::LevelGrid& grid, int spacing, int exemplarWidth,
-                int exemplarHeight, int64_t periodX, int64_t periodY) {
-  const InitParams p{gridParams(grid), periodX, periodY, spacing, exemplarWidth, exemplarHeight, 0};
+                int exemplarHeight, int64_t periodX, int64_t periodY, const ValidRegion* clampTo) {
+  const InitParams p{gridParams(grid), periodX, periodY, spacing, exemplarWidth, exemplarHeight, regionParams(clampTo)};
   commands.dispatch(kInit, p, {out}, texels(grid));
 }
 
 void upsampleKernel(Commands& commands, const Buffer& parent, const cpu::LevelGrid& parentGrid, const Buffer& out,
-                    const cpu::LevelGrid& grid, int spacing, int exemplarWidth, int exemplarHeight) {
-  const UpsampleParams p{gridParams(grid), gridParams(parentGrid), spacing, exemplarWidth, exemplarHeight, 0};
+                    const cpu::LevelGrid& grid, int spacing, int exemplarWidth, int exemplarHeight,
+                    const ValidRegion* clampTo) {
+  const UpsampleParams p{gridParams(grid), gridParams(parentGrid), spacing, exemplarWidth, exemplarHeight,
+                         regionParams(clampTo)};
   commands.dispatch(kUpsample, p, {parent, out}, texels(grid));
 }
 
 void jitterKernel(Commands& commands, const Buffer& coords, const cpu::LevelGrid& grid, uint32_t seed, int level,
-                  int64_t amplitude256, int64_t periodX, int64_t periodY, int exemplarWidth, int exemplarHeight) {
+                  int64_t amplitude256, int64_t periodX, int64_t periodY, int exemplarWidth, int exemplarHeight,
+                  const ValidRegion* clampTo) {
   if (amplitude256 == 0) return;
-  const JitterParams p{gridParams(grid), amplitude256, periodX, periodY, seed, level, exemplarWidth, exemplarHeight};
+  const JitterParams p{gridParams(grid), amplitude256, periodX, periodY, seed, level, exemplarWidth, exemplarHeight,
+                       regionParams(clampTo), 0};
   commands.dispatch(kJitter, p, {coords}, texels(grid));
 }
 
@@ -90,7 +99,7 @@ void correctKernel(Commands& commands, const Buffer& in, const Buffer& out, cons
                    const LevelTables& t, int interleave, int classX, int classY, int ax0, int ax1, int ay0, int ay1) {
   if (ax1 <= ax0 || ay1 <= ay0) return;
   const CorrectParams p{gridParams(grid), t.spacing, t.exemplarWidth, t.exemplarHeight, t.k, interleave, classX,
-                        classY, ax0, ax1, ay0, ay1, 0};
+                        classY, ax0, ax1, ay0, ay1, t.region};
   commands.dispatch(kCorrect, p, {in, out, t.appearance, t.neighborhood, t.candidates},
                     uint64_t(ax1 - ax0) * uint64_t(ay1 - ay0));
 }

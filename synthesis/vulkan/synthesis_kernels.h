@@ -4,10 +4,12 @@
 // GLSL twin (shaders/<name>.comp) of the CPU kernel of the same name in
 // synthesis/cpu/synthesis_kernels.h, over the whole buffer rather than a range of rows, and gives
 // the same bytes. Level buffers hold grid.width * grid.height packed coordinates and must fit one
-// binding (Device::maxRangeBytes).
+// binding (Device::maxRangeBytes). As there, `clampTo` (a non-toroidal exemplar's valid region at
+// the level; null: the exemplar tiles) keeps coordinates inside the region instead of wrapping.
 
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/vulkan/runtime.h"
+#include "synthesis/vulkan/shaders/kernel_params.h"
 
 #include <cstdint>
 
@@ -22,7 +24,11 @@ struct LevelTables {
   Buffer appearance;    ///< 8 int8 per exemplar pixel
   Buffer neighborhood;  ///< 32 int8 per exemplar pixel
   Buffer candidates;    ///< k packed coordinates per exemplar pixel
+  RegionParams region{};  ///< the level's valid region (clamp 0: the exemplar tiles)
 };
+
+/// The push-constant form of `clampTo` (clamp 0 when null).
+RegionParams regionParams(const ValidRegion* clampTo);
 
 /// Uploads `tables`. Throws Error when a table exceeds the device's binding range.
 LevelTables uploadTables(Commands& commands, const cpu::LevelTables& tables);
@@ -31,13 +37,15 @@ LevelTables uploadTables(Commands& commands, const cpu::LevelTables& tables);
 Buffer levelBuffer(Device& device, const cpu::LevelGrid& grid);
 
 void initKernel(Commands& commands, const Buffer& out, const cpu::LevelGrid& grid, int spacing, int exemplarWidth,
-                int exemplarHeight, int64_t periodX, int64_t periodY);
+                int exemplarHeight, int64_t periodX, int64_t periodY, const ValidRegion* clampTo = nullptr);
 
 void upsampleKernel(Commands& commands, const Buffer& parent, const cpu::LevelGrid& parentGrid, const Buffer& out,
-                    const cpu::LevelGrid& grid, int spacing, int exemplarWidth, int exemplarHeight);
+                    const cpu::LevelGrid& grid, int spacing, int exemplarWidth, int exemplarHeight,
+                    const ValidRegion* clampTo = nullptr);
 
 void jitterKernel(Commands& commands, const Buffer& coords, const cpu::LevelGrid& grid, uint32_t seed, int level,
-                  int64_t amplitude256, int64_t periodX, int64_t periodY, int exemplarWidth, int exemplarHeight);
+                  int64_t amplitude256, int64_t periodX, int64_t periodY, int exemplarWidth, int exemplarHeight,
+                  const ValidRegion* clampTo = nullptr);
 
 /// One correction sub-pass over the buffer rectangle [ax0, ax1) x [ay0, ay1) (rows ay0..ay1 of the
 /// CPU kernel); texels of `out` outside it are left as they are.

@@ -32,6 +32,7 @@ namespace texfab::golden {
 /// The expected hashes (hex). A deliberate change of output updates them here, with its reason in
 /// the commit message.
 inline constexpr const char* kWindow2d = "72908d5d3414dcbb";
+inline constexpr const char* kWindow2dClamp = "f938a9dcaf008e4f";
 inline constexpr const char* kSolidVolume = "27aa583fe74a68f6";
 inline constexpr const char* kSolidObliquePlane = "88431cfed679a0dd";
 inline constexpr const char* kSolidClampVolume = "8908ef52a00c4752";
@@ -119,6 +120,35 @@ inline uint64_t window2d(Backend backend = Backend::Cpu) {
   options.seed = 7;
   const synthesis::SynthesisResult r =
       synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, synthesisContext(backend));
+  return hashOf(r.coords.coords);
+}
+
+/// A 64x64 crop of the bundled stone photograph, which does not tile.
+inline const Image& stone64() {
+  static const Image crop = [] {
+    const Image full = readImage(bundled("exemplars/photos/stone.png"));
+    Image out(64, 64, full.channels, full.format);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x)
+        for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(30 + x, 40 + y, c);
+    return out;
+  }();
+  return crop;
+}
+
+/// stone64 analysed as an exemplar that does not tile (ExemplarWrap::Clamp).
+inline const synthesis::ExemplarAnalysis& clampAnalysis64() {
+  static const synthesis::ExemplarAnalysis a =
+      synthesis::analyzeExemplar(stone64(), {.wrap = synthesis::ExemplarWrap::Clamp}, Context{.threads = 2});
+  return a;
+}
+
+/// A 2-D window away from the origin from clampAnalysis64, seed 5.
+inline uint64_t window2dClamp(Backend backend = Backend::Cpu) {
+  synthesis::SynthesisOptions options;
+  options.seed = 5;
+  const synthesis::SynthesisResult r =
+      synthesis::synthesize2d(clampAnalysis64(), {-1000003, 77, 80, 72}, options, synthesisContext(backend));
   return hashOf(r.coords.coords);
 }
 

@@ -12,6 +12,7 @@ namespace texfab::golden {
 namespace {
 
 TEST(Golden, Window2d) { EXPECT_EQ(hex(window2d()), kWindow2d); }
+TEST(Golden, Window2dClamp) { EXPECT_EQ(hex(window2dClamp()), kWindow2dClamp); }
 TEST(Golden, SolidVolume) { EXPECT_EQ(hex(solidVolume()), kSolidVolume); }
 TEST(Golden, SolidObliquePlane) { EXPECT_EQ(hex(solidPlane()), kSolidObliquePlane); }
 TEST(Golden, SolidClampVolume) { EXPECT_EQ(hex(solidClampVolume()), kSolidClampVolume); }

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The Vulkan backend end to end: the golden outputs (2-D window, solid volume and plane, the
-// texture job in both modes, its GLB) computed with the kernels on the device give the golden
-// hashes; more 2-D windows, solid requests and a solid box equal the CPU backend's; and the
-// choice of the backend (Auto, Vulkan, device indices) behaves as documented.
+// The Vulkan backend end to end: the golden outputs (2-D windows from a toroidal exemplar and from
+// one that does not tile, solid volume and plane, the texture job in both modes, its GLB) computed
+// with the kernels on the device give the golden hashes; more 2-D windows (both kinds of exemplar,
+// in tiles under a small binding range), a texture from an exemplar that does not tile, solid
+// requests and a solid box equal the CPU backend's; and the choice of the backend (Auto, Vulkan,
+// device indices) behaves as documented.
 #include "synthesis/backend.h"
 #include "tests/golden/golden_cases.h"
 #include "tests/vulkan/vulkan_test_support.h"
@@ -26,6 +28,10 @@ namespace {
 TEST(VulkanGolden, Window2d) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
   EXPECT_EQ(hex(window2d(Backend::Vulkan)), kWindow2d);
+}
+TEST(VulkanGolden, Window2dClamp) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  EXPECT_EQ(hex(window2dClamp(Backend::Vulkan)), kWindow2dClamp);
 }
 TEST(VulkanGolden, SolidVolume) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
@@ -54,18 +60,28 @@ const synthesis::ExemplarAnalysis& marbleAnalysis() {
   return a;
 }
 
-// Windows far from the origin, tiling periods, every interleave, no correction, one pass; and a
-// window larger than one binding when ctest lowers the range ($TEXFAB_VULKAN_MAX_RANGE): tiles.
+// Windows far from the origin, tiling periods, every interleave, no correction, one pass, from a
+// toroidal exemplar (marble) and from one that does not tile (clampAnalysis64); and windows larger
+// than one binding when ctest lowers the range ($TEXFAB_VULKAN_MAX_RANGE): tiles.
 TEST(VulkanBackend, WindowsEqualTheCpu) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
+  const synthesis::ExemplarAnalysis* tile = &marbleAnalysis();
+  const synthesis::ExemplarAnalysis* clamp = &clampAnalysis64();
   struct Case {
+    const synthesis::ExemplarAnalysis* analysis;
     synthesis::Window window;
     int interleave, passes, periodX, periodY;
     bool correct;
   };
-  for (const Case& c : {Case{{-(int64_t(1) << 38), 12345, 61, 47}, 2, 2, 0, 0, true},
-                        Case{{0, 0, 96, 48}, 3, 1, 96, 48, true}, Case{{-5, -9, 40, 40}, 1, 3, 0, 0, true},
-                        Case{{100, -100, 33, 70}, 2, 2, 0, 0, false}, Case{{7, 3, 900, 700}, 2, 1, 0, 0, true}}) {
+  for (const Case& c : {Case{tile, {-(int64_t(1) << 38), 12345, 61, 47}, 2, 2, 0, 0, true},
+                        Case{tile, {0, 0, 96, 48}, 3, 1, 96, 48, true},
+                        Case{tile, {-5, -9, 40, 40}, 1, 3, 0, 0, true},
+                        Case{tile, {100, -100, 33, 70}, 2, 2, 0, 0, false},
+                        Case{tile, {7, 3, 900, 700}, 2, 1, 0, 0, true},
+                        Case{clamp, {-(int64_t(1) << 39), 4321, 45, 38}, 1, 2, 0, 0, true},
+                        Case{clamp, {0, 0, 64, 48}, 2, 2, 64, 48, true},
+                        Case{clamp, {-9, 5, 41, 30}, 3, 1, 0, 0, true},
+                        Case{clamp, {-300, 200, 660, 610}, 1, 1, 0, 0, true}}) {
     synthesis::SynthesisOptions o;
     o.seed = 3;
     o.interleave = c.interleave;
@@ -73,11 +89,29 @@ TEST(VulkanBackend, WindowsEqualTheCpu) {
     o.periodX = c.periodX;
     o.periodY = c.periodY;
     o.correct = c.correct;
-    const auto cpu = synthesis::synthesize2d(marbleAnalysis(), c.window, o, synthesisContext(Backend::Cpu));
-    const auto gpu = synthesis::synthesize2d(marbleAnalysis(), c.window, o, synthesisContext(Backend::Vulkan));
+    const auto cpu = synthesis::synthesize2d(*c.analysis, c.window, o, synthesisContext(Backend::Cpu));
+    const auto gpu = synthesis::synthesize2d(*c.analysis, c.window, o, synthesisContext(Backend::Vulkan));
     EXPECT_EQ(gpu.coords.coords, cpu.coords.coords) << c.window.width << "x" << c.window.height;
     EXPECT_EQ(gpu.levels.size(), cpu.levels.size());  // (tiles add up their padding: more texels)
   }
+}
+
+// The bundled elephant textured (surface mode) from an exemplar that does not tile: the same
+// coordinates and base colour on both backends.
+TEST(VulkanBackend, ClampedSurfaceEqualsTheCpu) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
+  render::TextureExemplar ex;
+  ex.color = &stone64();
+  ex.analysis = &clampAnalysis64();
+  render::TextureMeshOptions o;
+  o.atlas.pack.width = o.atlas.pack.height = 256;
+  o.measure = false;
+  o.surface.seed = 6;
+  const auto cpu = render::textureMesh(mesh, ex, o, Context{.backend = Backend::Cpu});
+  const auto gpu = render::textureMesh(mesh, ex, o, Context{.backend = Backend::Vulkan});
+  EXPECT_EQ(gpu.coords, cpu.coords);
+  EXPECT_EQ(gpu.baseColor->pixels, cpu.baseColor->pixels);
 }
 
 std::vector<synthesis::Voxel> shell(int r, int64_t cx, int64_t cy, int64_t cz) {

@@ -47,7 +47,14 @@ void correctKernel(uint x, uint y) {
       const uint cand = (coordV(s) * ew + coordU(s)) * uint(p.k);
       for (uint i = 0; i < uint(p.k); ++i) {
         const uint ci = candidates.words[cand + i];
-        const uint c = packCoord(wrapAdd(coordU(ci), backX[dx + 1], ew), wrapAdd(coordV(ci), backY[dy + 1], eh));
+        uint c;
+        if (p.region.clamp != 0) {  // no wrap: C_i - spacing*D must stay in the valid region
+          const int u = int(coordU(ci)) - p.spacing * dx, v = int(coordV(ci)) - p.spacing * dy;
+          if (u < p.region.x0 || u > p.region.x1 || v < p.region.y0 || v > p.region.y1) continue;
+          c = packCoord(uint(u), uint(v));
+        } else {
+          c = packCoord(wrapAdd(coordU(ci), backX[dx + 1], ew), wrapAdd(coordV(ci), backY[dy + 1], eh));
+        }
         if (c == best) continue;
         const int d = neighborhoodDistance(target, coordV(c) * ew + coordU(c));
         // Order-independent minimum of (distance, c != current, c).

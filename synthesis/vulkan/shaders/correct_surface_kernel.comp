@@ -31,6 +31,16 @@ uint pixelIndex(uint c) {
   return v * uint(p.exemplarWidth) + u;
 }
 
+// c + (dx, dy) subpixels: wrapped, or clamped to the valid region (whole pixels) when the
+// exemplar does not tile (a predicted neighborhood sample).
+uint predictedAt(uint c, int dx, int dy) {
+  if (p.region.clamp != 0)
+    return packCoord(uint(min(max(int(coordU(c)) + dx, p.region.x0 * kOne), p.region.x1 * kOne)),
+                     uint(min(max(int(coordV(c)) + dy, p.region.y0 * kOne), p.region.y1 * kOne)));
+  const uint sw = uint(p.exemplarWidth) * kOne, sh = uint(p.exemplarHeight) * kOne;
+  return packCoord(wrapAdd(coordU(c), reduce(dx, sw), sw), wrapAdd(coordV(c), reduce(dy, sh), sh));
+}
+
 int appearanceAt(uint pixel, int c) { return INT8_AT(appearance, pixel * 8u + uint(c)); }
 
 int neighborhoodDistance(const uint target[8], uint pixel) {
@@ -43,7 +53,6 @@ int neighborhoodDistance(const uint target[8], uint pixel) {
 // from immediate neighbors (LH06 §5): the mean of the estimates through the two unit steps
 // closest in direction to J^-1 Delta.
 void predictSample(int i, const float j[4], const ivec2 back[8], uint s, uint current, inout uint target[8]) {
-  const uint sw = uint(p.exemplarWidth) * kOne, sh = uint(p.exemplarHeight) * kOne;
   const int dx = p.spacing * kDiagonalX[i], dy = p.spacing * kDiagonalY[i];
   precise const float det = j[0] * j[3] - j[1] * j[2];
   const float sgn = det < 0 ? -1.0 : 1.0;
@@ -58,16 +67,10 @@ void predictSample(int i, const float j[4], const ivec2 back[8], uint s, uint cu
     const int d = k == 0 ? d1 : d2;
     const int n = int(neighbors.words[s * 8u + uint(d)]);
     if (n < 0) continue;
-    const uint c = coordsIn.words[n];
-    const uint predicted = packCoord(wrapAdd(coordU(c), reduce(dx * kOne + back[d].x, sw), sw),
-                                     wrapAdd(coordV(c), reduce(dy * kOne + back[d].y, sh), sh));
-    estimates[count++] = pixelIndex(predicted);
+    estimates[count++] = pixelIndex(predictedAt(coordsIn.words[n], dx * kOne + back[d].x, dy * kOne + back[d].y));
   }
-  if (count == 0) {  // no neighbor on that side (an open boundary): from the site itself
-    const uint predicted = packCoord(wrapAdd(coordU(current), reduce(dx * kOne, sw), sw),
-                                     wrapAdd(coordV(current), reduce(dy * kOne, sh), sh));
-    estimates[count++] = pixelIndex(predicted);
-  }
+  if (count == 0)  // no neighbor on that side (an open boundary): from the site itself
+    estimates[count++] = pixelIndex(predictedAt(current, dx * kOne, dy * kOne));
   for (int c = 0; c < 8; ++c) {
     const int a = appearanceAt(estimates[0], c);
     const int v = count == 1 ? a : (a + appearanceAt(estimates[1], c)) >> 1;
@@ -102,7 +105,16 @@ void correctSurfaceKernel(uint i) {
     const uint cand = pixelIndex(base) * uint(p.k);
     for (uint k = 0; k < uint(p.k); ++k) {
       const uint ck = candidates.words[cand + k];
-      const uint c = packCoord(wrapAdd(coordU(ck) * kOne, ox, sw), wrapAdd(coordV(ck) * kOne, oy, sh));
+      uint c;
+      if (p.region.clamp != 0) {  // C_i(S[n]) - J(p)delta unwrapped; skipped outside the valid region
+        const int u = int(coordU(ck)) * kOne + fracX + (d < 8 ? back[d].x : 0);
+        const int v = int(coordV(ck)) * kOne + fracY + (d < 8 ? back[d].y : 0);
+        if (u < p.region.x0 * kOne || u > p.region.x1 * kOne || v < p.region.y0 * kOne || v > p.region.y1 * kOne)
+          continue;
+        c = packCoord(uint(u), uint(v));
+      } else {
+        c = packCoord(wrapAdd(coordU(ck) * kOne, ox, sw), wrapAdd(coordV(ck) * kOne, oy, sh));
+      }
       if (c == best) continue;
       const int dist = neighborhoodDistance(target, pixelIndex(c));
       if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {

@@ -11,13 +11,14 @@ READ_WORDS(1, siteY);
 READ_WORDS(2, jacobian);
 WORDS(3, coords);         // the whole level
 
-// S[s] = J(s) * (texel centre) mod exemplar size.
+// S[s] = J(s) * (texel centre) mod exemplar size (non-toroidal: reflected into the valid region).
 void initSurfaceKernel(uint i) {
   float j[4];
   JACOBIAN_AT(jacobian, i, j);
   precise const float cx = float(int(siteX.words[i])) + 0.5, cy = float(int(siteY.words[i])) + 0.5;
   const ivec2 o = applyJ(j, cx, cy);
-  coords.words[p.first + i] = shifted(0u, o.x, o.y, p.exemplarWidth * kOne, p.exemplarHeight * kOne);
+  const int sw = p.exemplarWidth * kOne, sh = p.exemplarHeight * kOne;
+  coords.words[p.first + i] = shifted(shifted(0u, o.x, o.y, sw, sh), 0, 0, sw, sh, p.region);
 }
 
 void main() {

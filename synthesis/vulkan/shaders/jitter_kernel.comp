@@ -9,7 +9,8 @@
 layout(push_constant) uniform Push { JitterParams p; };
 WORDS(0, coords);
 
-// S[q] += round(amplitude/256 * H(q)), H uniform in [-1, 1)^2 from texelHash(seed, level, q mod period).
+// S[q] += round(amplitude/256 * H(q)), H uniform in [-1, 1)^2 from texelHash(seed, level, q mod period);
+// wrapped, or reflected into the valid region.
 void jitterKernel(uint index) {
   const uint w = uint(p.grid.width);
   int64_t qx = p.grid.x0 + int(index % w), qy = p.grid.y0 + int(index / w);
@@ -21,8 +22,13 @@ void jitterKernel(uint index) {
   const int64_t jx = (p.amplitude256 * hx + (int64_t(1) << 22)) >> 23;
   const int64_t jy = (p.amplitude256 * hy + (int64_t(1) << 22)) >> 23;
   const uint s = coords.words[index];
-  coords.words[index] = packCoord(uint(floorMod(int64_t(coordU(s)) + jx, int64_t(p.exemplarWidth))),
-                                  uint(floorMod(int64_t(coordV(s)) + jy, int64_t(p.exemplarHeight))));
+  const int64_t u = int64_t(coordU(s)) + jx, v = int64_t(coordV(s)) + jy;
+  if (p.region.clamp != 0)
+    coords.words[index] = packCoord(uint(reflectInto(int(u), p.region.x0, p.region.x1)),
+                                    uint(reflectInto(int(v), p.region.y0, p.region.y1)));
+  else
+    coords.words[index] = packCoord(uint(floorMod(u, int64_t(p.exemplarWidth))),
+                                    uint(floorMod(v, int64_t(p.exemplarHeight))));
 }
 
 void main() {

@@ -22,7 +22,7 @@ void jitterSurfaceKernel(uint i) {
   const int64_t jy = (p.amplitude256 * kOne * hy + (int64_t(1) << 22)) >> 23;
   const uint s = p.first + i;
   coords.words[s] = shifted(coords.words[s], int(jx), int(jy), p.exemplarWidth * kOne,
-                            p.exemplarHeight * kOne);
+                            p.exemplarHeight * kOne, p.region);
 }
 
 void main() {

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The parameter blocks (push constants) of the compute kernels: one definition, read by the C++
 // kernel wrappers and by the GLSL shaders (GL_EXT_shader_explicit_arithmetic_types gives GLSL the
-// same integer types). Scalars only, 64-bit fields first and 8-aligned, so that the std430 layout
-// of a push-constant block equals the C++ layout; the static_asserts below pin the sizes.
+// same integer types). Scalars and structs of scalars only, 64-bit fields first and 8-aligned, so
+// that the std430 layout of a push-constant block equals the C++ layout; the static_asserts below
+// pin the sizes.
 #ifndef TEXFAB_KERNEL_PARAMS_H
 #define TEXFAB_KERNEL_PARAMS_H
 
@@ -22,6 +23,16 @@ struct GridParams {
   int32_t height;
 };
 
+/// A non-toroidal exemplar's valid region at one level (ValidRegion: inclusive bounds, in
+/// exemplar pixels). `clamp` 0: the exemplar tiles, coordinates wrap and the bounds are unused.
+struct RegionParams {
+  int32_t clamp;
+  int32_t x0;
+  int32_t y0;
+  int32_t x1;
+  int32_t y1;
+};
+
 /// initKernel.
 struct InitParams {
   GridParams grid;
@@ -30,7 +41,7 @@ struct InitParams {
   int32_t spacing;
   int32_t exemplarWidth;
   int32_t exemplarHeight;
-  int32_t unused;
+  RegionParams region;
 };
 
 /// upsampleKernel.
@@ -40,7 +51,7 @@ struct UpsampleParams {
   int32_t spacing;
   int32_t exemplarWidth;
   int32_t exemplarHeight;
-  int32_t unused;
+  RegionParams region;
 };
 
 /// jitterKernel.
@@ -53,6 +64,8 @@ struct JitterParams {
   int32_t level;
   int32_t exemplarWidth;
   int32_t exemplarHeight;
+  RegionParams region;
+  int32_t unused;
 };
 
 /// correctKernel: one sub-pass over the buffer rectangle [ax0, ax1) x [ay0, ay1).
@@ -69,7 +82,7 @@ struct CorrectParams {
   int32_t ax1;
   int32_t ay0;
   int32_t ay1;
-  int32_t unused;
+  RegionParams region;
 };
 
 /// initSurfaceKernel, upsampleSurfaceKernel, jitterSurfaceKernel: the sites [first, first + count)
@@ -82,6 +95,8 @@ struct SurfaceParams {
   int32_t exemplarHeight;
   uint32_t seed;
   int32_t atlasLevel;
+  RegionParams region;
+  int32_t unused;
 };
 
 /// correctSurfaceKernel, over the sites [first, first + count).
@@ -93,7 +108,7 @@ struct CorrectSurfaceParams {
   int32_t exemplarWidth;
   int32_t exemplarHeight;
   int32_t k;
-  int32_t unused;
+  RegionParams region;
 };
 
 /// Solid kernels work on 16^3 chunks of a level (the lazy engine's chunks).
@@ -122,12 +137,13 @@ struct SolidParams {
 
 #ifdef __cplusplus
 static_assert(sizeof(GridParams) == 24 && alignof(GridParams) == 8);
-static_assert(sizeof(InitParams) == 56);
-static_assert(sizeof(UpsampleParams) == 64);
-static_assert(sizeof(JitterParams) == 64);
-static_assert(sizeof(CorrectParams) == 72);
-static_assert(sizeof(SurfaceParams) == 32);
-static_assert(sizeof(CorrectSurfaceParams) == 32);
+static_assert(sizeof(RegionParams) == 20 && alignof(RegionParams) == 4);
+static_assert(sizeof(InitParams) == 72);
+static_assert(sizeof(UpsampleParams) == 80);
+static_assert(sizeof(JitterParams) == 88);
+static_assert(sizeof(CorrectParams) == 88);
+static_assert(sizeof(SurfaceParams) == 56);
+static_assert(sizeof(CorrectSurfaceParams) == 48);
 static_assert(sizeof(SolidParams) == 72);
 } // namespace texfab::synthesis::vulkan
 #endif

@@ -9,6 +9,7 @@
 #define TEXFAB_SURFACE_GLSL
 
 #include "coord_map.glsl"
+#include "kernel_params.h"
 
 const int kSubpixelBits = 4;
 const int kOne = 1 << kSubpixelBits;  // one exemplar pixel in subpixel units
@@ -35,6 +36,13 @@ ivec2 applyJ(const float j[4], float vx, float vy) {
 // c + (dx, dy) subpixels, wrapped to the exemplar (sizes in subpixels).
 uint shifted(uint c, int dx, int dy, int w, int h) {
   return packCoord(uint(floorMod(int(coordU(c)) + dx, w)), uint(floorMod(int(coordV(c)) + dy, h)));
+}
+
+// The same, or reflected into the valid region (whole pixels) when the exemplar does not tile.
+uint shifted(uint c, int dx, int dy, int w, int h, RegionParams region) {
+  if (region.clamp == 0) return shifted(c, dx, dy, w, h);
+  return packCoord(uint(reflectInto(int(coordU(c)) + dx, region.x0 * kOne, region.x1 * kOne)),
+                   uint(reflectInto(int(coordV(c)) + dy, region.y0 * kOne, region.y1 * kOne)));
 }
 
 // The unit step (one of 8) closest in direction to (fx, fy) (sectors of 45 degrees around each).

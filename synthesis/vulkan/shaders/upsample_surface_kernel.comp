@@ -20,7 +20,7 @@ void upsampleSurfaceKernel(uint i) {
   precise const float vx = float(int(siteX.words[i] & 1u)) - 0.5, vy = float(int(siteY.words[i] & 1u)) - 0.5;
   const ivec2 o = applyJ(j, vx, vy);
   coords.words[p.first + i] = shifted(parentCoords.words[parent.words[i]], o.x, o.y, p.exemplarWidth * kOne,
-                                      p.exemplarHeight * kOne);
+                                      p.exemplarHeight * kOne, p.region);
 }
 
 void main() {
