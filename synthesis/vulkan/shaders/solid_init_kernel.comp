@@ -59,13 +59,10 @@ void cellOffset(const int64_t q[3], out int64_t offset[3]) {
 }
 
 // A slab layer's coordinate c along one exemplar axis: wrapped, or reflected into the valid region
-// [m, side - 1 - m] (reflectInto, synthesis/cpu/synthesis_kernels.h).
-uint layerCoord(int64_t c, int side) {
-  const int64_t m = int64_t(p.clampMargin), hi = int64_t(side - 1) - m;
-  if (m == 0) return uint(floorMod(c, int64_t(side)));
-  if (c < m) c = 2 * m - c;
-  if (c > hi) c = 2 * hi - c;
-  return uint(c < m ? m : c > hi ? hi : c);
+// [m, side - 1 - m].
+uint layerCoord(int c, int side) {
+  const int m = p.clampMargin;
+  return uint(m == 0 ? floorMod(c, side) : reflectInto(c, m, side - 1 - m));
 }
 
 // The slab (§4.3) at warped position q, shifted by `offset`: the E_z pixel under (x, y), thickened
@@ -76,8 +73,8 @@ void slabTriple(const int64_t q[3], const int64_t offset[3], uint g) {
   const int64_t dz = floorMod(q[2] + offset[2], int64_t(5)) - 2;
   const uint best = (coordV(pixel) * uint(w) + coordU(pixel)) * uint(kSolidMaxCandidates) * 3u;
   const uint b0 = slabTriples.words[best], b1 = slabTriples.words[best + 1u];
-  triples.words[3u * g] = packCoord(coordU(b0), layerCoord(int64_t(coordV(b0)) + dz * p.spacing, h));
-  triples.words[3u * g + 1u] = packCoord(layerCoord(int64_t(coordU(b1)) + dz * p.spacing, w), coordV(b1));
+  triples.words[3u * g] = packCoord(coordU(b0), layerCoord(int(coordV(b0)) + int(dz) * p.spacing, h));
+  triples.words[3u * g + 1u] = packCoord(layerCoord(int(coordU(b1)) + int(dz) * p.spacing, w), coordV(b1));
   triples.words[3u * g + 2u] = slabTriples.words[best + 2u];  // the pixel, or its reflection (clamp)
 }
 
