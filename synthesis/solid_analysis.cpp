@@ -23,6 +23,7 @@
 #include <cstring>
 #include <fstream>
 #include <numeric>
+#include <thread>
 
 namespace texfab::synthesis {
 namespace fs = std::filesystem;
@@ -471,15 +472,26 @@ void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez, c
   const Image* images[3] = {&ex, &ey, &ez};
   for (int e = 0; e < 3; ++e) {
     const Image& i = *images[e];
-    if (i.width < 8 || i.height < 8 || i.width > 1024 || i.height > 1024)
-      throw Error(names[size_t(e)] + ": exemplar is " + std::to_string(i.width) + "x" + std::to_string(i.height) +
-                  ", outside the 8x8 to 1024x1024 that solid synthesis supports");
+    const std::string size = std::to_string(i.width) + "x" + std::to_string(i.height);
+    if (i.width < 8 || i.height < 8)
+      throw Error(names[size_t(e)] + ": exemplar is " + size + ", smaller than the 8x8 solid synthesis needs");
+    if (i.width > kMaxSolidExemplarSide || i.height > kMaxSolidExemplarSide)
+      throw Error(names[size_t(e)] + ": exemplar is " + size + ", larger than the " +
+                  std::to_string(kMaxSolidExemplarSide) + "x" + std::to_string(kMaxSolidExemplarSide) +
+                  " solid synthesis accepts (its precomputation grows with the square of the pixels: about 9 min at "
+                  "512x512); downsample it, e.g. oiiotool IN --resize 50% -o OUT");
   }
   for (int e = 1; e < 3; ++e)
     if (images[e]->width != ex.width || images[e]->height != ex.height)
       throw Error(names[size_t(e)] + ": exemplar is " + std::to_string(images[e]->width) + "x" +
                   std::to_string(images[e]->height) + " but " + names[0] + " is " + std::to_string(ex.width) + "x" +
                   std::to_string(ex.height) + " (the three exemplars must have the same size)");
+}
+
+double solidAnalysisSeconds(int width, int height, int threads) {
+  // 14.4 s of CPU at 128^2 (123.7 s at 256^2): the strip searches, n^1.5 in practice.
+  const double n = double(width) * double(height) / (128.0 * 128.0);
+  return 14.4 * n * std::sqrt(n) / std::max(1, threads);
 }
 
 uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& o) {
@@ -627,6 +639,14 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   const Image* inputs[3] = {&exIn, &eyIn, &ezIn};
   const bool shared = samePixels(exIn, eyIn) && samePixels(exIn, ezIn);
   const int w = exIn.width, h = exIn.height;
+  const int threads = ctx.threads > 0 ? ctx.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  if (const double seconds = solidAnalysisSeconds(w, h, threads); seconds > 20) {
+    Stage estimate(ctx, "estimate");  // said before a long precomputation
+    char detail[96];
+    std::snprintf(detail, sizeof detail, "about %.0f %s for a %dx%d exemplar on %d threads",
+                  seconds < 90 ? seconds : seconds / 60, seconds < 90 ? "s" : "min", w, h, threads);
+    estimate.finish(detail);
+  }
 
   SolidAnalysis a;
   a.width = w;
@@ -787,7 +807,7 @@ std::optional<SolidAnalysis> readSolidAnalysis(const fs::path& path, uint64_t ex
   r.value(count);
   r.value(a.stats);
   if (!r.ok || magic != kSolidMagic || version != kSolidVersion || a.key != expectedKey) return std::nullopt;
-  if (a.width < 8 || a.height < 8 || a.width > 1024 || a.height > 1024 ||
+  if (a.width < 8 || a.height < 8 || a.width > kMaxSolidExemplarSide || a.height > kMaxSolidExemplarSide ||
       (a.wrap != ExemplarWrap::Tile && a.wrap != ExemplarWrap::Clamp) ||
       a.finestStackLevel != stackLevelCount(a.width, a.height) - 1 || count < 1 ||
       count > solidLevelLimit(a.width, a.height, a.wrap))

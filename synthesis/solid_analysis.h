@@ -62,6 +62,9 @@ inline constexpr int kSolidCrossVoxels = 61;
 inline constexpr int kSolid2dDims = 8;
 /// Most dimensions of a projected 3-neighborhood (coarse levels; the finest keeps 8).
 inline constexpr int kSolidMaxDims = 12;
+/// Largest exemplar side the precomputation accepts: its exact strip search grows with the
+/// square of the pixel count (2 cores: 8 s at 128^2, 65 s at 256^2, about 9 min at 512^2).
+inline constexpr int kMaxSolidExemplarSide = 512;
 /// Most 3-D candidates per exemplar pixel after the coherence filter.
 inline constexpr int kSolidMaxCandidates = 12;
 /// Sums of three 8-bit colour values: 0..765.
@@ -148,7 +151,7 @@ struct SolidAnalysis {
 const std::array<std::array<int, 3>, kSolidCrossVoxels>& solidCrossOffsets();
 
 /// Throws texfab::Error unless the three exemplars can be analysed together (same size, at least
-/// 8x8, at most 1024x1024). Names the exemplars as given in `names` (x, y, z).
+/// 8x8, at most kMaxSolidExemplarSide per side). Names the exemplars as given in `names` (x, y, z).
 void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez,
                             const std::array<std::string, 3>& names = {"x exemplar", "y exemplar", "z exemplar"});
 
@@ -156,6 +159,9 @@ void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez,
 /// Passing the same image three times shares the candidate computation.
 SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
                            const Context& ctx = {});
+
+/// Rough seconds of the precomputation on `threads` cores (measured on a 2-core machine).
+double solidAnalysisSeconds(int width, int height, int threads);
 
 uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options);
 

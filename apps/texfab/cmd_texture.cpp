@@ -6,12 +6,14 @@
 #include "apps/texfab/command.h"
 #include "apps/texfab/report_json.h"
 #include "geometry/mesh_io.h"
+#include "render/image/downsample.h"
 #include "render/image/image_io.h"
 #include "render/image/memory.h"
 #include "render/image/text.h"
 #include "render/preview_renderer.h"
 #include "render/texture_mesh.h"
 
+#include <cmath>
 #include <memory>
 #include <optional>
 
@@ -84,6 +86,30 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
   return in;
 }
 
+// Smallest side an exemplar is downsampled to for its analysis.
+constexpr int kMinAnalysedSide = 32;
+
+// The factor (a power of two) by which the exemplar and its maps are analysed smaller: where the
+// scale puts at least that many exemplar pixels in every texel, whatever the atlas, detail finer
+// than a texel would cost analysis time and memory for nothing. Charts keep their surface area in
+// UV space, so a W x H atlas has at most sqrt(W H / area) texels per model unit.
+int analysisDownsampling(const render::TextureMeshOptions& o, const Inputs& in) {
+  if (o.textureScale <= 0) return 1;
+  double area = 0;
+  for (size_t t = 0; t < in.mesh.triangleCount(); ++t) {
+    const Eigen::Vector3d a = in.mesh.corner(t, 0).cast<double>(), b = in.mesh.corner(t, 1).cast<double>(),
+                          c = in.mesh.corner(t, 2).cast<double>();
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  if (!(area > 0)) return 1;
+  const double fewestPixelsPerTexel =
+      o.textureScale / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area);
+  const int side = std::min(in.exemplar.width, in.exemplar.height);
+  int factor = 1;
+  while (2 * factor <= fewestPixelsPerTexel && side / (2 * factor) >= kMinAnalysedSide) factor *= 2;
+  return factor;
+}
+
 void runTexture(TextureJob& job) {
   Run run("texture", job.common);
   render::TextureMeshOptions& o = job.options;
@@ -105,17 +131,31 @@ void runTexture(TextureJob& job) {
   o.measure = run.reporting();  // the measures (seconds on a 2048² atlas) go to the report
 
   Inputs in = load(job, maps, run.ctx());
+  const nlohmann::json exemplarReport = imageJson(job.exemplar, in.exemplar);  // as given
+  // The wrap is measured on the exemplar as given (a smaller copy hides part of its seam).
+  const WrapChoice wrap =
+      chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
+  if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
+  const int downsampling = analysisDownsampling(o, in);
+  if (downsampling > 1) {
+    for (std::optional<Image>* map : {&in.normal, &in.roughness, &in.height})
+      if (*map) **map = downsample(**map, downsampling);
+    in.exemplar = downsample(in.exemplar, downsampling);
+    o.textureScale /= downsampling;
+    run.note("the scale puts at least " + std::to_string(downsampling) + " exemplar pixels in every texel: the " +
+             "exemplar is synthesized from a copy " + std::to_string(downsampling) + " times smaller (" +
+             std::to_string(in.exemplar.width) + "x" + std::to_string(in.exemplar.height) + ")");
+  }
   bool cached = false;
   std::optional<synthesis::ExemplarAnalysis> analysis;
   std::optional<synthesis::SolidAnalysis> solidAnalysis;
   if (o.mode == render::TextureMode::Surface) {
     synthesis::AnalysisOptions options;
-    options.wrap = chooseWrap(job.wrap, in.exemplar, run);
+    options.wrap = chooseWrap(wrap, in.exemplar, run);
     analysis = analyzeExemplar(run, in.exemplar, options, cached);
   } else {
-    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, job.wrap, cached);
+    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, wrap, cached);
   }
-  if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
   render::TextureExemplar ex = in.view();
   ex.analysis = analysis ? &*analysis : nullptr;
   ex.solidAnalysis = solidAnalysis ? &*solidAnalysis : nullptr;
@@ -135,11 +175,13 @@ void runTexture(TextureJob& job) {
 
   nlohmann::json& r = run.report();
   r["model"] = modelJson(job.model, in.mesh);
-  r["exemplar"] = imageJson(job.exemplar, in.exemplar);
+  r["exemplar"] = exemplarReport;
   r["exemplar"]["analysis_cached"] = cached;
+  r["exemplar"]["downsampled"] = downsampling;  // 1: synthesized from the exemplar as given
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},
                      {"exemplar_wrap", toString(analysis ? analysis->wrap : solidAnalysis->wrap)},
-                     {"texture_scale", result.textureScale}, {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel}};
+                     {"texture_scale", result.textureScale * downsampling},
+                     {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel * downsampling}};
   r["atlas"] = toJson(result.atlas);
   r["measures"] = toJson(result.measures, result.textureScale);
   if (o.mode == render::TextureMode::Solid)
@@ -162,7 +204,9 @@ Command addTextureCommand(CLI::App& root) {
   f.text("-o,--output", job->output, "Textured model (.glb .gltf .obj)")->required();
   f.choice("--mode", o.mode, {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}},
            "surface (synthesis over the surface) or solid (a 3-D material, seamless)");
-  f.option("--scale", o.textureScale, "Exemplar pixels per model unit (default: the atlas density, one per texel)",
+  f.option("--scale", o.textureScale,
+           "Exemplar pixels per model unit (default: the atlas density, one per texel); a scale that puts 2 or more "
+           "exemplar pixels in every texel synthesizes from a copy of the exemplar 2, 4, ... times smaller",
            positive())->default_str("auto");
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --scale)", positive())
       ->default_str("");

@@ -131,6 +131,26 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
   EXPECT_TRUE(fs::exists(d / "maps.mtl"));
 }
 
+// A scale that puts several exemplar pixels in every texel synthesizes from a smaller copy of the
+// exemplar (and says so); the report keeps the exemplar as given, the scale asked for, and the
+// wrap measured on the exemplar as given (a photograph: clamp).
+TEST(CliTexture, MinifyingScaleAnalysesASmallerExemplar) {
+  TempDir d("texfab-texture-cli");
+  const fs::path photo = kSource / "models" / "exemplars" / "photos" / "rock.png";
+  const texfab::test::CliResult r =
+      texture(Args() << kModel << "-e" << photo << "--resolution 256 --scale 1600 --no-cache -o" << d / "out.glb"
+                     << "--report" << d / "r.json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("a copy 4 times smaller (32x32)"), std::string::npos) << r.err;
+  const nlohmann::json report = readJson(d / "r.json");
+  EXPECT_EQ(report["exemplar"]["downsampled"], 4);
+  EXPECT_EQ(report["exemplar"]["width"], 128);
+  EXPECT_EQ(report["parameters"]["texture_scale"], 1600.0);
+  EXPECT_EQ(report["parameters"]["exemplar_wrap"], "clamp");
+  EXPECT_GE(report["parameters"]["exemplar_pixels_per_texel"].get<double>(), 4.0);
+  expectValidGltf(d / "out.glb");
+}
+
 TEST(CliTexture, BadInputFailsWithOneLineAndNoOutput) {
   TempDir d("texfab-texture-cli");
   std::ofstream(d / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
