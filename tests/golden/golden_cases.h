@@ -70,16 +70,19 @@ inline std::filesystem::path bundled(const std::string& relative) {
   return std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / relative;
 }
 
+/// The side x side crop at (x0, y0) of a bundled image.
+inline Image bundledCrop(const std::string& relative, int x0, int y0, int side) {
+  const Image full = readImage(bundled(relative));
+  Image out(side, side, full.channels, full.format);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x)
+      for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(x0 + x, y0 + y, c);
+  return out;
+}
+
 /// A 32x32 crop of the bundled marble: a solid analysis in a second or two.
 inline const Image& marble32() {
-  static const Image crop = [] {
-    const Image full = readImage(bundled("exemplars/marble.png"));
-    Image out(32, 32, full.channels, full.format);
-    for (int y = 0; y < 32; ++y)
-      for (int x = 0; x < 32; ++x)
-        for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(40 + x, 24 + y, c);
-    return out;
-  }();
+  static const Image crop = bundledCrop("exemplars/marble.png", 40, 24, 32);
   return crop;
 }
 
@@ -90,14 +93,7 @@ inline const synthesis::SolidAnalysis& solidAnalysis32() {
 
 /// A 40x40 crop of the bundled photograph rock.png (it does not tile), analysed with wrap Clamp.
 inline const Image& rock40() {
-  static const Image crop = [] {
-    const Image full = readImage(bundled("exemplars/photos/rock.png"));
-    Image out(40, 40, full.channels, full.format);
-    for (int y = 0; y < 40; ++y)
-      for (int x = 0; x < 40; ++x)
-        for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(70 + x, 9 + y, c);
-    return out;
-  }();
+  static const Image crop = bundledCrop("exemplars/photos/rock.png", 70, 9, 40);
   return crop;
 }
 inline const synthesis::SolidAnalysis& solidClampAnalysis40() {
@@ -125,14 +121,7 @@ inline uint64_t window2d(Backend backend = Backend::Cpu) {
 
 /// A 64x64 crop of the bundled stone photograph, which does not tile.
 inline const Image& stone64() {
-  static const Image crop = [] {
-    const Image full = readImage(bundled("exemplars/photos/stone.png"));
-    Image out(64, 64, full.channels, full.format);
-    for (int y = 0; y < 64; ++y)
-      for (int x = 0; x < 64; ++x)
-        for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(30 + x, 40 + y, c);
-    return out;
-  }();
+  static const Image crop = bundledCrop("exemplars/photos/stone.png", 30, 40, 64);
   return crop;
 }
 
