@@ -163,6 +163,8 @@ void validateExemplarSize(const Image& exemplar);
 /// of the exemplar included (meant as an upper bound), so callers can refuse an exemplar before
 /// the work.
 double analysisMemoryBytes(int width, int height, const AnalysisOptions& options);
+/// Rough CPU seconds of analyzeExemplar (on one core of the 2-core machine it was measured on).
+double analysisCpuSeconds(int width, int height);
 
 /// Analyses `exemplar` (at least kMinExemplarSide pixels per side). Pure: the result depends only
 /// on the pixels and the options, never on the context. Reports the stages "stack", then

@@ -23,7 +23,6 @@
 #include <cstring>
 #include <fstream>
 #include <numeric>
-#include <thread>
 
 namespace texfab::synthesis {
 namespace fs = std::filesystem;
@@ -478,7 +477,7 @@ void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez, c
     if (i.width > kMaxSolidExemplarSide || i.height > kMaxSolidExemplarSide)
       throw Error(names[size_t(e)] + ": exemplar is " + size + ", larger than the " +
                   std::to_string(kMaxSolidExemplarSide) + "x" + std::to_string(kMaxSolidExemplarSide) +
-                  " solid synthesis accepts (its precomputation grows with the square of the pixels: about 9 min at "
+                  " solid synthesis accepts (its precomputation grows with the square of the pixels: about 15 min at "
                   "512x512); downsample it, e.g. oiiotool IN --resize 50% -o OUT");
   }
   for (int e = 1; e < 3; ++e)
@@ -488,10 +487,10 @@ void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez, c
                   std::to_string(ex.height) + " (the three exemplars must have the same size)");
 }
 
-double solidAnalysisSeconds(int width, int height, int threads) {
-  // 14.4 s of CPU at 128^2 (123.7 s at 256^2): the strip searches, n^1.5 in practice.
+double solidAnalysisCpuSeconds(int width, int height) {
+  // 14.4 s of CPU at 128^2, 124 s at 256^2, 1590 s at 512^2: the strip searches, about n^1.7.
   const double n = double(width) * double(height) / (128.0 * 128.0);
-  return 14.4 * n * std::sqrt(n) / std::max(1, threads);
+  return 14.4 * std::pow(n, 1.7);
 }
 
 uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& o) {
@@ -639,14 +638,8 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
   const Image* inputs[3] = {&exIn, &eyIn, &ezIn};
   const bool shared = samePixels(exIn, eyIn) && samePixels(exIn, ezIn);
   const int w = exIn.width, h = exIn.height;
-  const int threads = ctx.threads > 0 ? ctx.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  if (const double seconds = solidAnalysisSeconds(w, h, threads); seconds > 20) {
-    Stage estimate(ctx, "estimate");  // said before a long precomputation
-    char detail[96];
-    std::snprintf(detail, sizeof detail, "about %.0f %s for a %dx%d exemplar on %d threads",
-                  seconds < 90 ? seconds : seconds / 60, seconds < 90 ? "s" : "min", w, h, threads);
-    estimate.finish(detail);
-  }
+  reportEstimate(ctx, solidAnalysisCpuSeconds(w, h),
+                 "the solid precomputation of a " + std::to_string(w) + "x" + std::to_string(h) + " exemplar");
 
   SolidAnalysis a;
   a.width = w;

@@ -63,7 +63,7 @@ inline constexpr int kSolid2dDims = 8;
 /// Most dimensions of a projected 3-neighborhood (coarse levels; the finest keeps 8).
 inline constexpr int kSolidMaxDims = 12;
 /// Largest exemplar side the precomputation accepts: its exact strip search grows with the
-/// square of the pixel count (2 cores: 8 s at 128^2, 65 s at 256^2, about 9 min at 512^2).
+/// square of the pixel count (2 cores: 8 s at 128^2, 65 s at 256^2, about 15 min at 512^2).
 inline constexpr int kMaxSolidExemplarSide = 512;
 /// Most 3-D candidates per exemplar pixel after the coherence filter.
 inline constexpr int kSolidMaxCandidates = 12;
@@ -160,8 +160,8 @@ void validateSolidExemplars(const Image& ex, const Image& ey, const Image& ez,
 SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options,
                            const Context& ctx = {});
 
-/// Rough seconds of the precomputation on `threads` cores (measured on a 2-core machine).
-double solidAnalysisSeconds(int width, int height, int threads);
+/// Rough CPU seconds of the precomputation (on one core of the 2-core machine it was measured on).
+double solidAnalysisCpuSeconds(int width, int height);
 
 uint64_t solidAnalysisKey(const Image& ex, const Image& ey, const Image& ez, const SolidAnalysisOptions& options);
 

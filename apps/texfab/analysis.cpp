@@ -59,9 +59,13 @@ synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey
                                       synthesis::SolidAnalysisOptions options, WrapChoice wrap, bool& cached) {
   const std::array<const Image*, 3> axes = {&ex, &ey, &ez};
   options.wrap = synthesis::ExemplarWrap::Tile;
-  for (auto e = axes.begin(); e != axes.end(); ++e)
-    if (std::find(axes.begin(), e, *e) == e && chooseWrap(wrap, **e, run) == synthesis::ExemplarWrap::Clamp)
+  for (auto e = axes.begin(); e != axes.end(); ++e) {
+    const bool seen = std::any_of(axes.begin(), e, [&](const Image* other) {
+      return other->width == (*e)->width && other->pixels == (*e)->pixels;
+    });
+    if (!seen && chooseWrap(wrap, **e, run) == synthesis::ExemplarWrap::Clamp)
       options.wrap = synthesis::ExemplarWrap::Clamp;  // one image for several axes is measured once
+  }
   // The most different pair of distinct exemplars, as synthesis reads their colours.
   const int channels = synthesis::solidColorChannels(ex, ey, ez);
   double worst = 0;

@@ -320,7 +320,7 @@ Command addSolidCommand(CLI::App& root) {
   f.input("exemplar", job->exemplar,
           "Exemplar image, used for all three axes unless --exemplar-y/--exemplar-z are given "
           "(E_x lies in the y-z plane, E_y in z-x, E_z in x-y); 8x8 to 512x512. The precomputation, cached, "
-          "takes about 8 s at 128x128, 1 min at 256x256, 9 min at 512x512 on 2 cores");
+          "takes about 8 s at 128x128, 1 min at 256x256, 15 min at 512x512 on 2 cores");
   f.text("--exemplar-y", job->exemplarY, "Exemplar for the z-x planes (same size as EXEMPLAR)");
   f.text("--exemplar-z", job->exemplarZ, "Exemplar for the x-y planes (same size as EXEMPLAR)");
   f.text("-o,--output", job->output,

@@ -2,6 +2,8 @@
 #include "render/image/context.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <thread>
 
 namespace texfab {
 
@@ -28,6 +30,16 @@ void Stage::advance(double fraction) {
   // One thread wins each interval; the others skip.
   if (now < due || !nextReport_.compare_exchange_strong(due, now + kReportIntervalNs)) return;
   ctx_.progress({ProgressEvent::Kind::Advance, name_, ctx_.depth, std::clamp(fraction, 0.0, 1.0), 0.0, {}});
+}
+
+void reportEstimate(const Context& ctx, double cpuSeconds, const std::string& what) {
+  const int threads = ctx.threads > 0 ? ctx.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  const double seconds = cpuSeconds / threads;
+  if (seconds < 20) return;
+  char detail[160];
+  std::snprintf(detail, sizeof detail, "about %.0f %s for %s on %d thread%s", seconds < 90 ? seconds : seconds / 60,
+                seconds < 90 ? "s" : "min", what.c_str(), threads, threads == 1 ? "" : "s");
+  Stage(ctx, "estimate").finish(detail);
 }
 
 double Stage::seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }

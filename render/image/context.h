@@ -98,4 +98,9 @@ private:
   bool finished_ = false;
 };
 
+/// Says before a long computation about how long it will take, as a finished stage "estimate"
+/// whose detail is "about N s (or min) for `what` on T threads"; nothing below 20 s. `cpuSeconds`:
+/// the work on one core, spread over ctx.threads (0: all cores).
+void reportEstimate(const Context& ctx, double cpuSeconds, const std::string& what);
+
 } // namespace texfab
