@@ -522,7 +522,7 @@ int solidLevelLimit(int w, int h, ExemplarWrap wrap) {
   return std::min(stackLevels, int(std::bit_width(unsigned((std::min(w, h) - 1) / 4))));
 }
 
-// A level's 2-D k-coherence candidates, each moved into `valid` (reflectPixel), in place of
+// A level's 2-D k-coherence candidates, each moved into `valid` (reflectInto per axis), in place of
 // pixel p's own when p lies outside it.
 std::vector<uint32_t> candidatesIn(const AnalysisLevel& level2d, const ValidRegion& valid) {
   std::vector<uint32_t> out = level2d.candidates;
