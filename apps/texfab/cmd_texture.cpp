@@ -110,6 +110,22 @@ int analysisDownsampling(const render::TextureMeshOptions& o, const Inputs& in) 
   return factor;
 }
 
+// Replaces the exemplar and its maps by the copy analysisDownsampling asks for (and the scale by
+// the copy's), says so, and returns the factor.
+int downsampleForAnalysis(render::TextureMeshOptions& o, Inputs& in, const Run& run) {
+  const int factor = analysisDownsampling(o, in);
+  if (factor == 1) return 1;
+  for (std::optional<Image>* map : {&in.normal, &in.roughness, &in.height})
+    if (*map) **map = downsample(**map, factor);
+  in.exemplar = downsample(in.exemplar, factor);
+  o.textureScale /= factor;
+  const std::string times = std::to_string(factor);
+  run.note("the scale puts at least " + times + " exemplar pixels in every texel: the exemplar is synthesized from a " +
+           "copy " + times + " times smaller (" + std::to_string(in.exemplar.width) + "x" +
+           std::to_string(in.exemplar.height) + ")");
+  return factor;
+}
+
 void runTexture(TextureJob& job) {
   Run run("texture", job.common);
   render::TextureMeshOptions& o = job.options;
@@ -136,16 +152,7 @@ void runTexture(TextureJob& job) {
   const WrapChoice wrap =
       chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
   if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
-  const int downsampling = analysisDownsampling(o, in);
-  if (downsampling > 1) {
-    for (std::optional<Image>* map : {&in.normal, &in.roughness, &in.height})
-      if (*map) **map = downsample(**map, downsampling);
-    in.exemplar = downsample(in.exemplar, downsampling);
-    o.textureScale /= downsampling;
-    run.note("the scale puts at least " + std::to_string(downsampling) + " exemplar pixels in every texel: the " +
-             "exemplar is synthesized from a copy " + std::to_string(downsampling) + " times smaller (" +
-             std::to_string(in.exemplar.width) + "x" + std::to_string(in.exemplar.height) + ")");
-  }
+  const int downsampling = downsampleForAnalysis(o, in, run);
   bool cached = false;
   std::optional<synthesis::ExemplarAnalysis> analysis;
   std::optional<synthesis::SolidAnalysis> solidAnalysis;

@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
+#include "render/image/downsample.h"
 #include "render/image/error.h"
 #include "render/image/image_io.h"
 #include "test_support.h"
@@ -137,6 +138,26 @@ TEST(ImageIo, FailedWriteLeavesNoFile) {
   EXPECT_THROW(writeImage(gradient(4, 4, 3, PixelFormat::UInt8), dir / "no-such-folder" / "x.png"), Error);
   EXPECT_THROW(writeImage(gradient(4, 4, 3, PixelFormat::UInt8), dir / "x.unknownext"), Error);
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+// Each output pixel is the mean of its block, every channel; a remainder row or column is dropped;
+// factor 1 is the image itself; factor 0 is refused.
+TEST(Downsample, AveragesBlocksAndDropsTheRemainder) {
+  Image image(5, 3, 2, PixelFormat::UInt16);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 5; ++x) {
+      image.at(x, y, 0) = float(x + 10 * y);
+      image.at(x, y, 1) = 1.0f;
+    }
+  const Image half = downsample(image, 2);
+  ASSERT_EQ(half.width, 2);
+  ASSERT_EQ(half.height, 1);
+  EXPECT_EQ(half.format, PixelFormat::UInt16);
+  EXPECT_FLOAT_EQ(half.at(0, 0, 0), (0 + 1 + 10 + 11) / 4.0f);
+  EXPECT_FLOAT_EQ(half.at(1, 0, 0), (2 + 3 + 12 + 13) / 4.0f);
+  EXPECT_FLOAT_EQ(half.at(1, 0, 1), 1.0f);
+  EXPECT_EQ(downsample(image, 1).pixels, image.pixels);
+  EXPECT_THROW(downsample(image, 0), Error);
 }
 
 } // namespace
