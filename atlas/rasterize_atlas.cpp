@@ -137,13 +137,19 @@ void fillGutters(AtlasFields& fields) {
     }
     srcX[i] = srcX[j], srcY[i] = srcY[j];
   };
+  // A chart texel is its own source (distance 0): no neighbour can improve it.
+  auto inGutter = [&](int x, int y) { return fields.samples.at(x, y).chart < 0; };
   for (int y = 0; y < H; ++y) {
-    for (int x = 0; x < W; ++x) relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1), relax(x, y, x + 1, y - 1);
-    for (int x = W - 1; x >= 0; --x) relax(x, y, x + 1, y);
+    for (int x = 0; x < W; ++x)
+      if (inGutter(x, y)) relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1), relax(x, y, x + 1, y - 1);
+    for (int x = W - 1; x >= 0; --x)
+      if (inGutter(x, y)) relax(x, y, x + 1, y);
   }
   for (int y = H - 1; y >= 0; --y) {
-    for (int x = W - 1; x >= 0; --x) relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1), relax(x, y, x - 1, y + 1);
-    for (int x = 0; x < W; ++x) relax(x, y, x - 1, y);
+    for (int x = W - 1; x >= 0; --x)
+      if (inGutter(x, y)) relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1), relax(x, y, x - 1, y + 1);
+    for (int x = 0; x < W; ++x)
+      if (inGutter(x, y)) relax(x, y, x - 1, y);
   }
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {

@@ -87,6 +87,10 @@ SurfaceLevel finestLevel(const Atlas& atlas, const AtlasFields& fields, const Te
   SurfaceLevel level;
   level.width = atlas.width;
   level.height = atlas.height;
+  level.x.reserve(fields.chartTexels);
+  level.y.reserve(fields.chartTexels);
+  level.chart.reserve(fields.chartTexels);
+  level.jacobian.reserve(fields.chartTexels);
   for (int y = 0; y < atlas.height; ++y)
     for (int x = 0; x < atlas.width; ++x) {
       const int32_t chart = fields.samples.at(x, y).chart;
