@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <string>
 
 namespace texfab {
 namespace {
@@ -138,6 +139,28 @@ TEST(ImageIo, FailedWriteLeavesNoFile) {
   EXPECT_THROW(writeImage(gradient(4, 4, 3, PixelFormat::UInt8), dir / "no-such-folder" / "x.png"), Error);
   EXPECT_THROW(writeImage(gradient(4, 4, 3, PixelFormat::UInt8), dir / "x.unknownext"), Error);
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+// OpenImageIO (and its ~260 libraries) is loaded by the first image read, not at the program's
+// start (checked when this is the process's first test, as under ctest).
+bool openImageIoLoaded() {
+  std::ifstream maps("/proc/self/maps");
+  for (std::string line; std::getline(maps, line);)
+    if (line.find("libOpenImageIO.so") != std::string::npos) return true;
+  return false;
+}
+
+TEST(ImageIo, OpenImageIoIsLoadedByTheFirstImageRead) {
+  const auto* unit = ::testing::UnitTest::GetInstance();
+  // (gtest counts the running test as successful)
+  if (unit->successful_test_count() + unit->failed_test_count() + unit->skipped_test_count() > 1)
+    GTEST_SKIP() << "not the first test of this process";
+  ASSERT_FALSE(openImageIoLoaded());
+  TempDir dir;
+  const std::filesystem::path png = dir / "x.png";
+  { std::ofstream(png) << "not a png"; }
+  EXPECT_THROW(readImage(png), Error);
+  EXPECT_TRUE(openImageIoLoaded());
 }
 
 // Each output pixel is the mean of its block, every channel; a remainder row or column is dropped;

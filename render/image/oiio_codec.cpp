@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The texfab_oiio module: image decoding and encoding through OpenImageIO (oiio_codec.h).
+#include "render/image/oiio_codec.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <mutex>
+
+namespace texfab::detail {
+namespace {
+
+// OIIO error texts can span several lines, often repeating one another ("Read error: hit end of
+// file", then "PNG read error: IDAT: Read error: hit end of file"); texfab errors are one line:
+// the lines no other line contains, joined by "; ".
+std::string oneLine(const std::string& text) {
+  std::vector<std::string> lines;
+  for (size_t begin = 0; begin < text.size();) {
+    const size_t end = std::min(text.find('\n', begin), text.size());
+    std::string line = text.substr(begin, end - begin);
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    if (!line.empty()) lines.push_back(std::move(line));
+    begin = end + 1;
+  }
+  std::string joined;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    bool repeated = false;
+    for (size_t j = 0; j < lines.size() && !repeated; ++j)
+      repeated = j != i && lines[j].find(lines[i]) != std::string::npos && (lines[j] != lines[i] || j < i);
+    if (!repeated) joined += (joined.empty() ? "" : "; ") + lines[i];
+  }
+  return joined.empty() ? std::string("unknown error") : joined;
+}
+
+// Image libraries under OIIO print their own diagnostics on stderr ("libpng error: ..."); texfab
+// says what went wrong in its one-line error. While an image is decoded, stderr goes to /dev/null
+// (one decode at a time: the redirection is process-wide).
+class QuietStderr {
+public:
+  QuietStderr() : lock_(mutex()) {
+    std::fflush(stderr);
+    saved_ = ::dup(STDERR_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
+    if (null >= 0) ::close(null);
+  }
+  ~QuietStderr() {
+    std::fflush(stderr);
+    if (saved_ >= 0) {
+      ::dup2(saved_, STDERR_FILENO);
+      ::close(saved_);
+    }
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  int saved_ = -1;
+};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string extensionOf(const std::string& name) {
+  const size_t dot = name.find_last_of('.'), slash = name.find_last_of('/');
+  return dot == std::string::npos || (slash != std::string::npos && dot < slash) ? "" : lower(name.substr(dot));
+}
+
+PixelFormat formatOf(OIIO::TypeDesc type) {
+  switch (type.basetype) {
+  case OIIO::TypeDesc::UINT8:
+  case OIIO::TypeDesc::INT8: return PixelFormat::UInt8;
+  case OIIO::TypeDesc::UINT16:
+  case OIIO::TypeDesc::INT16: return PixelFormat::UInt16;
+  default: return PixelFormat::Float;
+  }
+}
+
+// Texture data: alpha kept unassociated (as stored), never premultiplied.
+OIIO::ImageSpec readConfig() {
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  return config;
+}
+
+Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t maxBytes) {
+  const OIIO::ImageSpec& spec = in.spec();
+  checkImageSize(spec.width, spec.height, name);
+  if (spec.depth > 1) throw Error(name + ": volume images are not supported");
+  if (spec.nchannels < 1) throw Error(name + ": image has no channels");
+  const uint64_t bytes = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels) * sizeof(float);
+  if (bytes > maxBytes)
+    throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                ", too large to load in this machine's memory");
+  Image image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
+  if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+    throw Error(name + ": cannot decode image: " + oneLine(in.geterror()));
+  return image;
+}
+
+Image read(const std::string& name, uint64_t maxBytes) {
+  const OIIO::ImageSpec config = readConfig();
+  const QuietStderr quiet;
+  auto in = OIIO::ImageInput::open(name, &config);
+  if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
+  return decode(*in, name, maxBytes);
+}
+
+Image decodeBytes(std::span<const uint8_t> bytes, const std::string& pseudoName, const std::string& name,
+                  uint64_t maxBytes) {
+  OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+  OIIO::ImageSpec config = readConfig();
+  // OIIO 2.4 ignores open()'s proxy argument when a configuration is given; the hint carries it.
+  void* proxyPointer = &proxy;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
+  const QuietStderr quiet;
+  auto in = OIIO::ImageInput::open(pseudoName, &config, &proxy);
+  if (!in) throw Error(name + ": cannot decode image: " + oneLine(OIIO::geterror()));
+  return decode(*in, name, maxBytes);
+}
+
+bool canWrite(const std::string& name) { return OIIO::ImageOutput::create(name) != nullptr; }
+
+void write(const Image& image, const std::string& file, const std::string& name) {
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out) throw Error(name + ": no image writer for this file extension");
+  const std::string ext = extensionOf(name);
+  OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
+  if (ext == ".exr" || ext == ".hdr") type = OIIO::TypeDesc::FLOAT;
+  else if (image.format != PixelFormat::UInt8 && (ext == ".png" || ext == ".tif" || ext == ".tiff"))
+    type = OIIO::TypeDesc::UINT16;
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
+  if (ext == ".png") spec.attribute("png:compressionLevel", 6);
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // our alpha is not premultiplied
+  if (!out->open(file, spec)) throw Error(name + ": cannot create file: " + oneLine(out->geterror()));
+  const bool written = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+  const bool closed = out->close();
+  if (!written || !closed) throw Error(name + ": cannot write image: " + oneLine(out->geterror()));
+}
+
+std::vector<uint8_t> encode(const Image& image, int channels, const std::string& pseudoName, int quality,
+                            const std::string& format) {
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput proxy(bytes);
+  auto out = OIIO::ImageOutput::create(pseudoName, &proxy);
+  if (!out) throw Error(format + " encoding is not available");
+  OIIO::ImageSpec spec(image.width, image.height, channels, OIIO::TypeDesc::UINT8);
+  if (extensionOf(pseudoName) == ".png") spec.attribute("png:compressionLevel", 6);
+  else spec.attribute("CompressionQuality", std::clamp(quality, 1, 100));
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  void* proxyPointer = &proxy;
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
+  const OIIO::stride_t pixelStride = OIIO::stride_t(image.channels * sizeof(float));
+  if (!out->open(pseudoName, spec) ||
+      !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data(), pixelStride) || !out->close())
+    throw Error(format + " encoding failed: " + oneLine(out->geterror()));
+  if (bytes.empty()) throw Error(format + " encoding produced no bytes");
+  return {bytes.begin(), bytes.end()};
+}
+
+constexpr OiioCodec kCodec{read, decodeBytes, canWrite, write, encode};
+
+} // namespace
+} // namespace texfab::detail
+
+extern "C" __attribute__((visibility("default"))) const texfab::detail::OiioCodec* texfab_oiio_codec() {
+  return &texfab::detail::kCodec;
+}
