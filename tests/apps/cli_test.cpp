@@ -3,6 +3,7 @@
 // refuses NaN and infinity naming the flag, ranges are stated one way, unknown commands are named,
 // outputs are checked before any work and committed together, a signal leaves no temporary, the
 // analysis cache is bounded and an unwritable one is said once.
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "tests/test_support.h"
 
@@ -192,12 +193,7 @@ TEST(Cli, TextureChoosesTheExemplarWrap) {
   EXPECT_NE(r.err.find("exemplar wrap: clamp"), std::string::npos) << r.err;
   EXPECT_EQ(nlohmann::json::parse(readFile(d / "a.json"))["parameters"]["exemplar_wrap"], "clamp");
   // Solid mode on a 48x48 crop: the solid precomputation grows with the exemplar's size.
-  const texfab::Image full = texfab::readImage(photo);
-  texfab::Image crop(48, 48, full.channels, full.format);
-  for (int y = 0; y < 48; ++y)
-    for (int x = 0; x < 48; ++x)
-      for (int c = 0; c < full.channels; ++c) crop.at(x, y, c) = full.at(x + 20, y + 30, c);
-  texfab::writeImage(crop, d / "rock48.png");
+  texfab::writeImage(texfab::crop(texfab::readImage(photo), 20, 30, 48, 48), d / "rock48.png");
   const CliResult solid = runCli("texture " + quote(kModel) + " -e " + quote(d / "rock48.png") +
                                  " --resolution 256 --no-cache --mode solid -o " + quote(d / "b.glb") + " --report " +
                                  quote(d / "b.json"));

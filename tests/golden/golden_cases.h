@@ -5,6 +5,7 @@
 // Inputs are small bundled data so that the whole suite runs in seconds. The cases that synthesize
 // take the backend of their kernels (the Vulkan tests run them on the device: same hashes).
 
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
@@ -72,12 +73,7 @@ inline std::filesystem::path bundled(const std::string& relative) {
 
 /// The side x side crop at (x0, y0) of a bundled image.
 inline Image bundledCrop(const std::string& relative, int x0, int y0, int side) {
-  const Image full = readImage(bundled(relative));
-  Image out(side, side, full.channels, full.format);
-  for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x)
-      for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(x0 + x, y0 + y, c);
-  return out;
+  return crop(readImage(bundled(relative)), x0, y0, side, side);
 }
 
 /// A 32x32 crop of the bundled marble: a solid analysis in a second or two.

@@ -5,6 +5,7 @@
 // (the command line) or 2 (the files), and no output.
 #include "geometry/mesh_io.h"
 #include "render/image/image.h"
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "tests/test_support.h"
 
@@ -36,11 +37,7 @@ std::string readText(const fs::path& p) {
 // A 32x32 crop of the bundled marble (a short solid precomputation), written into `dir`.
 fs::path smallMarble(const fs::path& dir) {
   const texfab::Image full = texfab::readImage(kSource / "models" / "exemplars" / "marble.png");
-  texfab::Image crop(32, 32, full.channels);
-  for (int y = 0; y < 32; ++y)
-    for (int x = 0; x < 32; ++x)
-      for (int c = 0; c < full.channels; ++c) crop.at(x, y, c) = full.at(x, y, c);
-  texfab::writeImage(crop, dir / "marble32.png");
+  texfab::writeImage(texfab::crop(full, 0, 0, 32, 32), dir / "marble32.png");
   return dir / "marble32.png";
 }
 

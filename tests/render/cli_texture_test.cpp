@@ -2,6 +2,7 @@
 // texfab texture end to end on the bundled model: both modes, companion maps, files a real glTF
 // validator accepts, the report's measures; bad input fails with one line and leaves no output.
 #include "geometry/mesh_io.h"
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "tests/test_support.h"
 
@@ -90,12 +91,8 @@ TEST(CliTexture, SurfaceModeOnTheBundledModel) {
 TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
   TempDir d("texfab-texture-cli");
   // Solid mode, a small exemplar (the solid precomputation grows with its size).
-  texfab::Image small = texfab::readImage(kExemplar);
-  texfab::Image crop(32, 32, small.channels);
-  for (int y = 0; y < 32; ++y)
-    for (int x = 0; x < 32; ++x)
-      for (int c = 0; c < small.channels; ++c) crop.at(x, y, c) = small.at(x, y, c);
-  texfab::writeImage(crop, d / "small.png");
+  const texfab::Image small = texfab::crop(texfab::readImage(kExemplar), 0, 0, 32, 32);
+  texfab::writeImage(small, d / "small.png");
   ASSERT_EQ(0, texture(Args() << kModel << "-e" << d / "small.png" << "--mode solid --resolution 256 -q --cache-dir"
                               << d / "cache" << "-o" << d / "solid.glb" << "--report" << d / "solid.json").status);
   expectValidGltf(d / "solid.glb");
@@ -104,13 +101,13 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
   EXPECT_GT(r["solid"]["voxels_requested"].get<int64_t>(), 1000);
 
   // Surface mode with normal, roughness and height maps, written as OBJ and as Draco GLB.
-  texfab::Image normal(crop.width, crop.height, 3), rough(crop.width, crop.height, 1);
-  for (int y = 0; y < crop.height; ++y)
-    for (int x = 0; x < crop.width; ++x) {
+  texfab::Image normal(small.width, small.height, 3), rough(small.width, small.height, 1);
+  for (int y = 0; y < small.height; ++y)
+    for (int x = 0; x < small.width; ++x) {
       normal.at(x, y, 0) = 0.5f + 0.3f * float(x % 4) / 4.0f;
       normal.at(x, y, 1) = 0.5f;
       normal.at(x, y, 2) = 0.9f;
-      rough.at(x, y, 0) = crop.at(x, y, 0);
+      rough.at(x, y, 0) = small.at(x, y, 0);
     }
   texfab::writeImage(normal, d / "n.png");
   texfab::writeImage(rough, d / "r.png");

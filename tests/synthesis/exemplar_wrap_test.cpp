@@ -2,6 +2,7 @@
 // Exemplars that do not tile (ExemplarWrap): auto detection on real photographs and on GIMP's
 // tileable patterns, clamp synthesis (2-D and solid) against the toroidal baseline, and
 // determinism.
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
@@ -123,11 +124,7 @@ CoordMap solidSlice(const SolidAnalysis& a, int axis, int side) {
 // photograph's own edges (visibility near 1; slices are finer mosaics than 2-D synthesis, so the
 // few wrap crossings of the toroidal analysis hardly move the mean).
 TEST(ExemplarWrap, SolidClampNeverShowsTheBorder) {
-  const Image full = photo("rock");
-  Image exemplar(64, 64, full.channels, full.format);
-  for (int y = 0; y < 64; ++y)
-    for (int x = 0; x < 64; ++x)
-      for (int c = 0; c < full.channels; ++c) exemplar.at(x, y, c) = full.at(32 + x, 40 + y, c);
+  const Image exemplar = crop(photo("rock"), 32, 40, 64, 64);
   SolidAnalysisOptions clamped;
   clamped.wrap = ExemplarWrap::Clamp;
   const SolidAnalysis clamp = analyzeSolid(exemplar, exemplar, exemplar, clamped, Context{.threads = 2});

@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
+#include "render/image/crop.h"
 #include "render/image/downsample.h"
 #include "render/image/error.h"
 #include "render/image/image_io.h"
@@ -161,6 +162,22 @@ TEST(ImageIo, OpenImageIoIsLoadedByTheFirstImageRead) {
   { std::ofstream(png) << "not a png"; }
   EXPECT_THROW(readImage(png), Error);
   EXPECT_TRUE(openImageIoLoaded());
+}
+
+// A crop copies the rectangle, every channel, and keeps the format; a rectangle outside is refused.
+TEST(Crop, CopiesTheRectangleAndRefusesOneOutside) {
+  const Image image = gradient(7, 5, 3, PixelFormat::UInt16);
+  const Image part = crop(image, 2, 1, 4, 3);
+  ASSERT_EQ(part.width, 4);
+  ASSERT_EQ(part.height, 3);
+  EXPECT_EQ(part.format, PixelFormat::UInt16);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x)
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(part.at(x, y, c), image.at(x + 2, y + 1, c));
+  EXPECT_EQ(crop(image, 0, 0, 7, 5).pixels, image.pixels);
+  EXPECT_THROW(crop(image, 4, 0, 4, 1), Error);
+  EXPECT_THROW(crop(image, -1, 0, 2, 2), Error);
+  EXPECT_THROW(crop(image, 0, 0, 0, 2), Error);
 }
 
 // Each output pixel is the mean of its block, every channel; a remainder row or column is dropped;

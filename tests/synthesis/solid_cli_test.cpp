@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of `texfab solid`, through the real binary: the three modes agree with each
 // other voxel for voxel, and bad input fails with one line, a non-zero exit and no output.
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "test_support.h"
 
@@ -25,12 +26,8 @@ Outcome texfab(const std::string& args) { return test::runCli(args); }
 // A 32x32 crop of a bundled exemplar (marble unless told), written as PNG into `dir`.
 std::string smallExemplar(const TempDir& dir, int side = 32, const std::string& name = "ex.png",
                           const std::string& source = "marble.png") {
-  const Image full = readImage(std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/" + source);
-  Image crop(side, side, full.channels, full.format);
-  for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x)
-      for (int c = 0; c < full.channels; ++c) crop.at(x, y, c) = full.at(x + 20, y + 30, c);
-  writeImage(crop, dir / name);
+  writeImage(crop(readImage(std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/" + source), 20, 30, side, side),
+             dir / name);
   return (dir / name).string();
 }
 

@@ -2,6 +2,7 @@
 // Lazy solid synthesis (Dong et al. 2008): the precomputation, subset determinism (the padding of
 // §5.2 is sufficient), the dependency chain of one voxel, and slice quality against baselines.
 #include "render/image/error.h"
+#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
@@ -27,11 +28,7 @@ namespace {
 // A square crop of GIMP's marble (bundled as models/exemplars/marble.png).
 Image marble(int side, int x0 = 0, int y0 = 0) {
   static const Image full = readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png");
-  Image out(side, side, full.channels, full.format);
-  for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x)
-      for (int c = 0; c < full.channels; ++c) out.at(x, y, c) = full.at(x0 + x, y0 + y, c);
-  return out;
+  return crop(full, x0, y0, side, side);
 }
 
 const SolidAnalysis& analysis32() {
