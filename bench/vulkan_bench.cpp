@@ -28,6 +28,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -132,24 +133,40 @@ Image proceduralMarble(int side) {
   return out;
 }
 
+// The stages a run reports through its context (masks, level k/n), with their seconds.
+struct StageLog {
+  std::mutex mutex;
+  std::vector<std::pair<std::string, double>> stages;
+  ProgressSink sink() {
+    return [this](const ProgressEvent& e) {
+      if (e.kind != ProgressEvent::Kind::End) return;
+      const std::lock_guard lock(mutex);
+      stages.emplace_back(std::string(e.stage), e.seconds);
+    };
+  }
+};
+
 struct Timing {
   double seconds = 1e300;  // best of the repetitions
   vulkan::DeviceProfile profile;
+  std::vector<std::pair<std::string, double>> stages;
 };
 
 // The best of `reps` runs of `run` (whose `prepare` is not timed); on the device, its profile.
 template <class Result>
 Timing timeRuns(int reps, const std::function<void()>& prepare, const std::function<Result()>& run, Result& result,
-                vulkan::Device* device) {
+                vulkan::Device* device, StageLog& log) {
   Timing t;
   for (int r = 0; r < reps; ++r) {
     prepare();
+    log.stages.clear();
     if (device) device->setProfiling(true);
     const auto start = Clock::now();
     result = run();
     const double s = std::chrono::duration<double>(Clock::now() - start).count();
     if (s < t.seconds) {
       t.seconds = s;
+      t.stages = log.stages;
       if (device) t.profile = device->profile();
     }
   }
@@ -171,19 +188,32 @@ void printRow(const std::string& name, const std::string& size, const Timing& cp
   std::fflush(stdout);
 }
 
+// Where the time of the best run went: its stages, and on the device the buffers it created.
+void printStages(const char* backend, const Timing& t) {
+  std::printf("  %-6s", backend);
+  for (const auto& [stage, seconds] : t.stages) std::printf(" %s %.2f,", stage.c_str(), seconds * 1e3);
+  if (t.profile.allocations)
+    std::printf(" buffers %.2f (%llu)", t.profile.allocateSeconds * 1e3,
+                static_cast<unsigned long long>(t.profile.allocations));
+  std::printf("\n");
+}
+
 // Runs one case on both backends (a warm-up run on the device first: pipelines compile at their
 // first dispatch) and prints its row; returns whether the outputs are equal.
 template <class Result>
 bool compare(const Args& args, vulkan::Device& device, const std::string& name, const std::string& size,
              const std::function<void()>& prepare, const std::function<Result(const Context&)>& run) {
-  const Context cpuCtx{.threads = args.threads};
-  const Context gpuCtx{.threads = args.threads, .backend = Backend::Vulkan, .device = args.device};
+  StageLog log;
+  const Context cpuCtx{.threads = args.threads, .progress = log.sink()};
+  const Context gpuCtx{.threads = args.threads, .backend = Backend::Vulkan, .device = args.device, .progress = log.sink()};
   Result cpu, gpu;
-  const Timing tc = timeRuns<Result>(args.reps, prepare, [&] { return run(cpuCtx); }, cpu, nullptr);
+  const Timing tc = timeRuns<Result>(args.reps, prepare, [&] { return run(cpuCtx); }, cpu, nullptr, log);
   prepare();
   run(gpuCtx);
-  const Timing tg = timeRuns<Result>(args.reps, prepare, [&] { return run(gpuCtx); }, gpu, &device);
+  const Timing tg = timeRuns<Result>(args.reps, prepare, [&] { return run(gpuCtx); }, gpu, &device, log);
   printRow(name, size, tc, tg, cpu == gpu);
+  printStages("cpu", tc);
+  printStages("vulkan", tg);
   return cpu == gpu;
 }
 

@@ -150,10 +150,11 @@ bool fitsDevice(const Plan& plan, const vulkan::Device& device) {
   return true;
 }
 
-// The same on a Vulkan device: the levels stay on the device, one submit per level.
-std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const ExemplarAnalysis& analysis, const Plan& plan,
-                                         const SynthesisOptions& options, const Context& ctx,
-                                         std::vector<LevelStats>& stats) {
+// The same on a Vulkan device: the levels stay on the device, one submit per level, and the
+// window's rows of the finest level come back into `out` at (x0, y0).
+void synthesizeOnDevice(vulkan::Device& device, const ExemplarAnalysis& analysis, const Plan& plan,
+                        const SynthesisOptions& options, const Context& ctx, std::vector<LevelStats>& stats,
+                        CoordMap& out, int x0, int y0) {
   const int ew = analysis.width, eh = analysis.height;
   vulkan::Commands commands(device);
   vulkan::Buffer previous, current, scratch;
@@ -179,10 +180,13 @@ std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const ExemplarA
     previous = std::move(current);
     stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
   }
-  std::vector<uint32_t> finest(size_t(plan.grid(plan.finest).width) * size_t(plan.grid(plan.finest).height));
-  commands.download(previous, 0, finest.data(), finest.size() * 4);
+  const LevelGrid& grid = plan.grid(plan.finest);
+  std::vector<vulkan::Commands::Region> rows(size_t(plan.window.height));
+  for (int y = 0; y < plan.window.height; ++y)
+    rows[size_t(y)] = {(uint64_t(y + plan.subpasses) * uint64_t(grid.width) + uint64_t(plan.subpasses)) * 4,
+                       (uint64_t(y0 + y) * uint64_t(out.width) + uint64_t(x0)) * 4, uint64_t(plan.window.width) * 4};
+  commands.download(previous, rows, out.coords.data());
   commands.submit(ctx);
-  return finest;
 }
 #endif
 
@@ -192,6 +196,16 @@ void cropWindow(const Plan& plan, const std::vector<uint32_t>& finest, CoordMap&
   for (int y = 0; y < plan.window.height; ++y)
     std::copy_n(finest.begin() + std::ptrdiff_t(size_t(y + plan.subpasses) * size_t(grid.width) + size_t(plan.subpasses)),
                 plan.window.width, out.coords.begin() + std::ptrdiff_t(size_t(y0 + y) * size_t(out.width) + size_t(x0)));
+}
+
+// Tiles add up their levels.
+void addLevels(std::vector<LevelStats>& stats, const std::vector<LevelStats>& tile) {
+  if (stats.empty()) stats = tile;
+  else
+    for (size_t i = 0; i < stats.size() && i < tile.size(); ++i) {
+      stats[i].texels += tile[i].texels;
+      stats[i].seconds += tile[i].seconds;
+    }
 }
 
 // Synthesizes `window` into `out` at (x0, y0), on the device when there is one. A window whose
@@ -221,20 +235,15 @@ void synthesizeWindow(const ExemplarAnalysis& analysis, const Window& window, co
     }
     return;
   }
-  const std::vector<uint32_t> finest = device ? synthesizeOnDevice(*device, analysis, plan, options, ctx, tile)
-                                              : synthesizeOnCpu(analysis, plan, options, ctx, tile);
+  if (device) {
+    synthesizeOnDevice(*device, analysis, plan, options, ctx, tile, out, x0, y0);
+    return addLevels(stats, tile);
+  }
 #else
   (void)device;
-  const std::vector<uint32_t> finest = synthesizeOnCpu(analysis, plan, options, ctx, tile);
 #endif
-  cropWindow(plan, finest, out, x0, y0);
-  // Tiles add up their levels.
-  if (stats.empty()) stats = tile;
-  else
-    for (size_t i = 0; i < stats.size() && i < tile.size(); ++i) {
-      stats[i].texels += tile[i].texels;
-      stats[i].seconds += tile[i].seconds;
-    }
+  cropWindow(plan, synthesizeOnCpu(analysis, plan, options, ctx, tile), out, x0, y0);
+  addLevels(stats, tile);
 }
 
 } // namespace

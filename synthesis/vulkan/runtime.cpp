@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -241,12 +242,14 @@ int chooseDevice(const std::vector<DeviceInfo>& infos, const std::vector<VkPhysi
   return best;
 }
 
-// A buffer with its own memory allocation.
+// A buffer with its own memory allocation, of `capacity` bytes (a size class, see allocate()).
 struct Allocation {
   VkDevice device = VK_NULL_HANDLE;
   VkBuffer buffer = VK_NULL_HANDLE;
   VkDeviceMemory memory = VK_NULL_HANDLE;
   void* mapped = nullptr;
+  uint64_t capacity = 0;
+  bool host = false;
 
   Allocation() = default;
   Allocation(const Allocation&) = delete;
@@ -285,10 +288,28 @@ struct Device::Impl {
   std::atomic<bool> profiling{false};
   std::mutex profileMutex;
   DeviceProfile profile;
+  // Allocations released by buffers and staging, kept for reuse (oldest first): creating memory
+  // costs far more than the copies of a small request (NVIDIA: ~1 ms per buffer, and every
+  // request creates tens of them).
+  std::mutex poolMutex;
+  std::vector<std::unique_ptr<Allocation>> pool;
+  uint64_t pooledBytes = 0;
+  uint64_t poolLimit = 0;  // set with the device: min(512 MiB, an eighth of its largest heap)
+  // Device::resident's data, most recently used last.
+  struct Resident {
+    uint64_t key;
+    std::shared_ptr<const void> data;
+    uint64_t bytes;
+  };
+  std::mutex residentMutex;
+  std::vector<Resident> resident;
+  uint64_t residentBytes = 0;
 
   ~Impl() {
     if (!device) return;
     vkDeviceWaitIdle(device);
+    resident.clear();
+    pool.clear();
     for (auto& [kernel, p] : pipelines) {
       vkDestroyPipeline(device, p.pipeline, nullptr);
       vkDestroyPipelineLayout(device, p.layout, nullptr);
@@ -322,14 +343,38 @@ struct Device::Impl {
     return uint32_t(fallback);
   }
 
-  // A buffer of `bytes` (device-local, or host-visible and mapped).
-  std::unique_ptr<Allocation> allocate(uint64_t bytes, bool host, VkBufferUsageFlags usage) {
+  // Sizes are rounded up to classes of at most 1/8 more (and whole 4 KiB), so that released
+  // allocations serve later requests of similar sizes.
+  static uint64_t sizeClass(uint64_t bytes) {
+    const uint64_t step = std::max<uint64_t>(4096, std::bit_ceil(std::max<uint64_t>(bytes, 1)) / 8);
+    return (std::max<uint64_t>(bytes, 1) + step - 1) / step * step;
+  }
+
+  // A buffer of at least `bytes` (device-local storage, or host-visible and mapped staging): a
+  // released one of the same class, else a new one.
+  std::unique_ptr<Allocation> allocate(uint64_t bytes, bool host) {
     if (lost) throw Error("Vulkan device lost: " + info.name);
+    const uint64_t capacity = sizeClass(bytes);
+    {
+      const std::lock_guard lock(poolMutex);
+      for (auto it = pool.begin(); it != pool.end(); ++it)
+        if ((*it)->host == host && (*it)->capacity == capacity) {
+          std::unique_ptr<Allocation> a = std::move(*it);
+          pool.erase(it);
+          pooledBytes -= capacity;
+          return a;
+        }
+    }
+    const auto started = std::chrono::steady_clock::now();
     auto a = std::make_unique<Allocation>();
     a->device = device;
+    a->capacity = capacity;
+    a->host = host;
     auto bi = make<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
-    bi.size = std::max<uint64_t>(bytes, 4);
-    bi.usage = usage;
+    bi.size = capacity;
+    bi.usage = host ? VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT
+                    : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     check(vkCreateBuffer(device, &bi, nullptr, &a->buffer), "vkCreateBuffer");
     VkMemoryRequirements req;
@@ -344,7 +389,24 @@ struct Device::Impl {
     check(vkAllocateMemory(device, &mi, nullptr, &a->memory), what.c_str());
     check(vkBindBufferMemory(device, a->buffer, a->memory, 0), "vkBindBufferMemory");
     if (host) check(vkMapMemory(device, a->memory, 0, VK_WHOLE_SIZE, 0, &a->mapped), "vkMapMemory");
+    if (profiling) {
+      const std::lock_guard lock(profileMutex);
+      profile.allocateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      ++profile.allocations;
+    }
     return a;
+  }
+
+  // Keeps `a` for reuse, the oldest released ones going first beyond poolLimit.
+  void release(std::unique_ptr<Allocation> a) {
+    if (!a || lost || a->capacity > poolLimit) return;
+    const std::lock_guard lock(poolMutex);
+    while (pooledBytes + a->capacity > poolLimit) {
+      pooledBytes -= pool.front()->capacity;
+      pool.erase(pool.begin());
+    }
+    pooledBytes += a->capacity;
+    pool.push_back(std::move(a));
   }
 
   const Pipeline& pipeline(const Kernel& kernel);
@@ -436,6 +498,7 @@ Device::Device(int index, const DeviceOptions& options) : impl_(std::make_unique
   uint64_t range = d.limits.maxStorageBufferRange;
   if (options.maxRangeBytes) range = std::min(range, options.maxRangeBytes);
   d.maxRange = range / 256 * 256;
+  d.poolLimit = std::min<uint64_t>(uint64_t(512) << 20, d.info.memoryBytes / 8);
   d.instance.checkMessages();
 }
 
@@ -455,9 +518,33 @@ DeviceProfile Device::profile() const {
   return impl_->profile;
 }
 
+std::shared_ptr<const void> Device::residentData(
+    uint64_t key, const std::function<std::pair<std::shared_ptr<const void>, uint64_t>()>& make) {
+  if (key == 0) return make().first;
+  Impl& d = *impl_;
+  const std::lock_guard lock(d.residentMutex);  // one maker at a time: a second asker waits for it
+  auto& r = d.resident;
+  if (auto it = std::find_if(r.begin(), r.end(), [&](const Impl::Resident& e) { return e.key == key; }); it != r.end()) {
+    std::rotate(it, it + 1, r.end());
+    return r.back().data;
+  }
+  auto [data, bytes] = make();
+  if (bytes > d.poolLimit) return data;
+  while (d.residentBytes + bytes > d.poolLimit) {
+    d.residentBytes -= r.front().bytes;
+    r.erase(r.begin());
+  }
+  d.residentBytes += bytes;
+  r.push_back({key, data, bytes});
+  return data;
+}
+
 std::shared_ptr<Device> sharedDevice(int index) {
+  // The registry is never destroyed: a driver that registered exit handlers of its own when it was
+  // loaded (after this registry was built) has torn itself down before static destructors run, and
+  // destroying a device then crashes (NVIDIA 580: SIGSEGV at every exit). Process exit frees it.
   static std::mutex mutex;
-  static std::map<int, std::shared_ptr<Device>> devices;
+  static auto& devices = *new std::map<int, std::shared_ptr<Device>>;
   if (index < 0) index = deviceFromEnvironment();
   const std::lock_guard lock(mutex);
   std::shared_ptr<Device>& d = devices[index];
@@ -480,14 +567,13 @@ std::vector<DeviceInfo> listDevices() {
 // ---- Buffer ----
 
 struct Buffer::Impl {
+  Device::Impl& device;
   std::unique_ptr<Allocation> allocation;
+  ~Impl() { device.release(std::move(allocation)); }
 };
 
-Buffer::Buffer(Device& device, uint64_t bytes) : impl_(std::make_unique<Impl>()), bytes_(bytes) {
-  impl_->allocation = device.impl().allocate(
-      bytes, false,
-      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-}
+Buffer::Buffer(Device& device, uint64_t bytes)
+    : impl_(new Impl{device.impl(), device.impl().allocate(bytes, false)}), bytes_(bytes) {}
 Buffer::Buffer() = default;
 Buffer::Buffer(Buffer&&) noexcept = default;
 Buffer& Buffer::operator=(Buffer&&) noexcept = default;
@@ -505,6 +591,7 @@ struct Commands::Impl {
   std::vector<std::unique_ptr<Allocation>> staging;
   struct Download {
     const Allocation* from;
+    uint64_t offset;  // in `from`
     void* to;
     uint64_t bytes;
   };
@@ -584,7 +671,7 @@ Commands::~Commands() {
 void Commands::upload(const Buffer& to, uint64_t offset, const void* data, uint64_t bytes) {
   if (bytes == 0) return;
   Impl& c = *impl_;
-  auto s = c.d.allocate(bytes, true, VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+  auto s = c.d.allocate(bytes, true);
   std::memcpy(s->mapped, data, bytes);
   const VkBufferCopy region{0, offset, bytes};
   const VkCommandBuffer cmd = c.begin();
@@ -595,15 +682,29 @@ void Commands::upload(const Buffer& to, uint64_t offset, const void* data, uint6
 }
 
 void Commands::download(const Buffer& from, uint64_t offset, void* data, uint64_t bytes) {
-  if (bytes == 0) return;
+  const Region region{offset, 0, bytes};
+  download(from, std::span<const Region>(&region, 1), data);
+}
+
+void Commands::download(const Buffer& from, std::span<const Region> regions, void* data) {
   Impl& c = *impl_;
-  auto s = c.d.allocate(bytes, true, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-  const VkBufferCopy region{offset, 0, bytes};
+  std::vector<VkBufferCopy> copies;  // packed one after the other in the staging buffer
+  uint64_t bytes = 0;
+  for (const Region& r : regions) {
+    if (r.bytes == 0) continue;
+    copies.push_back({r.from, bytes, r.bytes});
+    c.downloads.push_back({nullptr, bytes, static_cast<uint8_t*>(data) + r.to, r.bytes});
+    bytes += r.bytes;
+  }
+  if (bytes == 0) return;
+  auto s = c.d.allocate(bytes, true);
+  for (size_t i = c.downloads.size() - copies.size(); i < c.downloads.size(); ++i) c.downloads[i].from = s.get();
   const VkCommandBuffer cmd = c.begin();
-  c.timed("download", [&] { vkCmdCopyBuffer(cmd, from.impl().allocation->buffer, s->buffer, 1, &region); });
+  c.timed("download", [&] {
+    vkCmdCopyBuffer(cmd, from.impl().allocation->buffer, s->buffer, uint32_t(copies.size()), copies.data());
+  });
   c.downloadBytes += bytes;
   c.barrier();
-  c.downloads.push_back({s.get(), data, bytes});
   c.staging.push_back(std::move(s));
 }
 
@@ -696,7 +797,8 @@ void Commands::submit(const Context& ctx) {
   }
   d.instance.checkMessages();
   if (cancelled) throw Cancelled();
-  for (const Impl::Download& dl : c.downloads) std::memcpy(dl.to, dl.from->mapped, dl.bytes);
+  for (const Impl::Download& dl : c.downloads)
+    std::memcpy(dl.to, static_cast<const uint8_t*>(dl.from->mapped) + dl.offset, dl.bytes);
   seconds_.clear();
   if (!c.timedKernels.empty()) {
     std::vector<uint64_t> stamps(c.timedKernels.size() * 2);
@@ -708,6 +810,7 @@ void Commands::submit(const Context& ctx) {
   }
   if (d.profiling) addToProfile(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
   c.downloads.clear();
+  for (auto& a : c.staging) d.release(std::move(a));
   c.staging.clear();
   c.timedKernels.clear();
   c.uploadBytes = c.downloadBytes = c.dispatches = 0;

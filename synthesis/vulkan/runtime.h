@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <map>
 #include <memory>
@@ -52,8 +53,9 @@ struct DeviceProfile {
   double dispatchSeconds = 0;  ///< device: kernels
   double downloadSeconds = 0;  ///< device: device-to-host copies
   double submitSeconds = 0;    ///< host wall time inside submit (queue, wait, copy-out)
+  double allocateSeconds = 0;  ///< host wall time creating buffers (device and staging memory)
   uint64_t uploadBytes = 0, downloadBytes = 0;
-  uint64_t dispatches = 0, submits = 0;
+  uint64_t dispatches = 0, submits = 0, allocations = 0;
 };
 
 struct DeviceOptions {
@@ -84,10 +86,23 @@ public:
   void setProfiling(bool on);
   DeviceProfile profile() const;
 
+  /// Data kept on the device between computations, by a key of its content (the tables of one
+  /// level of a solid analysis, say): `make` builds it on a miss and returns it with its size in
+  /// bytes. The least recently used data goes beyond a budget (an eighth of the device's memory,
+  /// at most 512 MiB); data larger than the budget is returned and not kept. Key 0: never kept.
+  template <class T, class Make> std::shared_ptr<const T> resident(uint64_t key, Make&& make) {
+    return std::static_pointer_cast<const T>(residentData(key, [&]() -> std::pair<std::shared_ptr<const void>, uint64_t> {
+      return make();
+    }));
+  }
+
   struct Impl;
   Impl& impl() const { return *impl_; }
 
 private:
+  std::shared_ptr<const void> residentData(uint64_t key,
+                                           const std::function<std::pair<std::shared_ptr<const void>, uint64_t>()>& make);
+
   std::unique_ptr<Impl> impl_;
 };
 
@@ -163,6 +178,11 @@ public:
     return b;
   }
   void download(const Buffer& from, uint64_t offset, void* data, uint64_t bytes);
+  /// Bytes [from, from + bytes) of the buffer to data + to, for each region (one copy command).
+  struct Region {
+    uint64_t from = 0, to = 0, bytes = 0;
+  };
+  void download(const Buffer& from, std::span<const Region> regions, void* data);
   void fill(const Buffer& to, uint32_t value);
 
   /// Runs `kernel` over `invocations` (its index in [0, invocations), gl_GlobalInvocationID.x plus

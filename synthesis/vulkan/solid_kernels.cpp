@@ -31,12 +31,16 @@ constexpr uint32_t kCorrectSpirv[] =
 constexpr uint32_t kCommitSpirv[] =
 #include "synthesis/vulkan/shaders/solid_commit_kernel.spv.inc"
     ;
+constexpr uint32_t kGatherSpirv[] =
+#include "synthesis/vulkan/shaders/solid_gather_kernel.spv.inc"
+    ;
 
 const Kernel kInit{"solidInitKernel", kInitSpirv, {1, 1, 1, 1}, sizeof(SolidParams)};
 const Kernel kUpsample{"solidUpsampleKernel", kUpsampleSpirv, {1, 1, 1}, sizeof(SolidParams)};
 const Kernel kColor{"solidColorKernel", kColorSpirv, {1, 1, 1, 3, 1}, sizeof(SolidParams)};
 const Kernel kCorrect{"solidCorrectKernel", kCorrectSpirv, {1, 1, 1, 1, 1, 1, 3, 3, 3, 3, 3, 1, 1}, sizeof(SolidParams)};
 const Kernel kCommit{"solidCommitKernel", kCommitSpirv, {1, 1, 1, 1, 1}, sizeof(SolidParams)};
+const Kernel kGather{"solidGatherKernel", kGatherSpirv, {1, 1, 1}, sizeof(GatherParams)};
 
 constexpr int kPlaneInputs = 3 * 25;
 constexpr int kCrossInputs = 3 * kSolidCrossVoxels;
@@ -201,6 +205,11 @@ void solidCommitKernel(Commands& commands, const SolidChunks& c, int interleave,
   p.interleave = interleave;
   p.step = step;
   commands.dispatch(kCommit, p, {c.last, c.corrected, c.correctedColors, c.triples, c.colors}, voxels(c));
+}
+
+void solidGatherKernel(Commands& commands, const SolidChunks& c, const Buffer& listed, uint32_t count,
+                       const Buffer& packed) {
+  commands.dispatch(kGather, GatherParams{count}, {listed, c.triples, packed}, count);
 }
 
 } // namespace texfab::synthesis::vulkan

@@ -75,4 +75,9 @@ void solidCorrectKernel(Commands& commands, const SolidChunks& chunks, const Sol
 /// Copies the voxels corrected at `step` from corrected/correctedColors to triples/colors.
 void solidCommitKernel(Commands& commands, const SolidChunks& chunks, int interleave, int step);
 
+/// `packed` (3 words per entry) = the triples of the `count` voxels listed in `listed` (chunk *
+/// 4096 + local index): what a level's caller reads, without the rest of the chunks. No CPU twin.
+void solidGatherKernel(Commands& commands, const SolidChunks& chunks, const Buffer& listed, uint32_t count,
+                       const Buffer& packed);
+
 } // namespace texfab::synthesis::vulkan

@@ -94,6 +94,38 @@ SolidChunks uploadPart(Commands& commands, const SolidLevelInput& level, const K
   return uploadChunks(commands, n, keys, last, neighbours, parents);
 }
 
+// The voxels of a part's centre chunks whose final values the caller reads (last == steps), as
+// indices into the part's chunks (chunk * 4096 + local), chunk by chunk: chunk i's are
+// [first[i], first[i + 1]).
+struct Listed {
+  std::vector<uint32_t> voxels;
+  std::vector<size_t> first;
+};
+
+Listed listFinished(const SolidLevelInput& level, const Part& part, const Context& ctx) {
+  const auto steps = int8_t(level.steps);
+  const int n = int(part.centre);
+  Listed l;
+  l.first.assign(size_t(n) + 1, 0);
+  parallelFor(0, n, ctx, [&](int b, int e) {
+    for (int i = b; i < e; ++i) {
+      const int8_t* last = level.last(part.slots[size_t(i)]);
+      l.first[size_t(i) + 1] = size_t(std::count(last, last + kSolidChunkVoxels, steps));
+    }
+  });
+  for (int i = 0; i < n; ++i) l.first[size_t(i) + 1] += l.first[size_t(i)];
+  l.voxels.resize(l.first[size_t(n)]);
+  parallelFor(0, n, ctx, [&](int b, int e) {
+    for (int i = b; i < e; ++i) {
+      const int8_t* last = level.last(part.slots[size_t(i)]);
+      size_t k = l.first[size_t(i)];
+      for (int v = 0; v < kSolidChunkVoxels; ++v)
+        if (last[v] == steps) l.voxels[k++] = uint32_t(i) * kSolidChunkVoxels + uint32_t(v);
+    }
+  });
+  return l;
+}
+
 // One part: every step on the device, then its centre's final triples to `finish`.
 void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelInput& level, const KeyIndex& index,
                     const Part& part, const SolidChunkSink& finish, const Context& ctx) {
@@ -106,16 +138,24 @@ void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelI
     solidCorrectKernel(commands, chunks, tables, level.interleave, t);
     solidCommitKernel(commands, chunks, level.interleave, t);
   }
-  std::vector<uint32_t> triples(part.centre * kSolidChunkVoxels * 3);
-  commands.download(chunks.triples, 0, triples.data(), triples.size() * 4);
+  // Only the voxels the caller reads (last == steps) come back, packed, centre chunk by chunk.
+  const Listed listed = listFinished(level, part, ctx);
+  if (listed.voxels.empty()) return commands.submit(ctx);
+  const Buffer list = commands.uploaded(std::span<const uint32_t>(listed.voxels));
+  const Buffer packed(device, listed.voxels.size() * 12);
+  solidGatherKernel(commands, chunks, list, uint32_t(listed.voxels.size()), packed);
+  std::vector<uint32_t> values(listed.voxels.size() * 3);
+  commands.download(packed, 0, values.data(), values.size() * 4);
   commands.submit(ctx);
-  const auto steps = int8_t(level.steps);
+  // Each chunk's values at their places in a chunk-sized scratch (its other voxels are not read).
   parallelFor(0, int(part.centre), ctx, [&](int b, int e) {
+    std::vector<uint32_t> scratch(size_t(kSolidChunkVoxels) * 3);
     for (int i = b; i < e; ++i) {
-      const uint32_t slot = part.slots[size_t(i)];
-      const int8_t* last = level.last(slot);
-      if (std::find(last, last + kSolidChunkVoxels, steps) != last + kSolidChunkVoxels)
-        finish(slot, triples.data() + size_t(i) * kSolidChunkVoxels * 3);
+      const size_t from = listed.first[size_t(i)], to = listed.first[size_t(i) + 1];
+      if (from == to) continue;
+      for (size_t k = from; k < to; ++k)
+        std::copy_n(values.data() + k * 3, 3, scratch.data() + (listed.voxels[k] % kSolidChunkVoxels) * 3);
+      finish(part.slots[size_t(i)], scratch.data());
     }
   });
 }
@@ -136,10 +176,13 @@ void synthesizeSolidLevel(Device& device, const cpu::SolidTables& tables, const 
   std::vector<Part> parts;
   split(keys, index, std::move(all), halo, SolidChunks::maxCount(device), parts);
 
-  Commands commands(device);
-  const SolidTables deviceTables = uploadSolidTables(commands, tables);
-  commands.submit(ctx);
-  for (const Part& part : parts) synthesizePart(device, deviceTables, level, index, part, finish, ctx);
+  const auto deviceTables = device.resident<SolidTables>(level.tablesKey, [&] {
+    Commands commands(device);
+    auto t = std::make_shared<const SolidTables>(uploadSolidTables(commands, tables));
+    commands.submit(ctx);
+    return std::pair{t, t->data.bytes()};
+  });
+  for (const Part& part : parts) synthesizePart(device, *deviceTables, level, index, part, finish, ctx);
 }
 
 } // namespace texfab::synthesis::vulkan

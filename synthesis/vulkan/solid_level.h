@@ -25,12 +25,14 @@ struct SolidLevelInput {
   std::span<const std::array<int64_t, 3>> keys;             ///< the level's 16^3 chunks (position / 16)
   std::function<const int8_t*(uint32_t slot)> last;         ///< a chunk's mask, 4096 values
   std::function<const uint32_t*(uint32_t slot)> parents;    ///< its parents' 8^3 triples; empty at the coarsest level
+  uint64_t tablesKey = 0;  ///< a key of the level's tables' content: kept on the device between requests (0: not kept)
   int steps = 0;        ///< correction steps T
   int interleave = 1;
   cpu::SolidInit init;  ///< initialization (coarsest level)
 };
 
-/// Receives the final triples (4096 * 3) of chunk `slot`; called from several threads at once.
+/// Receives the final triples of chunk `slot` (4096 * 3 words, of which only those of its voxels
+/// with last = steps are set); called from several threads at once.
 using SolidChunkSink = std::function<void(uint32_t slot, const uint32_t* triples)>;
 
 /// Synthesizes the level: every chunk holding a voxel with last = steps goes to `finish`.

@@ -135,6 +135,11 @@ struct SolidParams {
   int32_t clampMargin;  ///< cpu::SolidTables::clampMargin
 };
 
+/// solidGatherKernel.
+struct GatherParams {
+  uint32_t count;
+};
+
 #ifdef __cplusplus
 static_assert(sizeof(GridParams) == 24 && alignof(GridParams) == 8);
 static_assert(sizeof(RegionParams) == 20 && alignof(RegionParams) == 4);
@@ -145,6 +150,7 @@ static_assert(sizeof(CorrectParams) == 88);
 static_assert(sizeof(SurfaceParams) == 56);
 static_assert(sizeof(CorrectSurfaceParams) == 48);
 static_assert(sizeof(SolidParams) == 72);
+static_assert(sizeof(GatherParams) == 4);
 } // namespace texfab::synthesis::vulkan
 #endif
 #undef TEXFAB_CONST
