@@ -134,7 +134,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   f.text("--preview", job.preview, "Also render the pieces, exploded, to this image");
   f.size("--preview-size", job.previewOptions.width, job.previewOptions.height, "Preview size", {1, 16384});
   f.up(job.up);
-  f.common(job.common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  f.common(job.common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
 }
 
 void runBreak(const std::string& command, BreakJob& job) {

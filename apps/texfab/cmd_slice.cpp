@@ -224,7 +224,7 @@ Command addSliceCommand(CLI::App& root) {
   f.option("--resolution", job->resolution, "Atlas size for --mode surface", {64, 16384});
   f.text("--preview", job->preview, "Also write a picture of the print (front, side, four layers) to this PNG");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSlice(*job); }};
 }
 

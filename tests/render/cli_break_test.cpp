@@ -103,6 +103,17 @@ TEST_F(CliBreak, SameBytesOnOneAndTwoThreads) {
   EXPECT_EQ(readText(dir / "a.glb"), readText(dir / "b.glb"));
 }
 
+// The cut faces' solid synthesis (and the outer texture's) on the Vulkan backend: the CPU's bytes.
+TEST_F(CliBreak, VulkanBackendWritesTheCpusBytes) {
+  const nlohmann::json devices = nlohmann::json::parse(texfab("info", "--devices --json").out);
+  if (devices.empty() || !devices[0]["usable"].get<bool>()) GTEST_SKIP() << "no usable Vulkan device";
+  for (const auto& [output, backend] : {std::pair{"cpu.glb", "cpu"}, std::pair{"vulkan.glb", "vulkan --device 0"}}) {
+    const auto run = texfab("fracture", common(output, 128) + " --pieces 3 --backend " + backend);
+    ASSERT_EQ(0, run.status) << run.err;
+  }
+  EXPECT_EQ(readText(dir / "cpu.glb"), readText(dir / "vulkan.glb"));
+}
+
 TEST_F(CliBreak, CutByTwoPlanesAndAPlaneThatMisses) {
   const auto run = texfab("cut", common("cut.glb") + " --plane 0,0,0,1,0,0 --plane 0,0,0,0,1,0.2 --report " +
                                       quoted(dir / "r.json"));

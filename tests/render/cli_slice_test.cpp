@@ -86,6 +86,22 @@ TEST(CliSlice, ShardsMergeIntoTheFullRun) {
   EXPECT_EQ(readText(dir / "lo" / "slice_00015.png"), readText(dir / "full" / "slice_00015.png"));
 }
 
+// The voxels' solid synthesis on the Vulkan backend: the CPU's layers, byte for byte.
+TEST(CliSlice, VulkanBackendWritesTheCpusLayers) {
+  const nlohmann::json devices = nlohmann::json::parse(texfab::test::runCli("info --devices --json").out);
+  if (devices.empty() || !devices[0]["usable"].get<bool>()) GTEST_SKIP() << "no usable Vulkan device";
+  TempDir dir;
+  const fs::path model = sphereModel(dir);
+  texfab::writeImage(texfab::golden::marble32(), dir / "marble32.png");
+  const std::string common = quoted(model) + kSmall + " -e " + quoted(dir / "marble32.png") +
+                             " --feature-size 2 --cache-dir " + quoted(dir / "cache");
+  ASSERT_EQ(slice(common + " -o " + quoted(dir / "cpu")).status, 0);
+  const auto vulkan = slice(common + " -o " + quoted(dir / "vulkan") + " --backend vulkan --device 0");
+  ASSERT_EQ(vulkan.status, 0) << vulkan.err;
+  for (const auto& e : fs::directory_iterator(dir / "cpu"))
+    EXPECT_EQ(readText(e.path()), readText(dir / "vulkan" / e.path().filename())) << e.path().filename();
+}
+
 // One line on stderr, exit status `status` (1: a flag's value, 2: bad input), and no output folder.
 void expectRefused(const TempDir& dir, const std::string& args, const std::string& message, int status = 2) {
   const fs::path out = dir / "refused";
