@@ -15,6 +15,7 @@
 #endif
 
 #include <algorithm>
+#include <bitset>
 #include <climits>
 #include <cstdint>
 #include <chrono>
@@ -214,27 +215,45 @@ struct Engine {
   }
 
   // §5.2, exact per sub-pass, over the level's chunks: for t = T..1, every voxel of step t's
-  // class with last >= t needs its 3-neighborhood after step t-1. The chunks holding such voxels
-  // are spread in parallel, batch by batch, each into its own gathered grid (reads only); the
-  // grids are then merged into the chunks and their neighbours one after the other.
+  // class with last >= t needs its 3-neighborhood after step t-1. Batch by batch, the chunks
+  // holding such voxels are spread in parallel, each into its own gathered grid; the chunks the
+  // grids reach are created (one thread: the store's index), then each chunk takes the maximum of
+  // the grids reaching it (in parallel over the chunks written). Raising to t-1 < t never changes
+  // which voxels are spread in step t, so the order of the batches does not matter.
   void dilate(int li) {
     Mask& m = masks[size_t(li)];
-    constexpr size_t kBatch = 128;
+    constexpr size_t kBatch = 512;
     std::vector<int8_t> grids(kBatch * kGatheredVoxels);
+    std::vector<uint32_t> reach(kBatch);  // per grid: bit (dz+1)*9 + (dy+1)*3 + dx+1 = it reaches that neighbour
     for (int t = steps(li); t >= 1; --t) {
-      std::vector<uint32_t> active;  // chunks created in this step hold no voxel with last >= t
-      for (size_t s = 0; s < m.size(); ++s) {
-        const int8_t* c = m.at(uint32_t(s));
-        if (std::any_of(c, c + kChunkVoxels, [&](int8_t v) { return v >= t; })) active.push_back(uint32_t(s));
-      }
+      const std::vector<uint32_t> active = chunksHolding(m, t);  // chunks created in this step hold none
       for (size_t b = 0; b < active.size(); b += kBatch) {
-        const size_t e = std::min(active.size(), b + kBatch);
-        parallelFor(int(b), int(e), ctx, [&](int k0, int k1) {
-          for (int k = k0; k < k1; ++k) spread(m, active[size_t(k)], t, grids.data() + size_t(k - int(b)) * kGatheredVoxels);
+        const int n = int(std::min(active.size() - b, kBatch));
+        parallelFor(0, n, ctx, [&](int k0, int k1) {
+          for (int k = k0; k < k1; ++k) {
+            int8_t* g = grids.data() + size_t(k) * kGatheredVoxels;
+            spread(m, active[b + size_t(k)], t, g);
+            reach[size_t(k)] = reached(g);
+          }
         });
-        for (size_t k = b; k < e; ++k) merge(m, m.keys[active[k]], grids.data() + (k - b) * kGatheredVoxels);
+        merge(m, std::span<const uint32_t>(active).subspan(b, size_t(n)), grids.data(), reach.data());
       }
     }
+  }
+
+  // The chunks of `m` holding a voxel with last >= t.
+  std::vector<uint32_t> chunksHolding(const Mask& m, int t) const {
+    std::vector<uint8_t> holds(m.size());
+    parallelFor(0, int(m.size()), ctx, [&](int s0, int s1) {
+      for (int s = s0; s < s1; ++s) {
+        const int8_t* c = m.at(uint32_t(s));
+        holds[size_t(s)] = std::any_of(c, c + kChunkVoxels, [&](int8_t v) { return v >= t; });
+      }
+    });
+    std::vector<uint32_t> out;
+    for (size_t s = 0; s < holds.size(); ++s)
+      if (holds[s]) out.push_back(uint32_t(s));
+    return out;
   }
 
   // Chunk `slot` with a halo, its voxels needed after step t spread to their 3-neighborhoods.
@@ -250,8 +269,10 @@ struct Engine {
     cpu::solidDilateKernel(g, grid, o.interleave, t);
   }
 
-  // The spread grid of the chunk at `key` into it and its neighbours (created where it reaches).
-  void merge(Mask& m, const ChunkKey key, const int8_t* g) {  // key by value: m.get() may move m.keys
+  // Which of the 27 chunks around a spread grid's centre hold a voxel of it that is needed.
+  static uint32_t reached(const int8_t* g) {
+    uint32_t bits = 0;
+    int bit = 0;
     forNeighbours([&](int dx, int dy, int dz) {
       const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
       bool any = false;
@@ -260,70 +281,126 @@ struct Engine {
           const int8_t* row = g + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
           any = std::any_of(row, row + sx.n, [](int8_t v) { return v >= 0; });
         }
-      if (!any) return;
-      int8_t* d = m.at(m.get({key[0] + dx, key[1] + dy, key[2] + dz}));
-      for (int z = 0; z < sz.n; ++z)
-        for (int y = 0; y < sy.n; ++y) {
-          const int8_t* row = g + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
-          int8_t* to = d + ((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from;
-          for (int x = 0; x < sx.n; ++x) to[x] = std::max(to[x], row[x]);
+      bits |= uint32_t(any) << bit++;
+    });
+    return bits;
+  }
+
+  // The spread grids of the chunks `from` into the chunks they reach (created where missing).
+  void merge(Mask& m, std::span<const uint32_t> from, const int8_t* grids, const uint32_t* reach) {
+    struct Write {
+      uint32_t to;       // chunk written
+      uint32_t grid;     // index into `from`
+      uint32_t neighbour;  // bit of `reach`
+    };
+    std::vector<Write> writes;
+    for (size_t k = 0; k < from.size(); ++k) {
+      const ChunkKey key = m.keys[from[k]];  // by value: m.get() may move m.keys
+      int bit = 0;
+      forNeighbours([&](int dx, int dy, int dz) {
+        if (reach[k] >> bit & 1) writes.push_back({m.get({key[0] + dx, key[1] + dy, key[2] + dz}), uint32_t(k), uint32_t(bit)});
+        ++bit;
+      });
+    }
+    std::sort(writes.begin(), writes.end(), [](const Write& a, const Write& b) { return a.to < b.to; });
+    std::vector<size_t> first;  // the writes of one chunk are [first[i], first[i + 1])
+    for (size_t w = 0; w < writes.size(); ++w)
+      if (w == 0 || writes[w].to != writes[w - 1].to) first.push_back(w);
+    first.push_back(writes.size());
+    parallelFor(0, int(first.size()) - 1, ctx, [&](int i0, int i1) {
+      for (int i = i0; i < i1; ++i)
+        for (size_t w = first[size_t(i)]; w < first[size_t(i) + 1]; ++w) {
+          const Write& wr = writes[w];
+          const int dx = int(wr.neighbour % 3) - 1, dy = int(wr.neighbour / 3 % 3) - 1, dz = int(wr.neighbour / 9) - 1;
+          const Span1 &sx = kSpans[dx + 1], &sy = kSpans[dy + 1], &sz = kSpans[dz + 1];
+          const int8_t* g = grids + size_t(wr.grid) * kGatheredVoxels;
+          int8_t* d = m.at(wr.to);
+          for (int z = 0; z < sz.n; ++z)
+            for (int y = 0; y < sy.n; ++y) {
+              const int8_t* row = g + ((sz.to + z) * kGathered + sy.to + y) * kGathered + sx.to;
+              int8_t* to = d + ((sz.from + z) * kChunk + sy.from + y) * kChunk + sx.from;
+              for (int x = 0; x < sx.n; ++x) to[x] = std::max(to[x], row[x]);
+            }
         }
     });
   }
 
   // The voxels of level li whose final values level li+1 upsamples from (the parents of its
-  // mask): read from the cache where it has them, else seeds of level li's mask.
+  // mask): read from the cache where it has them, else seeds of level li's mask. The parents of
+  // each child chunk fill one octant of one chunk of level li; which are needed is found in
+  // parallel, the cache is asked in one thread (it is not thread-safe, and its order of use
+  // decides what it evicts), and the values and seeds are written in parallel (octants and
+  // blocks are disjoint).
   void seedFromChild(int li) {
     const Mask& child = masks[size_t(li) + 1];
     Mask& m = masks[size_t(li)];
     Finals& f = finals[size_t(li)];
     const auto T = int8_t(steps(li));
-    for (size_t s = 0; s < child.size(); ++s) {
-      const int8_t* c = child.at(uint32_t(s));
-      const ChunkKey key = child.keys[s];
-      // The parents of this chunk fill one octant (8^3) of one chunk of level li.
-      uint8_t need[8 * 8 * 8] = {};
-      bool any = false;
-      for (int z = 0; z < kChunk; ++z)
-        for (int y = 0; y < kChunk; ++y)
-          for (int x = 0; x < kChunk; ++x)
-            if (c[(z * kChunk + y) * kChunk + x] >= 0) {
-              need[((z >> 1) * 8 + (y >> 1)) * 8 + (x >> 1)] = 1;
-              any = true;
-            }
-      if (!any) continue;
-      const ChunkKey pkey{cpu::floorShift(key[0], 1), cpu::floorShift(key[1], 1), cpu::floorShift(key[2], 1)};
-      const int64_t origin[3] = {key[0] * kBlock, key[1] * kBlock, key[2] * kBlock};
-      uint32_t* fv = f.at(f.get(key));
-      int8_t* mv = nullptr;
-      // Per 4^3 cache brick of the octant.
-      for (int bz = 0; bz < 2; ++bz)
-        for (int by = 0; by < 2; ++by)
-          for (int bx = 0; bx < 2; ++bx) {
-            bool brickNeeded = false;
-            for (int z = 0; z < kBrickSide && !brickNeeded; ++z)
-              for (int y = 0; y < kBrickSide && !brickNeeded; ++y)
-                for (int x = 0; x < kBrickSide && !brickNeeded; ++x)
-                  brickNeeded = need[((bz * 4 + z) * 8 + by * 4 + y) * 8 + bx * 4 + x] != 0;
-            if (!brickNeeded) continue;
-            const int64_t b0[3] = {origin[0] + bx * kBrickSide, origin[1] + by * kBrickSide, origin[2] + bz * kBrickSide};
-            std::shared_ptr<const SolidLevelCache::Brick> brick;
-            if (cache) brick = cache->find({li, b0[0] >> kBrickShift, b0[1] >> kBrickShift, b0[2] >> kBrickShift});
-            for (int z = 0; z < kBrickSide; ++z)
-              for (int y = 0; y < kBrickSide; ++y)
-                for (int x = 0; x < kBrickSide; ++x) {
-                  if (!need[((bz * 4 + z) * 8 + by * 4 + y) * 8 + bx * 4 + x]) continue;
-                  const int local = localIndex(b0[0] + x, b0[1] + y, b0[2] + z);
-                  const int inBrick = (z * kBrickSide + y) * kBrickSide + x;
-                  if (brick && (brick->valid >> inBrick & 1)) {
-                    std::copy_n(brick->values.data() + inBrick * 3, 3, fv + localIndex<kBlockShift>(b0[0] + x, b0[1] + y, b0[2] + z) * 3);
-                  } else {
-                    if (!mv) mv = m.at(m.get(pkey));
-                    mv[local] = T;
-                  }
-                }
-          }
+    const int n = int(child.size());
+    std::vector<std::bitset<512>> need(static_cast<size_t>(n));  // per child chunk: its parents, (z * 8 + y) * 8 + x
+    parallelFor(0, n, ctx, [&](int s0, int s1) {
+      for (int s = s0; s < s1; ++s) {
+        const int8_t* c = child.at(uint32_t(s));
+        for (int z = 0; z < kChunk; ++z)
+          for (int y = 0; y < kChunk; ++y)
+            for (int x = 0; x < kChunk; ++x)
+              if (c[(z * kChunk + y) * kChunk + x] >= 0) need[size_t(s)].set(size_t(((z >> 1) * 8 + (y >> 1)) * 8 + (x >> 1)));
+      }
+    });
+    struct Octant {
+      uint32_t child;          // chunk of level li+1
+      uint32_t block;          // its parents' block in `f`
+      int32_t mask = -1;       // the chunk of `m` holding them, where one is not cached
+      std::array<std::shared_ptr<const SolidLevelCache::Brick>, 8> bricks;  // per 4^3 brick, if cached
+    };
+    std::vector<Octant> octants;
+    for (int s = 0; s < n; ++s) {
+      if (need[size_t(s)].none()) continue;
+      const ChunkKey key = child.keys[size_t(s)];
+      Octant oc{uint32_t(s), f.get(key), -1, {}};
+      bool seeds = false;
+      for (int b = 0; b < 8; ++b) {
+        const uint64_t needed = brickNeed(need[size_t(s)], b & 1, b >> 1 & 1, b >> 2);
+        if (!needed) continue;
+        if (cache) oc.bricks[size_t(b)] = cache->find({li, key[0] * 2 + (b & 1), key[1] * 2 + (b >> 1 & 1), key[2] * 2 + (b >> 2)});
+        seeds = seeds || !oc.bricks[size_t(b)] || (needed & ~oc.bricks[size_t(b)]->valid);
+      }
+      if (seeds) oc.mask = int32_t(m.get({cpu::floorShift(key[0], 1), cpu::floorShift(key[1], 1), cpu::floorShift(key[2], 1)}));
+      octants.push_back(std::move(oc));
     }
+    parallelFor(0, int(octants.size()), ctx, [&](int i0, int i1) {
+      for (int i = i0; i < i1; ++i) {
+        const Octant& oc = octants[size_t(i)];
+        const std::bitset<512>& needed = need[oc.child];
+        const ChunkKey key = child.keys[oc.child];
+        uint32_t* fv = f.at(oc.block);
+        int8_t* mv = oc.mask >= 0 ? m.at(uint32_t(oc.mask)) : nullptr;
+        for (int z = 0; z < kBlock; ++z)
+          for (int y = 0; y < kBlock; ++y)
+            for (int x = 0; x < kBlock; ++x) {
+              const int q = (z * 8 + y) * 8 + x;
+              if (!needed[size_t(q)]) continue;
+              const SolidLevelCache::Brick* brick = oc.bricks[size_t((z >> 2) * 4 + (y >> 2) * 2 + (x >> 2))].get();
+              const int inBrick = ((z & 3) * kBrickSide + (y & 3)) * kBrickSide + (x & 3);
+              if (brick && (brick->valid >> inBrick & 1))
+                std::copy_n(brick->values.data() + inBrick * 3, 3, fv + q * 3);
+              else
+                mv[localIndex(key[0] * kBlock + x, key[1] * kBlock + y, key[2] * kBlock + z)] = T;
+            }
+      }
+    });
+  }
+
+  // The needed parents in brick (bx, by, bz) of a child chunk's octant, bit (z * 4 + y) * 4 + x
+  // (as SolidLevelCache::Brick::valid).
+  static uint64_t brickNeed(const std::bitset<512>& need, int bx, int by, int bz) {
+    uint64_t bits = 0;
+    for (int z = 0; z < kBrickSide; ++z)
+      for (int y = 0; y < kBrickSide; ++y)
+        for (int x = 0; x < kBrickSide; ++x)
+          if (need[size_t(((bz * 4 + z) * 8 + by * 4 + y) * 8 + bx * 4 + x)])
+            bits |= uint64_t(1) << ((z * kBrickSide + y) * kBrickSide + x);
+    return bits;
   }
 
   // Final values of level li < top computed in this request go to the cache, per 4^3 brick
