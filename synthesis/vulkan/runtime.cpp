@@ -688,17 +688,25 @@ void Commands::download(const Buffer& from, uint64_t offset, void* data, uint64_
 
 void Commands::download(const Buffer& from, std::span<const Region> regions, void* data) {
   Impl& c = *impl_;
-  std::vector<VkBufferCopy> copies;  // packed one after the other in the staging buffer
-  uint64_t bytes = 0;
+  uint64_t needed = 0, lo = UINT64_MAX, hi = 0;
+  for (const Region& r : regions)
+    if (r.bytes) needed += r.bytes, lo = std::min(lo, r.from), hi = std::max(hi, r.from + r.bytes);
+  if (needed == 0) return;
+  // Regions that fill most of the range they span (rows of a window) come back in one copy of
+  // that range (a GPU copies many small regions slowly: 4096 rows of 16 KiB, 13 ms against 1.3);
+  // sparse ones one after the other in the staging buffer.
+  const bool whole = hi - lo <= 2 * needed;
+  std::vector<VkBufferCopy> copies;
+  uint64_t bytes = whole ? hi - lo : 0;
+  if (whole) copies.push_back({lo, 0, bytes});
   for (const Region& r : regions) {
     if (r.bytes == 0) continue;
-    copies.push_back({r.from, bytes, r.bytes});
-    c.downloads.push_back({nullptr, bytes, static_cast<uint8_t*>(data) + r.to, r.bytes});
-    bytes += r.bytes;
+    if (!whole) copies.push_back({r.from, bytes, r.bytes});
+    c.downloads.push_back({nullptr, whole ? r.from - lo : bytes, static_cast<uint8_t*>(data) + r.to, r.bytes});
+    if (!whole) bytes += r.bytes;
   }
-  if (bytes == 0) return;
   auto s = c.d.allocate(bytes, true);
-  for (size_t i = c.downloads.size() - copies.size(); i < c.downloads.size(); ++i) c.downloads[i].from = s.get();
+  for (auto d = c.downloads.rbegin(); d != c.downloads.rend() && !d->from; ++d) d->from = s.get();
   const VkCommandBuffer cmd = c.begin();
   c.timed("download", [&] {
     vkCmdCopyBuffer(cmd, from.impl().allocation->buffer, s->buffer, uint32_t(copies.size()), copies.data());

@@ -50,6 +50,15 @@ TEST(VulkanRuntime, DownloadRegionsLandWhereAsked) {
   for (const auto& r : regions)
     for (uint64_t i = 0; i < r.bytes / 4; ++i) expected[r.to / 4 + i] = words[r.from / 4 + i];
   EXPECT_EQ(out, expected);
+
+  // Rows of a window (they fill most of the range they span: one copy of that range).
+  std::vector<vulkan::Commands::Region> rows;
+  for (uint64_t y = 0; y < 10; ++y) rows.push_back({4 * (64 * (y + 3) + 2), 4 * 60 * (9 - y), 4 * 60});
+  std::vector<uint32_t> window(600, 0xdeadbeef);
+  commands.download(buffer, rows, window.data());
+  commands.submit();
+  for (uint64_t y = 0; y < 10; ++y)
+    for (uint64_t x = 0; x < 60; ++x) ASSERT_EQ(window[60 * (9 - y) + x], words[64 * (y + 3) + 2 + x]) << x << "," << y;
 }
 
 TEST(VulkanRuntime, ResidentDataIsMadeOncePerKey) {
