@@ -299,8 +299,14 @@ int main(int argc, char** argv) {
       std::string line;
       for (int axis = 0; axis < 3; ++axis) {
         const Plane& p = planes[size_t(axis)];
-        CoordMap m{p.w, p.h, e.width, e.height, {}};
-        for (size_t v = 0; v < p.voxels.size(); ++v) m.coords.push_back(r.triples[at + v][size_t(axis)]);
+        // The y plane's image is (x, z) where E_y's (u, v) is (z, x): measured transposed.
+        const bool transposed = axis == 1;
+        CoordMap m{transposed ? p.h : p.w, transposed ? p.w : p.h, e.width, e.height, {}};
+        m.coords.resize(p.voxels.size());
+        for (size_t v = 0; v < p.voxels.size(); ++v) {
+          const size_t i = v % size_t(p.w), j = v / size_t(p.w);
+          m.coords[transposed ? i * size_t(p.h) + j : v] = r.triples[at + v][size_t(axis)];
+        }
         at += p.voxels.size();
         char buf[64];
         std::snprintf(buf, sizeof buf, " %c:%.3f", "xyz"[axis], coherence(m));
