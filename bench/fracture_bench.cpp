@@ -96,7 +96,7 @@ BENCHMARK(BM_FractureBunny)->Arg(10)->Arg(50)->Unit(benchmark::kSecond)->UseReal
 void BM_RecutBunny256(benchmark::State& state) {
   const Fixture& f = fixture();
   if (!f.ok) return state.SkipWithError("models/cgal/bunny00.off absent: run models/fetch");
-  synthesis::SolidLevelCache cache(size_t(1) << 30);
+  synthesis::SolidLevelCache cache(size_t(1) << 30, synthesis::SolidLevelCache::Fill::WholeBricks);
   const render::BrokenModel pieces = render::breakModel(f.bunny, {}, f.interior(), fractureOptions(10), {}, &cache);
   atlas::GenerateAtlasOptions atlas;
   atlas.pack.width = atlas.pack.height = 256;

@@ -326,11 +326,11 @@ struct Engine {
   }
 
   // The voxels of level li whose final values level li+1 upsamples from (the parents of its
-  // mask): read from the cache where it has them, else seeds of level li's mask. The parents of
-  // each child chunk fill one octant of one chunk of level li; which are needed is found in
-  // parallel, the cache is asked in one thread (it is not thread-safe, and its order of use
-  // decides what it evicts), and the values and seeds are written in parallel (octants and
-  // blocks are disjoint).
+  // mask): read from the cache where it has them, else seeds of level li's mask (with
+  // Fill::WholeBricks, every voxel of a brick the cache lacks in part). The parents of each child
+  // chunk fill one octant of one chunk of level li; which are needed is found in parallel, the
+  // cache is asked in one thread (it is not thread-safe, and its order of use decides what it
+  // evicts), and the values and seeds are written in parallel (octants and blocks are disjoint).
   void seedFromChild(int li) {
     const Mask& child = masks[size_t(li) + 1];
     Mask& m = masks[size_t(li)];
@@ -347,46 +347,47 @@ struct Engine {
               if (c[(z * kChunk + y) * kChunk + x] >= 0) need[size_t(s)].set(size_t(((z >> 1) * 8 + (y >> 1)) * 8 + (x >> 1)));
       }
     });
+    // Per 4^3 brick of an octant, bit (z * 4 + y) * 4 + x: the parents read from the cache, and
+    // those seeded.
     struct Octant {
-      uint32_t child;          // chunk of level li+1
-      uint32_t block;          // its parents' block in `f`
-      int32_t mask = -1;       // the chunk of `m` holding them, where one is not cached
-      std::array<std::shared_ptr<const SolidLevelCache::Brick>, 8> bricks;  // per 4^3 brick, if cached
+      uint32_t child;     // chunk of level li+1
+      uint32_t block;     // its parents' block in `f`
+      int32_t mask = -1;  // the chunk of `m` holding its seeds, if it has any
+      std::array<std::shared_ptr<const SolidLevelCache::Brick>, 8> bricks;
+      std::array<uint64_t, 8> cached{}, seeded{};
     };
+    const bool wholeBricks = cache && cache->fill() == SolidLevelCache::Fill::WholeBricks;
     std::vector<Octant> octants;
     for (int s = 0; s < n; ++s) {
       if (need[size_t(s)].none()) continue;
       const ChunkKey key = child.keys[size_t(s)];
-      Octant oc{uint32_t(s), f.get(key), -1, {}};
-      bool seeds = false;
+      Octant oc{uint32_t(s), f.get(key), -1, {}, {}, {}};
       for (int b = 0; b < 8; ++b) {
         const uint64_t needed = brickNeed(need[size_t(s)], b & 1, b >> 1 & 1, b >> 2);
         if (!needed) continue;
         if (cache) oc.bricks[size_t(b)] = cache->find({li, key[0] * 2 + (b & 1), key[1] * 2 + (b >> 1 & 1), key[2] * 2 + (b >> 2)});
-        seeds = seeds || !oc.bricks[size_t(b)] || (needed & ~oc.bricks[size_t(b)]->valid);
+        const uint64_t valid = oc.bricks[size_t(b)] ? oc.bricks[size_t(b)]->valid : 0;
+        oc.cached[size_t(b)] = needed & valid;
+        oc.seeded[size_t(b)] = (wholeBricks ? ~uint64_t(0) : needed) & ~valid;
       }
-      if (seeds) oc.mask = int32_t(m.get({cpu::floorShift(key[0], 1), cpu::floorShift(key[1], 1), cpu::floorShift(key[2], 1)}));
+      if (std::any_of(oc.seeded.begin(), oc.seeded.end(), [](uint64_t bits) { return bits != 0; }))
+        oc.mask = int32_t(m.get({cpu::floorShift(key[0], 1), cpu::floorShift(key[1], 1), cpu::floorShift(key[2], 1)}));
       octants.push_back(std::move(oc));
     }
     parallelFor(0, int(octants.size()), ctx, [&](int i0, int i1) {
       for (int i = i0; i < i1; ++i) {
         const Octant& oc = octants[size_t(i)];
-        const std::bitset<512>& needed = need[oc.child];
         const ChunkKey key = child.keys[oc.child];
         uint32_t* fv = f.at(oc.block);
         int8_t* mv = oc.mask >= 0 ? m.at(uint32_t(oc.mask)) : nullptr;
-        for (int z = 0; z < kBlock; ++z)
-          for (int y = 0; y < kBlock; ++y)
-            for (int x = 0; x < kBlock; ++x) {
-              const int q = (z * 8 + y) * 8 + x;
-              if (!needed[size_t(q)]) continue;
-              const SolidLevelCache::Brick* brick = oc.bricks[size_t((z >> 2) * 4 + (y >> 2) * 2 + (x >> 2))].get();
-              const int inBrick = ((z & 3) * kBrickSide + (y & 3)) * kBrickSide + (x & 3);
-              if (brick && (brick->valid >> inBrick & 1))
-                std::copy_n(brick->values.data() + inBrick * 3, 3, fv + q * 3);
-              else
-                mv[localIndex(key[0] * kBlock + x, key[1] * kBlock + y, key[2] * kBlock + z)] = T;
-            }
+        for (int b = 0; b < 8; ++b)
+          for (int inBrick = 0; inBrick < 64; ++inBrick) {
+            const bool cached = oc.cached[size_t(b)] >> inBrick & 1, seeded = oc.seeded[size_t(b)] >> inBrick & 1;
+            if (!cached && !seeded) continue;
+            const int x = (b & 1) * 4 + (inBrick & 3), y = (b >> 1 & 1) * 4 + (inBrick >> 2 & 3), z = (b >> 2) * 4 + (inBrick >> 4);
+            if (cached) std::copy_n(oc.bricks[size_t(b)]->values.data() + inBrick * 3, 3, fv + ((z * 8 + y) * 8 + x) * 3);
+            else mv[localIndex(key[0] * kBlock + x, key[1] * kBlock + y, key[2] * kBlock + z)] = T;
+          }
       }
     });
   }

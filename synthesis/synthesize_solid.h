@@ -126,9 +126,18 @@ struct SolidSynthesisResult {
 /// at a time (it clears itself when they change). Not thread-safe: one request at a time.
 class SolidLevelCache {
 public:
-  explicit SolidLevelCache(size_t maxBytes = size_t(256) << 20) : maxBytes_(maxBytes) {}
+  /// What a request computes of a coarse level's brick it finds missing or incomplete: only the
+  /// voxels it needs (Needed), or the whole brick (WholeBricks), so that the next requests nearby
+  /// find it complete: for a cut dragged through a model, about a third less work per position
+  /// and a third more for the first (docs/measurements.md#the-interactive-re-cut). Values are the
+  /// same either way.
+  enum class Fill : uint8_t { Needed, WholeBricks };
+
+  explicit SolidLevelCache(size_t maxBytes = size_t(256) << 20, Fill fill = Fill::Needed)
+      : maxBytes_(maxBytes), fill_(fill) {}
   size_t bytes() const { return bytes_; }
   size_t maxBytes() const { return maxBytes_; }
+  Fill fill() const { return fill_; }
   int64_t hits() const { return hits_; }
   int64_t misses() const { return misses_; }
   void clear();
@@ -145,6 +154,7 @@ public:
 
 private:
   size_t maxBytes_;
+  Fill fill_;
   size_t bytes_ = 0;
   uint64_t owner_ = 0;
   int64_t hits_ = 0, misses_ = 0;
