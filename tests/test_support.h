@@ -14,6 +14,12 @@
 #include <memory>
 #include <string>
 
+#ifdef TEXFAB_CLI
+#include "synthesis/backend.h"
+
+#include <vector>
+#endif
+
 namespace texfab::test {
 
 /// A fresh, empty folder under the system temp folder for one test, removed by the destructor.
@@ -77,6 +83,15 @@ inline std::string readFile(const std::filesystem::path& path) {
 }
 
 #ifdef TEXFAB_CLI
+/// Why `texfab ... --backend vulkan --device 0` cannot run here (for GTEST_SKIP), or empty when it
+/// can: the CLI suites run the texfab they link against, so they see the devices it sees.
+inline std::string vulkanDeviceMissing() {
+  const std::vector<synthesis::vulkan::DeviceInfo> devices = synthesis::vulkanDevices();
+  if (devices.empty()) return "no Vulkan device";
+  if (!devices[0].unusable.empty()) return "no usable Vulkan device (" + devices[0].name + ": " + devices[0].unusable + ")";
+  return {};
+}
+
 /// Runs the texfab CLI with `args` (already quoted for the shell), capturing stdout and stderr.
 inline CliResult runCli(const std::string& args) {
   static std::atomic<int> counter{0};

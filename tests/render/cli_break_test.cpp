@@ -105,8 +105,7 @@ TEST_F(CliBreak, SameBytesOnOneAndTwoThreads) {
 
 // The cut faces' solid synthesis (and the outer texture's) on the Vulkan backend: the CPU's bytes.
 TEST_F(CliBreak, VulkanBackendWritesTheCpusBytes) {
-  const nlohmann::json devices = nlohmann::json::parse(texfab("info", "--devices --json").out);
-  if (devices.empty() || !devices[0]["usable"].get<bool>()) GTEST_SKIP() << "no usable Vulkan device";
+  if (const std::string missing = texfab::test::vulkanDeviceMissing(); !missing.empty()) GTEST_SKIP() << missing;
   for (const auto& [output, backend] : {std::pair{"cpu.glb", "cpu"}, std::pair{"vulkan.glb", "vulkan --device 0"}}) {
     const auto run = texfab("fracture", common(output, 128) + " --pieces 3 --backend " + backend);
     ASSERT_EQ(0, run.status) << run.err;
