@@ -129,6 +129,10 @@ Listed listFinished(const SolidLevelInput& level, const Part& part, const Contex
 // One part: every step on the device, then its centre's final triples to `finish`.
 void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelInput& level, const KeyIndex& index,
                     const Part& part, const SolidChunkSink& finish, const Context& ctx) {
+  // Only the voxels the caller reads (last == steps) come back, packed, centre chunk by chunk; a
+  // part whose centre holds none has nothing to compute.
+  const Listed listed = listFinished(level, part, ctx);
+  if (listed.voxels.empty()) return;
   Commands commands(device);
   const SolidChunks chunks = uploadPart(commands, level, index, part);
   if (level.parents) solidUpsampleKernel(commands, chunks, tables);
@@ -138,9 +142,6 @@ void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelI
     solidCorrectKernel(commands, chunks, tables, level.interleave, t);
     solidCommitKernel(commands, chunks, level.interleave, t);
   }
-  // Only the voxels the caller reads (last == steps) come back, packed, centre chunk by chunk.
-  const Listed listed = listFinished(level, part, ctx);
-  if (listed.voxels.empty()) return commands.submit(ctx);
   const Buffer list = commands.uploaded(std::span<const uint32_t>(listed.voxels));
   const Buffer packed(device, listed.voxels.size() * 12);
   solidGatherKernel(commands, chunks, list, uint32_t(listed.voxels.size()), packed);
