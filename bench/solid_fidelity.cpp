@@ -3,12 +3,13 @@
 // (a 64^2 crop by default), synthesizes axis-aligned and oblique planes of a lazy solid texture and
 // colours their triples by several rules, then prints per rule: luminance contrast ratio (standard
 // deviation of luminance, slice / exemplar), 7x7 neighbourhood fidelity relative to the 2-D
-// synthesis of the same exemplar, histogram distance, and the shifted-self correlation of 256^2
-// planes at the exemplar's period. The 2-D synthesis and a random-pixel image are the baselines.
+// synthesis of the same exemplar, the same on both halved (5x5 neighbourhoods: structure at twice
+// the scale, "coarse"), histogram distance, and the shifted-self correlation of 256^2 planes at the
+// exemplar's period. The 2-D synthesis and a random-pixel image are the baselines.
 //   build/bench/solid_fidelity models/exemplars/marble.png /usr/share/gimp/2.0/patterns/Stone/rock.pat
 // Environment: SIDE (crop), N (plane side), BIG (repetition plane side), JITTER, OFFSET, PASSES, FINEST,
-// INTERLEAVE, MATCH (matchColors 0/1), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and synthesis options), FK3D, FK2D,
-// CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
+// INTERLEAVE, MATCH (matchColors 0/1), GAIN (contrastGain), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and
+// synthesis options), FK3D, FK2D, CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
 // (writes the exemplars as PNG and stops),
 // WRAP=clamp (non-toroidal analyses, 2-D and solid, and fidelity measured without wrap),
 // RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png),
@@ -58,6 +59,17 @@ double lumStd(const Image& im) {
       ss += l * l;
     }
   return std::sqrt(std::max(0.0, ss / n - (s / n) * (s / n)));
+}
+
+// Each 2x2 block averaged.
+Image half(const Image& im) {
+  Image out(im.width / 2, im.height / 2, im.channels);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      for (int c = 0; c < im.channels; ++c)
+        out.at(x, y, c) = (im.at(2 * x, 2 * y, c) + im.at(2 * x + 1, 2 * y, c) + im.at(2 * x, 2 * y + 1, c) +
+                           im.at(2 * x + 1, 2 * y + 1, c)) / 4;
+  return out;
 }
 
 double env(const char* name, double def) {
@@ -175,6 +187,7 @@ int main(int argc, char** argv) {
   so.passes = int(env("PASSES", so.passes));
   so.interleave = int(env("INTERLEAVE", so.interleave));
   so.matchColors = env("MATCH", so.matchColors) > 0;
+  so.contrastGain = float(env("GAIN", so.contrastGain));
   SolidAnalysisOptions ao;
   ao.strips = int(env("STRIPS", ao.strips));
   ao.kept = int(env("KEPT", ao.kept));
@@ -208,6 +221,10 @@ int main(int argc, char** argv) {
     const SynthesisResult s2 = synthesize2d(a2, {0, 0, n, n}, {}, kCtx);
     const Image im2 = applyCoords(s2.coords, e);
     const double f2 = neighborhoodFidelity(im2, e, fo), h2 = histogramDistance(im2, e);
+    const Image eh = half(e);
+    FidelityOptions coarse = fo;
+    coarse.radius = 2;
+    const double g2 = neighborhoodFidelity(half(im2), eh, coarse);
     if (std::getenv("SAVE")) writeImage(im2, "/tmp/solidfid-2d.png"), writeImage(e, "/tmp/solidfid-ex.png");
     const SynthesisResult s2b = synthesize2d(a2, {0, 0, big, big}, {}, kCtx);
     const double sc2 = shiftedSelfCorrelation(applyCoords(s2b.coords, e), e.width, e.height);
@@ -317,7 +334,7 @@ int main(int argc, char** argv) {
     for (const auto& [name, rule] : rules) {
       if (const char* only = std::getenv("RULES"); only && std::string(",") .append(only).append(",").find("," + name + ",") == std::string::npos) continue;
       size_t at = 0;
-      double cr = 0, fid = 0, hist = 0, shifted = 0;
+      double cr = 0, fid = 0, hist = 0, shifted = 0, coarseFid = 0;
       std::string line;
       auto image = [&](const Plane& p) {
         Image im(p.w, p.h, ch);
@@ -329,7 +346,7 @@ int main(int argc, char** argv) {
       for (const Plane& p : planes) {
         const Image im = image(p);
         const double c = lumStd(im) / exStd, f = neighborhoodFidelity(im, e, fo), hd = histogramDistance(im, e);
-        cr += c / 4, fid += f / 4, hist += hd / 4;
+        cr += c / 4, fid += f / 4, hist += hd / 4, coarseFid += neighborhoodFidelity(half(im), eh, coarse) / 4;
         std::snprintf(buf, sizeof buf, " %s:%.2f/%.2f/%.3f", p.name.c_str(), c, f / f2, hd);
         line += buf;
         if (std::getenv("SAVE")) writeImage(im, std::string("/tmp/solidfid-") + name + "-" + p.name + ".png");
@@ -341,15 +358,15 @@ int main(int argc, char** argv) {
         std::snprintf(buf, sizeof buf, " sc_%s:%.2f", p.name.c_str(), s);
         line += buf;
       }
-      std::printf("  %-8s contrast %.3f fidratio %.3f hist %.4f (2D %.4f) shifted %.3f |%s\n", name.c_str(), cr,
-                  fid / f2, hist, h2, shifted, line.c_str());
+      std::printf("  %-8s contrast %.3f fidratio %.3f coarseratio %.3f hist %.4f (2D %.4f) shifted %.3f |%s\n", name.c_str(), cr,
+                  fid / f2, coarseFid / g2, hist, h2, shifted, line.c_str());
       auto& s = sums[name];
-      s.resize(4);
-      s[0] += cr, s[1] += fid / f2, s[2] += hist / h2, s[3] += shifted;
+      s.resize(5);
+      s[0] += cr, s[1] += fid / f2, s[2] += hist / h2, s[3] += shifted, s[4] += coarseFid / g2;
     }
   }
   std::printf("\nmeans over %d exemplars (contrast, fidelity ratio, histogram ratio vs 2D, shifted):\n", argc - 1);
   for (const auto& [name, s] : sums)
-    std::printf("  %-8s %.3f %.3f %.3f %.3f\n", name.c_str(), s[0] / (argc - 1), s[1] / (argc - 1), s[2] / (argc - 1),
-                s[3] / (argc - 1));
+    std::printf("  %-8s %.3f %.3f %.3f %.3f coarse fidelity ratio %.3f\n", name.c_str(), s[0] / (argc - 1), s[1] / (argc - 1),
+                s[2] / (argc - 1), s[3] / (argc - 1), s[4] / (argc - 1));
 }

@@ -47,7 +47,7 @@ Prepared prepare(const SolidLevel& l) {
                                       l.projection3d.dims, l.projection3d.divisor)};
 }
 
-cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared, bool matchColors) {
+cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepared, const SolidSynthesisOptions& o) {
   const SolidLevel& l = a.levels[size_t(li)];
   cpu::SolidTables t;
   t.exemplarWidth = a.width;
@@ -70,7 +70,8 @@ cpu::SolidTables tablesOf(const SolidAnalysis& a, int li, const Prepared& prepar
   t.projection2d = &prepared.projection2d;
   t.projection3d = &prepared.projection3d;
   static_assert(sizeof(l.searchColors) == 3 * kSolidColorSums * sizeof(int16_t));
-  if (matchColors) t.searchColors = l.searchColors[0].data();
+  if (o.matchColors) t.searchColors = l.searchColors[0].data();
+  t.contrastGain16 = o.contrastGain16();
   return t;
 }
 
@@ -89,6 +90,7 @@ uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   h.add(o.interleave);
   h.add(o.matchColors);
   h.add(o.offsetCells);
+  h.add(o.contrastGain16());
   return h.h;
 }
 
@@ -596,17 +598,18 @@ struct Engine {
         if (ps < 0) throw std::logic_error("lazy solid synthesis: parent values missing");
         return finals[size_t(li) - 1].at(uint32_t(ps));
       };
-    if (a.key) {  // the tables are a function of the analysis, the level and the colour rule
+    if (a.key) {  // the tables are a function of the analysis, the level and the search's colours
       Fnv1a h;
       h.add(a.key);
       h.add(li);
       h.add(o.matchColors);
+      h.add(o.contrastGain16());
       level.tablesKey = h.h;
     }
     level.steps = steps(li);
     level.interleave = o.interleave;
     level.init = initOf(o);
-    vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li), o.matchColors), level,
+    vulkan::synthesizeSolidLevel(*device, tablesOf(a, li, prepared(li), o), level,
                                  [&](uint32_t slot, const uint32_t* triples) { finishChunk(li, slot, triples, emit); },
                                  ctx);
   }
@@ -633,7 +636,7 @@ struct Engine {
       layers.push_back({b, e});
       b = e;
     }
-    const cpu::SolidTables tables = tablesOf(a, li, prepared(li), o.matchColors);
+    const cpu::SolidTables tables = tablesOf(a, li, prepared(li), o);
     std::vector<ChunkValues> pool;
     std::vector<int32_t> freeList;
     std::vector<std::vector<int32_t>> bufferOf(size_t(T) + 1, std::vector<int32_t>(n, -1));
@@ -742,6 +745,8 @@ void SolidSynthesisOptions::validate() const {
     throw Error("interleave must be 1 (one sub-pass per pass) or 2 (8 sub-passes), got " + std::to_string(interleave));
   if (offsetCells < 0 || offsetCells > 1024)
     throw Error("offset cells must be in [0, 1024], got " + std::to_string(offsetCells));
+  if (!(contrastGain >= 1.0f && contrastGain <= 4.0f))
+    throw Error("contrast gain must be in [1, 4], got " + std::to_string(contrastGain));
 }
 
 double synthesizeSolidMemoryBytes(int64_t voxels) { return double(voxels) * 40.0; }

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The exemplar analyses the synthesis commands share, as one "analysis" stage of a Run: through the
-// on-disk cache unless --no-cache, which is then kept within --cache-size; and --exemplar-wrap.
+// on-disk cache unless --no-cache, which is then kept within --cache-size; --exemplar-wrap and
+// --contrast-gain.
 
 #include "apps/texfab/cli.h"
 #include "synthesis/exemplar_analysis.h"
@@ -14,6 +15,10 @@ enum class WrapChoice { Auto, Tile, Clamp };
 
 /// Adds --exemplar-wrap to a command.
 CLI::Option* wrapFlag(Flags& f, WrapChoice& choice);
+
+/// Adds --contrast-gain (synthesis::SolidSynthesisOptions::contrastGain) to a command with solid
+/// texture; `what` says where it applies.
+CLI::Option* contrastGainFlag(Flags& f, float& gain, const std::string& what);
 
 /// The wrap mode the choice asks for; auto measures the exemplar and notes what it chose.
 synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run);

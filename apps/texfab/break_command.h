@@ -17,6 +17,7 @@ struct BreakJob {
   std::string model, output, exemplar, interior, separate, preview;
   render::BreakModelOptions options;
   uint32_t seed = 1;
+  float contrastGain = 1;  ///< the solid textures' (outside in --mode solid, and the cut faces)
   double explode = 0;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;

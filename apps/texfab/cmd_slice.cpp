@@ -37,6 +37,7 @@ struct SliceJob {
   ColorMode mode = ColorMode::Solid;
   double textureScale = 0, featureSize = 0;
   uint32_t seed = 1;
+  float contrastGain = 1;
   int resolution = 2048;
   bool force = false;
   WrapChoice wrap = WrapChoice::Auto;
@@ -98,11 +99,13 @@ std::unique_ptr<render::VoxelColorSource> colorSource(const SliceJob& job, Run& 
     solid = analyzeSolid(run, *exemplar, *exemplar, *exemplar, {}, job.wrap, cached);
     synthesis::SolidSynthesisOptions so;
     so.seed = job.seed;
+    so.contrastGain = job.contrastGain;
     // Default: one exemplar spans a quarter of the model's height.
     const geometry::BoundingBox box = geometry::boundingBox(mesh);
     const double span = job.featureSize > 0 ? job.featureSize : (box.max.z() - box.min.z()) / 4;
     const double scale = job.textureScale > 0 ? job.textureScale : std::max(exemplar->width, exemplar->height) / span;
-    source["colors"] = {{"mode", "solid"}, {"exemplar", name}, {"seed", job.seed}, {"texture_scale", scale}};
+    source["colors"] = {{"mode", "solid"}, {"exemplar", name}, {"seed", job.seed},
+                         {"contrast_gain", job.contrastGain}, {"texture_scale", scale}};
     return std::make_unique<render::SolidVoxelColors>(*solid, *exemplar, *exemplar, *exemplar, so, scale, grid);
   }
   if (exemplar) mesh = surfaceTextured(job, run, mesh, *exemplar);
@@ -221,6 +224,7 @@ Command addSliceCommand(CLI::App& root) {
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", {0, 1e9});
   f.option("--seed", job->seed, "Random seed of the synthesis");
   wrapFlag(f, job->wrap);
+  contrastGainFlag(f, job->contrastGain, " (--mode solid)");
   f.option("--resolution", job->resolution, "Atlas size for --mode surface", {64, 16384});
   f.text("--preview", job->preview, "Also write a picture of the print (front, side, four layers) to this PNG");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");

@@ -203,6 +203,7 @@ Correction::Correction(const VolumeGrid& g, const SolidTables& t) {
   for (int i = 0; i < kSolidCrossVoxels; ++i) cross[i] = l.linear[i] * 4;
   for (int e = 0; e < 2; ++e)
     for (int k = 0; k < 25; ++k) planes[e][k] = cross[l.plane[e][k]];
+  contrastGain16 = t.contrastGain16;
   bases.w = uint32_t(t.exemplarWidth);
   bases.h = uint32_t(t.exemplarHeight);
   for (int e = 0; e < 3; ++e)

@@ -66,6 +66,11 @@ struct SolidTables {
   /// Null: a voxel's search colour is 2x the sum of its three colours (6x their mean). Otherwise
   /// 3 channels * 766 entries indexed by that sum (SolidLevel::searchColors).
   const int16_t* searchColors = nullptr;
+  /// The targets' gain in sixteenths (SolidSynthesisOptions::contrastGain): the search sees each
+  /// colour record c of a 3-neighborhood whose mean record is m as
+  /// clamp(m + (((c - m) * contrastGain16) >> 4), 0, 1530), per channel; m rounds the mean of the
+  /// 61 records to the nearest integer (halves up). 16: as they are.
+  int contrastGain16 = 16;
   const SolidKernelProjection* projection2d = nullptr;  ///< the 2-D projection, prepared
   const SolidKernelProjection* projection3d = nullptr;  ///< the 3-D projection, prepared
 };

@@ -59,6 +59,7 @@ struct Correction {
   int64_t cross[kSolidCrossVoxels];  // offsets of the 3-neighborhood's colour records (int16)
   int64_t planes[2][25];             // the same for E_x's and E_y's planes
   BaseLayout bases;
+  int contrastGain16 = 16;  // SolidTables::contrastGain16
 
   Correction(const VolumeGrid& g, const SolidTables& t);
 };
@@ -145,7 +146,32 @@ inline void findBases(VoxelSearch& s, const uint32_t* in, const BaseLayout& b) {
   }
 }
 
-/// The current 3-neighborhood of one voxel (its colour records) and its E_x and E_y planes.
+/// The largest colour record: 6x an 8-bit colour.
+inline constexpr int32_t kMaxColorRecord = 2 * (kSolidColorSums - 1);
+
+/// SolidTables::contrastGain16 applied to a gathered neighborhood: every record moved away from the
+/// mean of the 3-neighborhood's records (the planes hold some of the same records: the same values).
+inline void applyContrastGain(Neighborhood& n, int gain16) {
+  int32_t mean[3];
+  for (int ch = 0; ch < 3; ++ch) {
+    int32_t sum = 0;
+    for (int i = 0; i < kSolidCrossVoxels; ++i) sum += n.cross[3 * i + ch];
+    mean[ch] = (sum + kSolidCrossVoxels / 2) / kSolidCrossVoxels;
+  }
+  auto scale = [&](int16_t* values, int records) {
+    for (int i = 0; i < records; ++i)
+      for (int ch = 0; ch < 3; ++ch) {
+        int16_t& v = values[3 * i + ch];
+        v = int16_t(std::clamp(mean[ch] + (((int32_t(v) - mean[ch]) * gain16) >> 4), 0, kMaxColorRecord));
+      }
+  };
+  scale(n.cross, kSolidCrossVoxels);
+  scale(n.planes[0], 25);
+  scale(n.planes[1], 25);
+}
+
+/// The current 3-neighborhood of one voxel (its colour records) and its E_x and E_y planes,
+/// through the targets' gain.
 inline void gatherNeighborhood(const VoxelSearch& s, const int16_t* inColors, const Correction& c, Neighborhood& n) {
   const int16_t* centre = inColors + s.voxel * 4;
 #pragma GCC unroll 61
@@ -153,6 +179,7 @@ inline void gatherNeighborhood(const VoxelSearch& s, const int16_t* inColors, co
   for (int e = 0; e < 2; ++e)
 #pragma GCC unroll 25
     for (int k = 0; k < 25; ++k) std::memcpy(n.planes[e] + 3 * k, centre + c.planes[e][k], 8);
+  if (c.contrastGain16 != 16) applyContrastGain(n, c.contrastGain16);
 }
 
 /// Step 2's winner, from the tie-break of its key.

@@ -88,6 +88,7 @@ SolidParams paramsOf(const SolidChunks& c, const SolidTables* t) {
     p.shift2d = t->shift2d;
     p.shift3d = t->shift3d;
     p.clampMargin = t->clampMargin;
+    p.contrastGain16 = t->contrastGain16;
   }
   return p;
 }
@@ -108,6 +109,7 @@ SolidTables uploadSolidTables(Commands& commands, const cpu::SolidTables& t) {
   d.k2dStride = t.k2dStride;
   d.k3d = t.k3d;
   d.clampMargin = t.clampMargin;
+  d.contrastGain16 = t.contrastGain16;
   d.shift2d = t.projection2d->shift;
   d.shift3d = t.projection3d->shift;
   const uint64_t pixels = uint64_t(t.exemplarWidth) * uint64_t(t.exemplarHeight);

@@ -29,6 +29,7 @@ struct SolidTables {
   int dims = 0, k2d = 1, k2dStride = 1, k3d = 1;
   int shift2d = 0, shift3d = 0;
   int clampMargin = 0;
+  int contrastGain16 = 16;
   Buffer data;
   std::array<Slice, 3> colors, candidates2d, candidateDescriptors2d, triples, descriptors3d;
   Slice projection;  ///< int32: offsets 2-D [8], offsets 3-D [16], basis 2-D [8][75], basis 3-D [dims][183]

@@ -112,6 +112,28 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
   EXPECT_EQ(readImage(dir / "o.png").width, 16);
 }
 
+// --contrast-gain reaches the search: a plane of a 64^2 crop of the bundled brick keeps more of the
+// exemplar's contrast at gain 2 than at the default, as the report measures it, and says its gain.
+TEST(CliSolid, ContrastGainKeepsMoreContrast) {
+  TempDir dir;
+  const std::string ex = smallExemplar(dir, 64, "brick.png", "brick.png");
+  auto contrast = [&](const std::string& gain) {
+    const fs::path report = dir / ("r" + gain + ".json");
+    EXPECT_EQ(texfab("solid " + ex + " -q --cache-dir " + (dir / "cache").string() + " --contrast-gain " + gain +
+                     " --plane 3,5,21,1,0,0,0,1,0 --size 96 -o " + (dir / ("p" + gain + ".png")).string() +
+                     " --report " + report.string())
+                  .status,
+              0);
+    std::ifstream in(report);
+    const auto json = nlohmann::json::parse(in);
+    EXPECT_EQ(json["parameters"]["contrast_gain"].get<double>(), std::stod(gain));
+    return json["measures"]["slices"]["plane"]["contrast_ratio"].get<double>();
+  };
+  const double plain = contrast("1"), gained = contrast("2");
+  std::printf("[ contrast ] brick: %.3f at gain 1, %.3f at gain 2\n", plain, gained);
+  EXPECT_GT(gained, 1.2 * plain);
+}
+
 // A voxel shows the mean of its three exemplar colours: exemplars of different colours (grey marble
 // and red brick) get a warning, one material along two axes (marble and its transpose) does not.
 // The report measures each axis against its own exemplar, grey or RGB.

@@ -170,6 +170,22 @@ TEST(VulkanBackend, SolidBoxEqualsTheCpu) {
   EXPECT_EQ(gpu.triples, cpu.triples);
 }
 
+// Targets through a contrast gain (SolidSynthesisOptions::contrastGain): the shader moves them
+// away from their neighbourhood's mean as the CPU does, and tables made for another gain are not
+// reused (the resident tables' key holds it).
+TEST(VulkanBackend, ContrastGainEqualsTheCpu) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  synthesis::SolidSynthesisOptions o;
+  o.seed = 5;
+  const std::vector<synthesis::Voxel> voxels = shell(4, 30, -9, 600);
+  const auto plain = synthesis::synthesizeSolid(solidAnalysis32(), voxels, o, nullptr, synthesisContext(Backend::Cpu));
+  expectSameSolid(voxels, o, false);
+  o.contrastGain = 2.5f;
+  expectSameSolid(voxels, o, false);
+  const auto gained = synthesis::synthesizeSolid(solidAnalysis32(), voxels, o, nullptr, synthesisContext(Backend::Cpu));
+  EXPECT_NE(gained.triples, plain.triples);
+}
+
 // The paper's sub-passes (8 per pass; one pass per level, to keep the chain short).
 TEST(VulkanBackend, SubPassesEqualTheCpu) {
   TEXFAB_REQUIRE_SHARED_VULKAN();

@@ -50,6 +50,7 @@ struct HostSolidTables {
     }
     view.projection2d = &projection2d;
     view.projection3d = &projection3d;
+    view.contrastGain16 = r.between(0, 1) ? 16 : int(r.between(17, 64));  // targets as they are, or a gain
   }
 
   static cpu::SolidKernelProjection randomProjection(Random& r, int inputs, int dims) {

@@ -133,6 +133,7 @@ struct SolidParams {
   int32_t shift3d;
   int32_t offsetCells;
   int32_t clampMargin;  ///< cpu::SolidTables::clampMargin
+  int32_t contrastGain16;  ///< cpu::SolidTables::contrastGain16
 };
 
 /// solidGatherKernel.
@@ -149,7 +150,7 @@ static_assert(sizeof(JitterParams) == 88);
 static_assert(sizeof(CorrectParams) == 88);
 static_assert(sizeof(SurfaceParams) == 56);
 static_assert(sizeof(CorrectSurfaceParams) == 48);
-static_assert(sizeof(SolidParams) == 72);
+static_assert(sizeof(SolidParams) == 80);
 static_assert(sizeof(GatherParams) == 4);
 } // namespace texfab::synthesis::vulkan
 #endif

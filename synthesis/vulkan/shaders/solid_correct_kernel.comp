@@ -35,21 +35,47 @@ ivec3 colorAt(int v) {
 
 int clampProjected(int sum, int offset, int shift) { return clamp((sum + offset) >> shift, -127, 127); }
 
+// Voxel (a, b) of plane `plane` of the 3-neighborhood: its offset, and false when an earlier plane
+// holds it. Planes in the order of solidCrossOffsets: (x, y), (z, x), (y, z): 61 voxels in all.
+bool crossOffset(int plane, int a, int b, out ivec3 o) {
+  o = plane == 0 ? ivec3(b, a, 0) : plane == 1 ? ivec3(a, 0, b) : ivec3(0, b, a);
+  return !((plane == 1 && b == 0) || (plane == 2 && (a == 0 || b == 0)));
+}
+
+// cpu::applyContrastGain: the records the search sees, moved away from the 3-neighborhood's mean.
+ivec3 gained(ivec3 c, ivec3 mean) {
+  if (p.contrastGain16 == 16) return c;
+  return clamp(mean + (((c - mean) * p.contrastGain16) >> 4), ivec3(0), ivec3(kSolidColorSums * 2 - 2));
+}
+
+ivec3 crossMean(uint slot, ivec3 l) {
+  if (p.contrastGain16 == 16) return ivec3(0);
+  ivec3 sum = ivec3(0);
+  for (int plane = 0; plane < 3; ++plane)
+    for (int a = -2; a <= 2; ++a)
+      for (int b = -2; b <= 2; ++b) {
+        ivec3 o;
+        if (crossOffset(plane, a, b, o)) sum += colorAt(voxelAt(slot, l, o));
+      }
+  return (sum + 30) / 61;
+}
+
 // The projected 3-neighborhood (target3d) and its three projected planes (target2d, E_x, E_y,
 // E_z), each as int8 in words. Inputs are the colour records' channels in the order of
 // solidCrossOffsets: the (x, y) plane, the (z, x) plane off the x axis, the (y, z) plane off both.
 void projectTargets(uint g, out uint target3d[4], out uint target2d[3][2]) {
   const uint slot = g >> 12;
   const ivec3 l = localPosition(g);
+  const ivec3 mean = crossMean(slot, l);
   int sum[16];
   for (int d = 0; d < 16; ++d) sum[d] = 0;
   int i = 0;
   for (int plane = 0; plane < 3; ++plane)
     for (int a = -2; a <= 2; ++a)
       for (int b = -2; b <= 2; ++b) {
-        const ivec3 o = plane == 0 ? ivec3(b, a, 0) : plane == 1 ? ivec3(a, 0, b) : ivec3(0, b, a);
-        if ((plane == 1 && b == 0) || (plane == 2 && (a == 0 || b == 0))) continue;
-        const ivec3 c = colorAt(voxelAt(slot, l, o));
+        ivec3 o;
+        if (!crossOffset(plane, a, b, o)) continue;
+        const ivec3 c = gained(colorAt(voxelAt(slot, l, o)), mean);
         for (int d = 0; d < p.dims; ++d) {
           const uint row = uint(kBasis3d + d * 183 + 3 * i);
           sum[d] += int(projection.words[row]) * c.x + int(projection.words[row + 1u]) * c.y +
@@ -67,7 +93,7 @@ void projectTargets(uint g, out uint target3d[4], out uint target2d[3][2]) {
       ivec3 o = ivec3(0);
       o[kAxisU[e]] = k % 5 - 2;
       o[kAxisV[e]] = k / 5 - 2;
-      const ivec3 c = colorAt(voxelAt(slot, l, o));
+      const ivec3 c = gained(colorAt(voxelAt(slot, l, o)), mean);
       for (int d = 0; d < 8; ++d) {
         const uint row = uint(kBasis2d + d * 75 + 3 * k);
         sum[d] += int(projection.words[row]) * c.x + int(projection.words[row + 1u]) * c.y +
