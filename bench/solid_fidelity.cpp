@@ -14,6 +14,7 @@
 // WRAP=clamp (non-toroidal analyses, 2-D and solid, and fidelity measured without wrap),
 // RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png),
 // HISTPEN=lambda with HPITERS, HPBINS, HPBOX, HPALPHA, HPALL (see applyHistogramPenalty).
+#include "render/image/downsample.h"
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
@@ -59,17 +60,6 @@ double lumStd(const Image& im) {
       ss += l * l;
     }
   return std::sqrt(std::max(0.0, ss / n - (s / n) * (s / n)));
-}
-
-// Each 2x2 block averaged.
-Image half(const Image& im) {
-  Image out(im.width / 2, im.height / 2, im.channels);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x)
-      for (int c = 0; c < im.channels; ++c)
-        out.at(x, y, c) = (im.at(2 * x, 2 * y, c) + im.at(2 * x + 1, 2 * y, c) + im.at(2 * x, 2 * y + 1, c) +
-                           im.at(2 * x + 1, 2 * y + 1, c)) / 4;
-  return out;
 }
 
 double env(const char* name, double def) {
@@ -221,10 +211,10 @@ int main(int argc, char** argv) {
     const SynthesisResult s2 = synthesize2d(a2, {0, 0, n, n}, {}, kCtx);
     const Image im2 = applyCoords(s2.coords, e);
     const double f2 = neighborhoodFidelity(im2, e, fo), h2 = histogramDistance(im2, e);
-    const Image eh = half(e);
+    const Image eh = downsample(e, 2);
     FidelityOptions coarse = fo;
     coarse.radius = 2;
-    const double g2 = neighborhoodFidelity(half(im2), eh, coarse);
+    const double g2 = neighborhoodFidelity(downsample(im2, 2), eh, coarse);
     if (std::getenv("SAVE")) writeImage(im2, "/tmp/solidfid-2d.png"), writeImage(e, "/tmp/solidfid-ex.png");
     const SynthesisResult s2b = synthesize2d(a2, {0, 0, big, big}, {}, kCtx);
     const double sc2 = shiftedSelfCorrelation(applyCoords(s2b.coords, e), e.width, e.height);
@@ -346,7 +336,7 @@ int main(int argc, char** argv) {
       for (const Plane& p : planes) {
         const Image im = image(p);
         const double c = lumStd(im) / exStd, f = neighborhoodFidelity(im, e, fo), hd = histogramDistance(im, e);
-        cr += c / 4, fid += f / 4, hist += hd / 4, coarseFid += neighborhoodFidelity(half(im), eh, coarse) / 4;
+        cr += c / 4, fid += f / 4, hist += hd / 4, coarseFid += neighborhoodFidelity(downsample(im, 2), eh, coarse) / 4;
         std::snprintf(buf, sizeof buf, " %s:%.2f/%.2f/%.3f", p.name.c_str(), c, f / f2, hd);
         line += buf;
         if (std::getenv("SAVE")) writeImage(im, std::string("/tmp/solidfid-") + name + "-" + p.name + ".png");

@@ -598,12 +598,11 @@ struct Engine {
         if (ps < 0) throw std::logic_error("lazy solid synthesis: parent values missing");
         return finals[size_t(li) - 1].at(uint32_t(ps));
       };
-    if (a.key) {  // the tables are a function of the analysis, the level and the search's colours
+    if (a.key) {  // the tables are a function of the analysis, the level and the colour rule
       Fnv1a h;
       h.add(a.key);
       h.add(li);
       h.add(o.matchColors);
-      h.add(o.contrastGain16());
       level.tablesKey = h.h;
     }
     level.steps = steps(li);

@@ -88,7 +88,6 @@ SolidParams paramsOf(const SolidChunks& c, const SolidTables* t) {
     p.shift2d = t->shift2d;
     p.shift3d = t->shift3d;
     p.clampMargin = t->clampMargin;
-    p.contrastGain16 = t->contrastGain16;
   }
   return p;
 }
@@ -109,7 +108,6 @@ SolidTables uploadSolidTables(Commands& commands, const cpu::SolidTables& t) {
   d.k2dStride = t.k2dStride;
   d.k3d = t.k3d;
   d.clampMargin = t.clampMargin;
-  d.contrastGain16 = t.contrastGain16;
   d.shift2d = t.projection2d->shift;
   d.shift3d = t.projection3d->shift;
   const uint64_t pixels = uint64_t(t.exemplarWidth) * uint64_t(t.exemplarHeight);
@@ -186,10 +184,12 @@ void solidColorKernel(Commands& commands, const SolidChunks& c, const SolidTable
                     voxels(c));
 }
 
-void solidCorrectKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, int interleave, int step) {
+void solidCorrectKernel(Commands& commands, const SolidChunks& c, const SolidTables& t, int interleave, int step,
+                        int contrastGain16) {
   SolidParams p = paramsOf(c, &t);
   p.interleave = interleave;
   p.step = step;
+  p.contrastGain16 = contrastGain16;
   commands.dispatch(kCorrect, p,
                     {c.last, c.neighbours, c.triples, c.colors, c.corrected, c.correctedColors,
                      t.range(t.colors[0]), t.range(t.colors[1]), t.range(t.colors[2]),

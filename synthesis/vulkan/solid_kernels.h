@@ -29,7 +29,6 @@ struct SolidTables {
   int dims = 0, k2d = 1, k2dStride = 1, k3d = 1;
   int shift2d = 0, shift3d = 0;
   int clampMargin = 0;
-  int contrastGain16 = 16;
   Buffer data;
   std::array<Slice, 3> colors, candidates2d, candidateDescriptors2d, triples, descriptors3d;
   Slice projection;  ///< int32: offsets 2-D [8], offsets 3-D [16], basis 2-D [8][75], basis 3-D [dims][183]
@@ -70,8 +69,9 @@ void solidUpsampleKernel(Commands& commands, const SolidChunks& chunks, const So
 void solidColorKernel(Commands& commands, const SolidChunks& chunks, const SolidTables& tables, int minLast);
 
 /// Reads triples/colors, writes the voxels corrected at `step` to corrected/correctedColors.
+/// `contrastGain16` as cpu::SolidTables::contrastGain16 (an option of the request, not of the tables).
 void solidCorrectKernel(Commands& commands, const SolidChunks& chunks, const SolidTables& tables, int interleave,
-                        int step);
+                        int step, int contrastGain16);
 
 /// Copies the voxels corrected at `step` from corrected/correctedColors to triples/colors.
 void solidCommitKernel(Commands& commands, const SolidChunks& chunks, int interleave, int step);

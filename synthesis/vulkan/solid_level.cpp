@@ -127,8 +127,8 @@ Listed listFinished(const SolidLevelInput& level, const Part& part, const Contex
 }
 
 // One part: every step on the device, then its centre's final triples to `finish`.
-void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelInput& level, const KeyIndex& index,
-                    const Part& part, const SolidChunkSink& finish, const Context& ctx) {
+void synthesizePart(Device& device, const SolidTables& tables, int contrastGain16, const SolidLevelInput& level,
+                    const KeyIndex& index, const Part& part, const SolidChunkSink& finish, const Context& ctx) {
   // Only the voxels the caller reads (last == steps) come back, packed, centre chunk by chunk; a
   // part whose centre holds none has nothing to compute.
   const Listed listed = listFinished(level, part, ctx);
@@ -139,7 +139,7 @@ void synthesizePart(Device& device, const SolidTables& tables, const SolidLevelI
   else solidInitKernel(commands, chunks, tables, level.init);
   solidColorKernel(commands, chunks, tables, 0);
   for (int t = 1; t <= level.steps; ++t) {
-    solidCorrectKernel(commands, chunks, tables, level.interleave, t);
+    solidCorrectKernel(commands, chunks, tables, level.interleave, t, contrastGain16);
     solidCommitKernel(commands, chunks, level.interleave, t);
   }
   const Buffer list = commands.uploaded(std::span<const uint32_t>(listed.voxels));
@@ -183,7 +183,8 @@ void synthesizeSolidLevel(Device& device, const cpu::SolidTables& tables, const 
     commands.submit(ctx);
     return std::pair{t, t->data.bytes()};
   });
-  for (const Part& part : parts) synthesizePart(device, *deviceTables, level, index, part, finish, ctx);
+  for (const Part& part : parts)
+    synthesizePart(device, *deviceTables, tables.contrastGain16, level, index, part, finish, ctx);
 }
 
 } // namespace texfab::synthesis::vulkan

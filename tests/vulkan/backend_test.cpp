@@ -171,8 +171,8 @@ TEST(VulkanBackend, SolidBoxEqualsTheCpu) {
 }
 
 // Targets through a contrast gain (SolidSynthesisOptions::contrastGain): the shader moves them
-// away from their neighbourhood's mean as the CPU does, and tables made for another gain are not
-// reused (the resident tables' key holds it).
+// away from their neighbourhood's mean as the CPU does, and the tables kept on the device for the
+// first request serve the second at another gain.
 TEST(VulkanBackend, ContrastGainEqualsTheCpu) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
   synthesis::SolidSynthesisOptions o;

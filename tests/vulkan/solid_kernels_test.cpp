@@ -160,7 +160,7 @@ void checkCase(vulkan::Device& device, Random& r, const Case& c) {
   vulkan::solidColorKernel(commands, chunks, deviceTables, 0);
   commands.download(chunks.triples, 0, gpuUp.data(), kVoxels * 12);
   commands.download(chunks.colors, 0, colorWords.data(), kVoxels * 8);
-  vulkan::solidCorrectKernel(commands, chunks, deviceTables, c.interleave, step);
+  vulkan::solidCorrectKernel(commands, chunks, deviceTables, c.interleave, step, tables.view.contrastGain16);
   commands.download(chunks.corrected, 0, gpuOut.data(), kVoxels * 12);
   commands.download(chunks.correctedColors, 0, outColorWords.data(), kVoxels * 8);
   vulkan::solidCommitKernel(commands, chunks, c.interleave, step);
