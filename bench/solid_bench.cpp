@@ -14,6 +14,7 @@
 #include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
+#include "synthesis/refine_solid.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <benchmark/benchmark.h>
@@ -185,6 +186,45 @@ void BM_SolidShell(benchmark::State& state) {
   state.counters["peak_MiB"] = peakMemoryMiB();
 }
 BENCHMARK(BM_SolidShell)->Args({1, 48, 1})->Args({2, 48, 2})->Args({1, 200, 1})->Args({1, 200, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+// Slice refinement (SolidSynthesisOptions::refinePasses = range(1), at contrast gain 2) on the
+// 128^3 volume (range(0) = 0), a 256^2 cut with its coarse levels cached (1), the r = 48 shell (2);
+// 0 passes is the same request unrefined, in the same run.
+void BM_SolidRefinement(benchmark::State& state) {
+  const SolidAnalysis& a = analysis(128);
+  SolidSynthesisOptions o;
+  o.contrastGain = 2;
+  o.refinePasses = int(state.range(1));
+  std::vector<Voxel> voxels;
+  const int kind = int(state.range(0));
+  if (kind == 1) voxels = zPlane(256, 40);
+  if (kind == 2)
+    for (int z = -49; z <= 49; ++z)
+      for (int y = -49; y <= 49; ++y)
+        for (int x = -49; x <= 49; ++x) {
+          const double d2 = double(x) * x + double(y) * y + double(z) * z;
+          if (d2 >= 47.5 * 47.5 && d2 < 48.5 * 48.5) voxels.push_back({x + 300, y + 300, z + 300});
+        }
+  SolidLevelCache cache(size_t(1) << 30);
+  if (kind == 1) {
+    SolidSynthesisOptions warm = o;
+    warm.refinePasses = 0;
+    std::vector<Voxel> slab;
+    for (int64_t z = 40 - refineMargin(2); z <= 40 + refineMargin(2); ++z)
+      for (const Voxel& v : zPlane(256, z)) slab.push_back(v);
+    synthesizeSolid(a, slab, warm, &cache);
+  }
+  int64_t synthesized = 0;
+  for (auto _ : state) {
+    const SolidSynthesisResult r = kind == 0 ? synthesizeSolidBox(a, {0, 0, 0, 128, 128, 128}, o)
+                                             : synthesizeSolid(a, voxels, o, kind == 1 ? &cache : nullptr);
+    synthesized = r.voxelsSynthesized();
+    benchmark::DoNotOptimize(r.triples.data());
+  }
+  state.counters["synthesized_voxels"] = double(synthesized);
+  state.counters["peak_MiB"] = peakMemoryMiB();
+}
+BENCHMARK(BM_SolidRefinement)->ArgsProduct({{0, 1, 2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 } // namespace
 

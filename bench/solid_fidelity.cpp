@@ -8,7 +8,7 @@
 // exemplar's period. The 2-D synthesis and a random-pixel image are the baselines.
 //   build/bench/solid_fidelity models/exemplars/marble.png /usr/share/gimp/2.0/patterns/Stone/rock.pat
 // Environment: SIDE (crop), N (plane side), BIG (repetition plane side), JITTER, OFFSET, PASSES, FINEST,
-// INTERLEAVE, MATCH (matchColors 0/1), GAIN (contrastGain), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and
+// INTERLEAVE, MATCH (matchColors 0/1), GAIN (contrastGain), REFINE (refinePasses), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and
 // synthesis options), FK3D, FK2D, CK3D (candidates kept at the finest / coarser levels), CALBOX (calibration box side), DUMP=dir
 // (writes the exemplars as PNG and stops),
 // WRAP=clamp (non-toroidal analyses, 2-D and solid, and fidelity measured without wrap),
@@ -178,6 +178,7 @@ int main(int argc, char** argv) {
   so.interleave = int(env("INTERLEAVE", so.interleave));
   so.matchColors = env("MATCH", so.matchColors) > 0;
   so.contrastGain = float(env("GAIN", so.contrastGain));
+  so.refinePasses = int(env("REFINE", so.refinePasses));
   SolidAnalysisOptions ao;
   ao.strips = int(env("STRIPS", ao.strips));
   ao.kept = int(env("KEPT", ao.kept));

@@ -10,6 +10,7 @@
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/hash.h"
+#include "synthesis/refine_solid.h"
 #if TEXFAB_HAS_VULKAN
 #include "synthesis/vulkan/solid_level.h"
 #endif
@@ -746,6 +747,8 @@ void SolidSynthesisOptions::validate() const {
     throw Error("offset cells must be in [0, 1024], got " + std::to_string(offsetCells));
   if (!(contrastGain >= 1.0f && contrastGain <= 4.0f))
     throw Error("contrast gain must be in [1, 4], got " + std::to_string(contrastGain));
+  if (refinePasses < 0 || refinePasses > 4)
+    throw Error("refinement passes must be in [0, 4], got " + std::to_string(refinePasses));
 }
 
 double synthesizeSolidMemoryBytes(int64_t voxels) { return double(voxels) * 40.0; }
@@ -814,6 +817,7 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
   if (voxels.empty()) return result;
+  if (o.refinePasses > 0) return refineSolid(a, voxels, o, cache, ctx);
   Engine engine{a, o, cache, ctx, result.levels};
   Mask& mask = engine.masks[size_t(engine.top())];
   const auto T = int8_t(engine.steps(engine.top()));
@@ -860,6 +864,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
                 " is empty");
   validatePosition(box.x, box.y, box.z);
   validatePosition(box.x + box.nx - 1, box.y + box.ny - 1, box.z + box.nz - 1);
+  if (o.refinePasses > 0) return refineSolidBox(a, box, o, cache, ctx);
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(size_t(box.count()));

@@ -107,6 +107,14 @@ struct SolidSynthesisOptions {
   /// (1.56 -> 1.88 times the 2-D synthesis'). [1, 4]
   /// Figures: docs/measurements.md#contrast-gain-of-the-search-targets.
   float contrastGain = 1.0f;
+  /// Passes of slice refinement after the finest level (Kopf et al. 2007's search and vote,
+  /// refine_solid.h); 0 (default): none, the paper's triples. Each pass makes a voxel read its
+  /// neighbours within 4 voxels, so a request synthesizes a region 8 voxels thicker per pass, and
+  /// a pass costs about 10x the default synthesis of a 128^3 volume. Ten GIMP patterns, contrast /
+  /// 7x7 fidelity over the 2-D synthesis': default 0.63 / 1.56; one pass after a contrast gain of 2
+  /// 0.80 / 1.58 (the gain alone 0.88 / 1.89). [0, 4]
+  /// Figures: docs/measurements.md#slice-refinement.
+  int refinePasses = 0;
 
   /// contrastGain in sixteenths, as the kernels apply it.
   int contrastGain16() const { return int(std::lrint(double(contrastGain) * 16.0)); }
@@ -179,7 +187,8 @@ private:
 /// Triples of the given finest-level voxels (any set: shell, plane, box, scattered; duplicates
 /// allowed). `cache` may be null (nothing kept between requests).
 /// Reports its stages through ctx: "masks" (the dependency chains, fine to coarse), then one per
-/// level, "level k/n" coarsest first, with the voxels synthesized and corrected.
+/// level, "level k/n" coarsest first, with the voxels synthesized and corrected. With
+/// options.refinePasses, refineSolid (refine_solid.h) runs this over a larger region first.
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
                                      const SolidSynthesisOptions& options, SolidLevelCache* cache = nullptr,
                                      const Context& ctx = {});

@@ -16,9 +16,9 @@ enum class WrapChoice { Auto, Tile, Clamp };
 /// Adds --exemplar-wrap to a command.
 CLI::Option* wrapFlag(Flags& f, WrapChoice& choice);
 
-/// Adds --contrast-gain (synthesis::SolidSynthesisOptions::contrastGain) to a command with solid
-/// texture; `what` says where it applies.
-CLI::Option* contrastGainFlag(Flags& f, float& gain, const std::string& what);
+/// Adds --contrast-gain and --refine (synthesis::SolidSynthesisOptions::contrastGain and
+/// refinePasses) to a command with solid texture; `what` says where they apply.
+void solidFidelityFlags(Flags& f, float& gain, int& refinePasses, const std::string& what);
 
 /// The wrap mode the choice asks for; auto measures the exemplar and notes what it chose.
 synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run);

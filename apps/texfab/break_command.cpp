@@ -78,6 +78,7 @@ void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const ren
   r["notes"] = model.notes;
   r["parameters"] = {{"seed", job.seed},
                      {"contrast_gain", job.contrastGain},
+                     {"refine_passes", job.refinePasses},
                      {"mode", job.exemplar.empty() ? "own"
                               : job.options.outer.mode == render::TextureMode::Solid ? "solid" : "surface"},
                      {"interior_scale", model.interiorScale}};
@@ -129,7 +130,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", job.seed, "Random seed of the textures (and of the fracture's sites)");
   wrapFlag(f, job.wrap);
-  contrastGainFlag(f, job.contrastGain, " on the cut faces (and outside with --mode solid)");
+  solidFidelityFlags(f, job.contrastGain, job.refinePasses, " on the cut faces (and outside with --mode solid)");
   f.option("--explode", job.explode, "Move the pieces apart by this factor of their offset from the centre", {0, 100});
   f.text("--separate", job.separate, "Also write each piece to its own file in this new (or empty) folder");
   f.modelOutput(job.write);
@@ -160,6 +161,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   o.outer.textureScale = o.interior.textureScale;
   o.outer.surface.seed = o.outer.solid.seed = o.interior.solid.seed = job.seed;
   o.outer.solid.contrastGain = o.interior.solid.contrastGain = job.contrastGain;
+  o.outer.solid.refinePasses = o.interior.solid.refinePasses = job.refinePasses;
   o.outer.measure = false;
   render::TextureMeshOptions interiorCost;  // the cut faces' atlas costs as a solid texture job's
   interiorCost.mode = render::TextureMode::Solid;

@@ -18,6 +18,7 @@ struct BreakJob {
   render::BreakModelOptions options;
   uint32_t seed = 1;
   float contrastGain = 1;  ///< the solid textures' (outside in --mode solid, and the cut faces)
+  int refinePasses = 0;    ///< the same textures'
   double explode = 0;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;

@@ -38,6 +38,7 @@ struct SliceJob {
   double textureScale = 0, featureSize = 0;
   uint32_t seed = 1;
   float contrastGain = 1;
+  int refinePasses = 0;
   int resolution = 2048;
   bool force = false;
   WrapChoice wrap = WrapChoice::Auto;
@@ -100,12 +101,14 @@ std::unique_ptr<render::VoxelColorSource> colorSource(const SliceJob& job, Run& 
     synthesis::SolidSynthesisOptions so;
     so.seed = job.seed;
     so.contrastGain = job.contrastGain;
+    so.refinePasses = job.refinePasses;
     // Default: one exemplar spans a quarter of the model's height.
     const geometry::BoundingBox box = geometry::boundingBox(mesh);
     const double span = job.featureSize > 0 ? job.featureSize : (box.max.z() - box.min.z()) / 4;
     const double scale = job.textureScale > 0 ? job.textureScale : std::max(exemplar->width, exemplar->height) / span;
     source["colors"] = {{"mode", "solid"}, {"exemplar", name}, {"seed", job.seed},
-                         {"contrast_gain", job.contrastGain}, {"texture_scale", scale}};
+                         {"contrast_gain", job.contrastGain}, {"refine_passes", job.refinePasses},
+                         {"texture_scale", scale}};
     return std::make_unique<render::SolidVoxelColors>(*solid, *exemplar, *exemplar, *exemplar, so, scale, grid);
   }
   if (exemplar) mesh = surfaceTextured(job, run, mesh, *exemplar);
@@ -224,7 +227,7 @@ Command addSliceCommand(CLI::App& root) {
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", {0, 1e9});
   f.option("--seed", job->seed, "Random seed of the synthesis");
   wrapFlag(f, job->wrap);
-  contrastGainFlag(f, job->contrastGain, " (--mode solid)");
+  solidFidelityFlags(f, job->contrastGain, job->refinePasses, " (--mode solid)");
   f.option("--resolution", job->resolution, "Atlas size for --mode surface", {64, 16384});
   f.text("--preview", job->preview, "Also write a picture of the print (front, side, four layers) to this PNG");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");

@@ -297,7 +297,7 @@ void runSolid(SolidJob& job) {
   const synthesis::SolidSynthesisOptions& o = job.options;
   r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"offset_cells", o.offsetCells},
                      {"passes", o.passes}, {"finest_passes", o.finestPasses}, {"subpasses", o.subpasses()},
-                     {"contrast_gain", o.contrastGain},
+                     {"contrast_gain", o.contrastGain}, {"refine_passes", o.refinePasses},
                      {"scale", job.scale}, {"exemplar_wrap", toString(analysis.wrap)}};
   int64_t synthesized = 0;
   for (const synthesis::SolidLevelStats& l : s.levels) synthesized += l.voxels;
@@ -354,7 +354,7 @@ Command addSolidCommand(CLI::App& root) {
            "offset (0 = one tiling, as in the paper, which repeats with the exemplar's period)",
            {0, 1024});
   wrapFlag(f, job->wrap);
-  contrastGainFlag(f, o.contrastGain, "");
+  solidFidelityFlags(f, o.contrastGain, o.refinePasses, "");
   f.option("--passes", o.passes, "Correction passes per level above the finest", {0, 4});
   f.option("--finest-passes", o.finestPasses,
            "Correction passes at the finest level (the paper: 2, about 3x the finest level's work)", {0, 4});

@@ -186,7 +186,7 @@ void runTexture(TextureJob& job) {
   r["exemplar"]["analysis_cached"] = cached;
   r["exemplar"]["downsampled"] = downsampling;  // 1: synthesized from the exemplar as given
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},
-                     {"contrast_gain", o.solid.contrastGain},
+                     {"contrast_gain", o.solid.contrastGain}, {"refine_passes", o.solid.refinePasses},
                      {"exemplar_wrap", toString(analysis ? analysis->wrap : solidAnalysis->wrap)},
                      {"texture_scale", result.textureScale * downsampling},
                      {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel * downsampling}};
@@ -228,7 +228,7 @@ Command addTextureCommand(CLI::App& root) {
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", o.surface.seed, "Random seed: the only source of variation");
   wrapFlag(f, job->wrap);
-  contrastGainFlag(f, o.solid.contrastGain, " (--mode solid)");
+  solidFidelityFlags(f, o.solid.contrastGain, o.solid.refinePasses, " (--mode solid)");
   f.text("--maps", job->maps,
          "Companion maps of the exemplar's size, synthesized with the same coordinates: "
          "normal=N.png,roughness=R.png,height=H.png (height is written as OUTPUT_height.png)");

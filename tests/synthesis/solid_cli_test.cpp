@@ -114,24 +114,35 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
 
 // --contrast-gain reaches the search: a plane of a 64^2 crop of the bundled brick keeps more of the
 // exemplar's contrast at gain 2 than at the default, as the report measures it, and says its gain.
-TEST(CliSolid, ContrastGainKeepsMoreContrast) {
+// --contrast-gain keeps more of the exemplar's contrast; --refine then brings the slice's
+// structure closer to the exemplar's (fidelity ratio) and keeps most of that contrast.
+TEST(CliSolid, ContrastGainAndRefinement) {
   TempDir dir;
   const std::string ex = smallExemplar(dir, 64, "brick.png", "brick.png");
-  auto contrast = [&](const std::string& gain) {
-    const fs::path report = dir / ("r" + gain + ".json");
+  auto measures = [&](const std::string& gain, int refine) {
+    const std::string name = gain + "-" + std::to_string(refine);
+    const fs::path report = dir / ("r" + name + ".json");
     EXPECT_EQ(texfab("solid " + ex + " -q --cache-dir " + (dir / "cache").string() + " --contrast-gain " + gain +
-                     " --plane 3,5,21,1,0,0,0,1,0 --size 96 -o " + (dir / ("p" + gain + ".png")).string() +
-                     " --report " + report.string())
+                     " --refine " + std::to_string(refine) + " --plane 3,5,21,1,0,0,0,1,0 --size 96 -o " +
+                     (dir / ("p" + name + ".png")).string() + " --report " + report.string())
                   .status,
               0);
     std::ifstream in(report);
     const auto json = nlohmann::json::parse(in);
     EXPECT_EQ(json["parameters"]["contrast_gain"].get<double>(), std::stod(gain));
-    return json["measures"]["slices"]["plane"]["contrast_ratio"].get<double>();
+    EXPECT_EQ(json["parameters"]["refine_passes"].get<int>(), refine);
+    const auto& plane = json["measures"]["slices"]["plane"];
+    return std::pair{plane["contrast_ratio"].get<double>(), plane["fidelity_ratio"].get<double>()};
   };
-  const double plain = contrast("1"), gained = contrast("2");
-  std::printf("[ contrast ] brick: %.3f at gain 1, %.3f at gain 2\n", plain, gained);
+  const auto [plain, plainFidelity] = measures("1", 0);
+  const auto [gained, gainedFidelity] = measures("2", 0);
+  const auto [refined, refinedFidelity] = measures("2", 2);
+  std::printf("[ contrast ] brick: contrast / fidelity ratio %.3f / %.3f at gain 1, %.3f / %.3f at gain 2, %.3f / %.3f "
+              "refined\n", plain, plainFidelity, gained, gainedFidelity, refined, refinedFidelity);
   EXPECT_GT(gained, 1.2 * plain);
+  EXPECT_LT(refinedFidelity, 0.95 * gainedFidelity);
+  EXPECT_GT(refined, 1.1 * plain);
+  EXPECT_NE(texfab("solid " + ex + " --refine 5 -o " + (dir / "bad.png").string()).status, 0);
 }
 
 // A voxel shows the mean of its three exemplar colours: exemplars of different colours (grey marble

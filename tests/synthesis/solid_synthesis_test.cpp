@@ -6,6 +6,7 @@
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
+#include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
@@ -541,9 +542,9 @@ Image crop64(const Image& full) {
 // paper's mean of three, and a contrast gain of 2 on top, on real exemplars, over axis-aligned and
 // oblique 64^2 slices: each step keeps more of the exemplar's contrast and brings the histograms
 // closer to the exemplar's, while the neighborhoods stay far from random pixels'.
-TEST(SolidSynthesis, SearchTargetsKeepContrast) {
-  const int n = 64;
-  std::vector<std::vector<Voxel>> planes;  // x, y and z slices, and an oblique plane (normal (1, 2, 3))
+// x, y and z slices of n^2 voxels, and an oblique plane (normal (1, 2, 3)).
+std::vector<std::vector<Voxel>> testPlanes(int n) {
+  std::vector<std::vector<Voxel>> planes;
   for (int axis = 0; axis < 3; ++axis) {
     planes.emplace_back();
     for (int j = 0; j < n; ++j)
@@ -558,44 +559,72 @@ TEST(SolidSynthesis, SearchTargetsKeepContrast) {
       for (int k = 0; k < 3; ++k) q[k] = int64_t(std::floor(37 + (i + 0.5) * u[k] + (j + 0.5) * w[k]));
       planes.back().push_back({q[0], q[1], q[2]});
     }
-  const std::filesystem::path models = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars";
-  for (const auto& path : {models / "marble.png", models / "brick.png", test::gimpPatterns() / "Stone/cracked.pat"}) {
+  return planes;
+}
+
+// Means over square planes of exemplar e's solid texture: contrast ratio, histogram distance,
+// 7x7 fidelity.
+std::array<double, 3> sliceMeasures(const SolidAnalysis& a, const Image& e, const std::vector<std::vector<Voxel>>& planes,
+                                    const SolidSynthesisOptions& o) {
+  const int n = int(std::lrint(std::sqrt(double(planes[0].size()))));
+  const int ch = solidColorChannels(e, e, e);
+  std::array<double, 3> m{};
+  for (const auto& p : planes) {
+    Image slice(n, n, ch);
+    slice.pixels.clear();
+    solidColors(synthesizeSolid(a, p, o, nullptr, Context{.threads = 2}).triples, e, e, e, slice.pixels);
+    m[0] += contrastRatio(slice, e) / double(planes.size());
+    m[1] += histogramDistance(slice, e) / double(planes.size());
+    m[2] += neighborhoodFidelity(slice, e) / double(planes.size());
+  }
+  return m;
+}
+
+// 7x7 fidelity of n^2 random pixels of e (the baseline of SlicesLookLikeTheExemplar).
+double randomFidelity(const Image& e, int n) {
+  Image random(n, n, solidColorChannels(e, e, e));
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const uint32_t h = voxelHash(3, 0, x, y, 0, 0);
+      for (int c = 0; c < random.channels; ++c)
+        random.at(x, y, c) = e.at(int(h % uint32_t(e.width)), int((h >> 8) % uint32_t(e.height)), c);
+    }
+  return neighborhoodFidelity(random, e);
+}
+
+const std::filesystem::path kModels = std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars";
+
+// On real exemplars: the search's colour tables and a contrast gain keep more of the exemplar's
+// contrast; slice refinement (refine_solid.h) after the gain gives slices closer to the exemplar
+// than the gain alone and keeps most of its contrast.
+TEST(SolidSynthesis, SearchTargetsAndRefinementKeepContrast) {
+  const auto planes = testPlanes(64);
+  for (const auto& path : {kModels / "marble.png", kModels / "brick.png", test::gimpPatterns() / "Stone/cracked.pat"}) {
     const Image e = crop64(readImage(path));
     const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
-    const int ch = solidColorChannels(e, e, e);
-    Image random(n, n, ch);
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) {
-        const uint32_t h = voxelHash(3, 0, x, y, 0, 0);
-        for (int c = 0; c < ch; ++c) random.at(x, y, c) = e.at(int(h % 64), int((h >> 8) % 64), c);
-      }
-    const double fRandom = neighborhoodFidelity(random, e);
-    // Means over the planes: contrast ratio, histogram distance, fidelity.
+    const double fRandom = randomFidelity(e, 64);
     auto measure = [&](bool match, float gain) {
       SolidSynthesisOptions o;
       o.matchColors = match;
       o.contrastGain = gain;
-      std::array<double, 3> m{};
-      for (const auto& p : planes) {
-        Image slice(n, n, ch);
-        slice.pixels.clear();
-        solidColors(synthesizeSolid(a, p, o, nullptr, Context{.threads = 2}).triples, e, e, e, slice.pixels);
-        m[0] += contrastRatio(slice, e) / double(planes.size());
-        m[1] += histogramDistance(slice, e) / double(planes.size());
-        m[2] += neighborhoodFidelity(slice, e) / double(planes.size());
-      }
-      return m;
+      return sliceMeasures(a, e, planes, o);
     };
     const std::array<double, 3> off = measure(false, 1), on = measure(true, 1), gained = measure(true, 2);
-    std::printf("[ solid    ] %s: contrast %.3f (mean of three %.3f, gain 2 %.3f), histogram %.4f (%.4f, %.4f), "
-                "fidelity %.4f (%.4f, %.4f; random %.4f)\n", path.filename().c_str(), on[0], off[0], gained[0], on[1],
-                off[1], gained[1], on[2], off[2], gained[2], fRandom);
+    SolidSynthesisOptions o;
+    o.contrastGain = 2;
+    o.refinePasses = 2;
+    const std::array<double, 3> refined = sliceMeasures(a, e, planes, o);
+    std::printf("[ solid    ] %s: contrast %.3f (mean of three %.3f, gain 2 %.3f, refined %.3f), histogram %.4f (%.4f, "
+                "%.4f, %.4f), fidelity %.4f (%.4f, %.4f, %.4f; random %.4f)\n", path.filename().c_str(), on[0], off[0],
+                gained[0], refined[0], on[1], off[1], gained[1], refined[1], on[2], off[2], gained[2], refined[2], fRandom);
     EXPECT_GT(on[0], 1.03 * off[0]) << path;
     EXPECT_LT(on[1], off[1]) << path;
     EXPECT_LT(on[2], 0.7 * fRandom) << path;
     EXPECT_GT(gained[0], 1.1 * on[0]) << path;
     EXPECT_LT(gained[1], on[1]) << path;
     EXPECT_LT(gained[2], 0.8 * fRandom) << path;
+    EXPECT_LT(refined[2], 0.9 * gained[2]) << path;
+    EXPECT_GT(refined[0], 0.7 * gained[0]) << path;
   }
 }
 
@@ -641,9 +670,77 @@ TEST(SolidSynthesis, RejectsBadParameters) {
   o = {};
   o.offsetCells = -1;
   EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 2, 2, 2}, o), Error);
+  o = {};
+  o.refinePasses = 5;
+  EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 2, 2, 2}, o), Error);
   EXPECT_THROW(synthesizeSolidBox(a, {0, 0, 0, 0, 2, 2}, {}), Error);
   const Voxel far{int64_t(1) << 40, 0, 0};
   EXPECT_THROW(synthesizeSolid(a, std::span<const Voxel>(&far, 1), {}), Error);
+}
+
+// Slice refinement (refine_solid.h) keeps the determinism contract: a voxel's refined triple is
+// the same whatever the request holds, its order, the thread count or the cache; and refinement
+// changes most triples.
+TEST(SolidRefinement, AnySubsetAgreesWithTheBox) {
+  const SolidAnalysis& a = analysis32();
+  SolidSynthesisOptions o;
+  o.seed = 21;
+  o.contrastGain = 2;
+  o.refinePasses = 2;
+  const VoxelBox box{-13, 5, -9, 20, 16, 12};
+  const SolidSynthesisResult whole = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
+  ASSERT_EQ(whole.triples.size(), size_t(box.count()));
+  EXPECT_EQ(whole.distinctVoxels, box.count());
+  SolidLevelCache cache;
+  EXPECT_EQ(synthesizeSolidBox(a, box, o, &cache, Context{.threads = 1}).triples, whole.triples);
+
+  const std::vector<Voxel> all = boxVoxels(box);
+  uint32_t state = 99;
+  auto next = [&](uint32_t range) { state = pcgHash(state); return state % range; };
+  for (int trial = 0; trial < 4; ++trial) {
+    std::vector<Voxel> subset;
+    const uint32_t count = 1 + next(trial == 0 ? 1 : 200);
+    for (uint32_t i = 0; i < count; ++i) subset.push_back(all[next(uint32_t(all.size()))]);
+    const std::set<std::array<int64_t, 3>> distinct = [&] {
+      std::set<std::array<int64_t, 3>> d;
+      for (const Voxel& v : subset) d.insert({v.x, v.y, v.z});
+      return d;
+    }();
+    const SolidSynthesisResult r = synthesizeSolid(a, subset, o, trial % 2 ? &cache : nullptr, Context{.threads = 1 + trial % 2});
+    EXPECT_EQ(r.distinctVoxels, int64_t(distinct.size()));
+    for (size_t i = 0; i < subset.size(); ++i)
+      ASSERT_EQ(r.triples[i], fromBox(whole, box, subset[i])) << "trial " << trial << " voxel " << i;
+  }
+  std::vector<Voxel> reversed(all.rbegin(), all.rend());
+  const SolidSynthesisResult r = synthesizeSolid(a, reversed, o, nullptr, Context{.threads = 2});
+  for (size_t i = 0; i < reversed.size(); ++i) ASSERT_EQ(r.triples[i], fromBox(whole, box, reversed[i]));
+
+  SolidSynthesisOptions plain = o;
+  plain.refinePasses = 0;
+  const SolidSynthesisResult dong = synthesizeSolidBox(a, box, plain, nullptr, Context{.threads = 2});
+  size_t changed = 0;
+  for (size_t i = 0; i < dong.triples.size(); ++i) changed += dong.triples[i] != whole.triples[i];
+  EXPECT_GT(changed, dong.triples.size() / 2);
+}
+
+// Three different exemplars that do not tile: every refined coordinate stays in its level's valid
+// region (refinement never wraps), and the box agrees with a plane through it.
+TEST(SolidRefinement, NonToroidalExemplarsStayInTheirValidRegion) {
+  SolidAnalysisOptions ao;
+  ao.wrap = ExemplarWrap::Clamp;
+  const SolidAnalysis a = analyzeSolid(marble(32, 0, 0), marble(32, 50, 10), marble(32, 20, 60), ao, Context{.threads = 2});
+  SolidSynthesisOptions o;
+  o.refinePasses = 1;
+  const VoxelBox box{300, -20, 7, 12, 14, 10};
+  const SolidSynthesisResult r = synthesizeSolidBox(a, box, o, nullptr, Context{.threads = 2});
+  const ValidRegion& valid = a.levels.back().valid;
+  for (const Triple& t : r.triples)
+    for (uint32_t c : t) ASSERT_TRUE(valid.contains(coordU(c), coordV(c))) << coordU(c) << ", " << coordV(c);
+  std::vector<Voxel> plane;
+  for (int z = 0; z < box.nz; ++z)
+    for (int x = 0; x < box.nx; ++x) plane.push_back({box.x + x, box.y + 5, box.z + z});
+  const SolidSynthesisResult p = synthesizeSolid(a, plane, o, nullptr, Context{.threads = 2});
+  for (size_t i = 0; i < plane.size(); ++i) ASSERT_EQ(p.triples[i], fromBox(r, box, plane[i]));
 }
 
 } // namespace

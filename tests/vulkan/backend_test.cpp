@@ -186,6 +186,16 @@ TEST(VulkanBackend, ContrastGainEqualsTheCpu) {
   EXPECT_NE(gained.triples, plain.triples);
 }
 
+// Slice refinement runs on the CPU after either backend's levels: the same refined triples.
+TEST(VulkanBackend, RefinementEqualsTheCpu) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  synthesis::SolidSynthesisOptions o;
+  o.seed = 3;
+  o.contrastGain = 2;
+  o.refinePasses = 1;
+  expectSameSolid(shell(3, 12, 40, -7), o, false);
+}
+
 // The paper's sub-passes (8 per pass; one pass per level, to keep the chain short).
 TEST(VulkanBackend, SubPassesEqualTheCpu) {
   TEXFAB_REQUIRE_SHARED_VULKAN();

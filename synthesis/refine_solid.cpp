@@ -1,0 +1,408 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "synthesis/refine_solid.h"
+
+#include "render/image/parallel.h"
+#include "synthesis/coord_map.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/hash.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+namespace texfab::synthesis {
+namespace {
+
+// The refined region lives in sparse 8^3 chunks. Each voxel records the last phase it takes part
+// in: phase 2p - 1 is the search of pass p, phase 2p its vote (phase 0: Dong et al.'s triples),
+// -1 none. Every radius is at most 8, so a chunk's reads stay within its 27 neighbours.
+constexpr int kShift = 3;
+constexpr int kSide = 1 << kShift;
+constexpr int kVoxels = kSide * kSide * kSide;
+constexpr int kR = kRefineSearchRadius;
+constexpr int kV = kRefineVoteRadius;
+constexpr int kTaps = (2 * kR + 1) * (2 * kR + 1);
+constexpr int kMaxSum = 3 * 255;  // colours at 3x the 8-bit scale: a voxel's is the sum of its three
+constexpr uint64_t kWeightOne = uint64_t(1) << 40;  // weights < 2^31: 32 bits each
+constexpr int kErrorFloor = 512;
+static_assert(kR >= 1 && kR + 1 <= kSide && kV <= kSide);
+
+int localIndex(int64_t x, int64_t y, int64_t z) {
+  return int(((z & (kSide - 1)) * kSide + (y & (kSide - 1))) * kSide + (x & (kSide - 1)));
+}
+
+class Grid {
+public:
+  size_t size() const { return keys_.size(); }
+  const GridKey& key(size_t slot) const { return keys_[slot]; }
+  int32_t find(const GridKey& k) const {
+    const auto it = slots_.find(k);
+    return it == slots_.end() ? -1 : int32_t(it->second);
+  }
+  uint32_t get(const GridKey& k) {
+    const auto [it, added] = slots_.try_emplace(k, uint32_t(keys_.size()));
+    if (added) {
+      keys_.push_back(k);
+      phase.resize(keys_.size() * kVoxels, -1);
+    }
+    return it->second;
+  }
+  /// The slots of a chunk's 27 neighbours, x fastest (-1: absent).
+  std::array<int32_t, 27> neighbours(size_t slot) const {
+    std::array<int32_t, 27> out{};
+    const GridKey& k = keys_[slot];
+    for (int dz = -1, i = 0; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx, ++i) out[size_t(i)] = find({k[0] + dx, k[1] + dy, k[2] + dz});
+    return out;
+  }
+
+  std::vector<int8_t> phase;  // size() * kVoxels
+
+private:
+  std::unordered_map<GridKey, uint32_t, GridKeyHash> slots_;
+  std::vector<GridKey> keys_;
+};
+
+// Index of the voxel at chunk-local (x, y, z), each in [-kSide, 2 kSide), through the chunk's
+// neighbours; -1 when its chunk is absent.
+int64_t voxelAt(const std::array<int32_t, 27>& nb, int x, int y, int z) {
+  const int32_t slot = nb[size_t(((z >> kShift) + 1) * 9 + ((y >> kShift) + 1) * 3 + (x >> kShift) + 1)];
+  return slot < 0 ? -1 : int64_t(slot) * kVoxels + localIndex(x, y, z);
+}
+
+// Every voxel whose phase is at least `from` lends phase `to` (if higher than its own) to each
+// voxel within `radius` per axis: three one-axis dilations.
+void dilate(Grid& g, int from, int to, int radius) {
+  std::vector<uint8_t> mark(g.size() * kVoxels);
+  for (size_t i = 0; i < mark.size(); ++i) mark[i] = g.phase[i] >= from;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<uint8_t> next(mark.size(), 0);
+    const size_t chunks = g.size();
+    GridKey lastKey = g.key(0);
+    size_t slot = 0;
+    for (size_t s = 0; s < chunks; ++s) {
+      const GridKey origin = g.key(s);
+      for (int i = 0; i < kVoxels; ++i) {
+        if (!mark[s * kVoxels + size_t(i)]) continue;
+        std::array<int64_t, 3> p{origin[0] * kSide + (i & (kSide - 1)), origin[1] * kSide + ((i >> kShift) & (kSide - 1)),
+                                 origin[2] * kSide + (i >> (2 * kShift))};
+        const int64_t centre = p[size_t(axis)];
+        for (int64_t t = centre - radius; t <= centre + radius; ++t) {
+          p[size_t(axis)] = t;
+          const GridKey key{p[0] >> kShift, p[1] >> kShift, p[2] >> kShift};
+          if (key != lastKey) {
+            lastKey = key, slot = g.get(key);
+            if (next.size() < g.size() * kVoxels) next.resize(g.size() * kVoxels, 0);
+          }
+          next[slot * kVoxels + size_t(localIndex(p[0], p[1], p[2]))] = 1;
+        }
+      }
+    }
+    mark = std::move(next);
+  }
+  for (size_t i = 0; i < mark.size(); ++i)
+    if (mark[i]) g.phase[i] = std::max(g.phase[i], int8_t(to));
+}
+
+// One exemplar at the finest level, as the passes read it: colours padded by kR (wrapped or
+// mirrored as the analysis reads them), four values per pixel (3x the 8-bit colour, then 0, so that
+// a window's row is contiguous and vectorizes), 2-D candidates, the coordinates a triple may hold.
+struct Exemplar {
+  int width = 0, height = 0, pitch = 0;
+  ExemplarWrap wrap = ExemplarWrap::Tile;
+  ValidRegion valid;
+  std::vector<int16_t> padded;  // (width + 2 kR) x (height + 2 kR) x 4
+  const uint32_t* candidates = nullptr;
+  int k = 0;
+
+  const int16_t* colour3(int u, int v) const { return &padded[(size_t(v + kR) * size_t(pitch) + size_t(u + kR)) * 4]; }
+  // The coordinate (u, v) moved by (du, dv): wrapped, or false when it leaves the valid region.
+  bool moved(uint32_t c, int du, int dv, uint32_t& out) const {
+    int u = int(coordU(c)) + du, v = int(coordV(c)) + dv;
+    if (wrap == ExemplarWrap::Tile) {
+      u = (u + width) % width, v = (v + height) % height;
+    } else if (!valid.contains(u, v)) {
+      return false;
+    }
+    out = packCoord(uint32_t(u), uint32_t(v));
+    return true;
+  }
+};
+
+Exemplar exemplarOf(const SolidAnalysis& a, int e) {
+  const SolidLevel& level = a.levels.back();
+  Exemplar x;
+  x.width = a.width, x.height = a.height, x.pitch = a.width + 2 * kR, x.wrap = a.wrap, x.valid = level.valid;
+  x.padded.resize(size_t(x.pitch) * size_t(a.height + 2 * kR) * 4);
+  const std::vector<uint8_t>& c = level.colors[size_t(e)];
+  for (int v = -kR; v < a.height + kR; ++v)
+    for (int u = -kR; u < a.width + kR; ++u) {
+      const size_t from = (size_t(foldIndex(v, a.height, a.wrap)) * size_t(a.width) + size_t(foldIndex(u, a.width, a.wrap))) * 3;
+      for (int ch = 0; ch < 3; ++ch)
+        x.padded[(size_t(v + kR) * size_t(x.pitch) + size_t(u + kR)) * 4 + size_t(ch)] = int16_t(3 * c[from + size_t(ch)]);
+    }
+  x.k = int(level.candidates2d[size_t(e)].size() / (size_t(a.width) * size_t(a.height)));
+  x.candidates = level.candidates2d[size_t(e)].data();
+  return x;
+}
+
+// A voxel's state between passes: its triple and colour (sum of its three 8-bit colours).
+struct State {
+  std::vector<uint32_t> triples;  // 3 per voxel
+  std::vector<int16_t> colours;   // 3 per voxel
+  explicit State(size_t voxels) : triples(voxels * 3), colours(voxels * 3) {}
+};
+
+// The search's result per voxel and axis: the match's centre and its vote weight,
+// kWeightOne / (error + kErrorFloor).
+struct Matches {
+  std::vector<uint32_t> coords;   // 3 per voxel
+  std::vector<uint32_t> weights;  // 3 per voxel
+  explicit Matches(size_t voxels) : coords(voxels * 3), weights(voxels * 3) {}
+};
+
+void setColour(State& s, size_t i, const std::array<Exemplar, 3>& ex) {
+  for (int c = 0; c < 3; ++c) {
+    int sum = 0;
+    for (int q = 0; q < 3; ++q) {
+      const uint32_t t = s.triples[i * 3 + size_t(q)];
+      sum += ex[size_t(q)].colour3(int(coordU(t)), int(coordV(t)))[c];
+    }
+    s.colours[i * 3 + size_t(c)] = int16_t(sum / 3);
+  }
+}
+
+// Local offset of slice tap (a, b) across axis q: u along axis (q + 1) % 3, v along (q + 2) % 3
+// (the orientation of solid_analysis.h).
+std::array<int, 3> sliceOffset(int q, int a, int b) {
+  std::array<int, 3> d{};
+  d[size_t((q + 1) % 3)] = a;
+  d[size_t((q + 2) % 3)] = b;
+  return d;
+}
+
+class Refiner {
+public:
+  Refiner(const SolidAnalysis& a, Grid& g) : g_(g), ex_{exemplarOf(a, 0), exemplarOf(a, 1), exemplarOf(a, 2)} {}
+
+  void search(int phase, const State& s, Matches& m, const Context& ctx) const {
+    forEachVoxel(phase, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
+      for (int q = 0; q < 3; ++q) searchAxis(nb, x, y, z, q, s, m, at);
+    });
+  }
+
+  void vote(int phase, const Matches& m, State& s, const Context& ctx) const {
+    forEachVoxel(phase, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
+      voteAt(nb, x, y, z, m, s, at);
+    });
+  }
+
+  const std::array<Exemplar, 3>& exemplars() const { return ex_; }
+
+private:
+  // fn(chunk's neighbours, chunk-local x, y, z, index) for every voxel of phase >= `phase`, chunks in
+  // parallel.
+  template <class Fn> void forEachVoxel(int phase, const Context& ctx, Fn&& fn) const {
+    parallelFor(0, int(g_.size()), ctx, [&](int s0, int s1) {
+      for (int slot = s0; slot < s1; ++slot) {
+        const auto nb = g_.neighbours(size_t(slot));
+        for (int i = 0; i < kVoxels; ++i) {
+          const size_t at = size_t(slot) * kVoxels + size_t(i);
+          if (g_.phase[at] >= phase) fn(nb, i & (kSide - 1), (i >> kShift) & (kSide - 1), i >> (2 * kShift), at);
+        }
+      }
+    });
+  }
+
+  void searchAxis(const std::array<int32_t, 27>& nb, int x, int y, int z, int q, const State& s, Matches& m,
+                  size_t at) const {
+    const Exemplar& e = ex_[size_t(q)];
+    // Targets: the slice window's colours, their contrast raised around the window's mean.
+    constexpr int kRow = (2 * kR + 1) * 4;
+    std::array<int16_t, kTaps * 4> target{};
+    std::array<int64_t, kTaps> voxel{};
+    int32_t mean[3] = {0, 0, 0};
+    for (int b = -kR, t = 0; b <= kR; ++b)
+      for (int a = -kR; a <= kR; ++a, ++t) {
+        const auto d = sliceOffset(q, a, b);
+        voxel[size_t(t)] = voxelAt(nb, x + d[0], y + d[1], z + d[2]);
+        for (int c = 0; c < 3; ++c) mean[c] += s.colours[size_t(voxel[size_t(t)]) * 3 + size_t(c)];
+      }
+    for (int& v : mean) v = (v + kTaps / 2) / kTaps;
+    for (int t = 0; t < kTaps; ++t)
+      for (int c = 0; c < 3; ++c) {
+        const int v = s.colours[size_t(voxel[size_t(t)]) * 3 + size_t(c)];
+        target[size_t(t * 4 + c)] = int16_t(std::clamp(mean[c] + (((v - mean[c]) * kRefineGain16) >> 4), 0, kMaxSum));
+      }
+    // Candidates: the 2-D candidates of the voxel's and its four slice neighbours' coordinates,
+    // shifted back (the 3x3 neighbours cost 1.4x for the same figures).
+    int32_t best = std::numeric_limits<int32_t>::max();
+    uint32_t bestCoord = s.triples[at * 3 + size_t(q)];
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        if (di != 0 && dj != 0) continue;
+        const auto d = sliceOffset(q, di, dj);
+        const uint32_t c = s.triples[size_t(voxelAt(nb, x + d[0], y + d[1], z + d[2])) * 3 + size_t(q)];
+        const uint32_t* set = e.candidates + (size_t(coordV(c)) * size_t(e.width) + coordU(c)) * size_t(e.k);
+        for (int k = 0; k < e.k; ++k) {
+          uint32_t centre;
+          if (!e.moved(set[k], -di, -dj, centre)) continue;
+          const int u = int(coordU(centre)), v = int(coordV(centre));
+          int32_t ssd = 0;
+          for (int b = -kR; b <= kR; ++b) {
+            const int16_t* p = e.colour3(u - kR, v + b);
+            const int16_t* t = &target[size_t((b + kR) * kRow)];
+            for (int i = 0; i < kRow; ++i) {
+              const auto diff = int16_t(t[i] - p[i]);  // |diff| <= 765: int16 products (pmaddwd)
+              ssd += int32_t(diff) * diff;
+            }
+          }
+          if (ssd < best) best = ssd, bestCoord = centre;
+        }
+      }
+    m.coords[at * 3 + size_t(q)] = bestCoord;
+    m.weights[at * 3 + size_t(q)] = uint32_t(kWeightOne / (uint64_t(best) + kErrorFloor));
+  }
+
+  void voteAt(const std::array<int32_t, 27>& nb, int x, int y, int z, const Matches& m, State& s, size_t at) const {
+    // Predictions: each slice neighbour's match, shifted back to this voxel.
+    struct Prediction {
+      uint32_t coord;
+      const int16_t* colour;
+    };
+    constexpr int kPerAxis = (2 * kV + 1) * (2 * kV + 1);
+    std::array<std::array<Prediction, kPerAxis>, 3> predictions;
+    std::array<int, 3> count{};
+    uint64_t sum[3] = {0, 0, 0}, total = 0;
+    for (int q = 0; q < 3; ++q) {
+      const Exemplar& e = ex_[size_t(q)];
+      for (int b = -kV; b <= kV; ++b)
+        for (int a = -kV; a <= kV; ++a) {
+          const auto d = sliceOffset(q, a, b);
+          const size_t w = size_t(voxelAt(nb, x + d[0], y + d[1], z + d[2]));
+          uint32_t p;
+          if (!e.moved(m.coords[w * 3 + size_t(q)], -a, -b, p)) continue;
+          const int16_t* colour = e.colour3(int(coordU(p)), int(coordV(p)));
+          const uint64_t weight = m.weights[w * 3 + size_t(q)];
+          for (int c = 0; c < 3; ++c) sum[c] += weight * uint64_t(colour[c]);
+          total += weight;
+          predictions[size_t(q)][size_t(count[size_t(q)]++)] = {p, colour};
+        }
+    }
+    if (total == 0) return;  // every prediction left the valid region: the voxel keeps its triple
+    int mean[3];
+    for (int c = 0; c < 3; ++c) mean[c] = int((sum[c] + total / 2) / total);
+    // Each exemplar's coordinate: its prediction nearest the weighted mean (the first of equals).
+    for (int q = 0; q < 3; ++q) {
+      int bestDistance = std::numeric_limits<int>::max();
+      for (int k = 0; k < count[size_t(q)]; ++k) {
+        const Prediction& p = predictions[size_t(q)][size_t(k)];
+        int distance = 0;
+        for (int c = 0; c < 3; ++c) distance += (p.colour[c] - mean[c]) * (p.colour[c] - mean[c]);
+        if (distance < bestDistance) bestDistance = distance, s.triples[at * 3 + size_t(q)] = p.coord;
+      }
+    }
+    setColour(s, at, ex_);
+  }
+
+  Grid& g_;
+  std::array<Exemplar, 3> ex_;
+};
+
+} // namespace
+
+SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
+                                 const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx) {
+  const int passes = options.refinePasses;
+  if (passes < 1) throw Error("refineSolid needs at least one pass");
+  // Phases of every voxel: the requested ones take part in the last vote; each phase reads the
+  // one before within its radius (a vote the searches within kV, a search the votes within kR).
+  Stage regionStage(ctx, "refinement region");
+  Grid g;
+  for (const Voxel& v : voxels) {
+    g.phase[g.get({v.x >> kShift, v.y >> kShift, v.z >> kShift}) * kVoxels + size_t(localIndex(v.x, v.y, v.z))] =
+        int8_t(2 * passes);
+  }
+  for (int phase = 2 * passes; phase >= 1; --phase) dilate(g, phase, phase - 1, phase % 2 == 0 ? kV : kR);
+
+  // Dong et al.'s triples of the whole region.
+  std::vector<Voxel> region;
+  for (size_t slot = 0; slot < g.size(); ++slot)
+    for (int i = 0; i < kVoxels; ++i)
+      if (g.phase[slot * kVoxels + size_t(i)] >= 0) {
+        const GridKey& k = g.key(slot);
+        region.push_back({k[0] * kSide + (i & (kSide - 1)), k[1] * kSide + ((i >> kShift) & (kSide - 1)),
+                          k[2] * kSide + (i >> (2 * kShift))});
+      }
+  regionStage.finish(std::to_string(region.size()) + " voxels for " + std::to_string(voxels.size()) + " requested");
+  SolidSynthesisOptions dong = options;
+  dong.refinePasses = 0;
+  SolidSynthesisResult result = synthesizeSolid(a, region, dong, cache, ctx);
+
+  Stage stage(ctx, "refinement");
+  Refiner refiner(a, g);
+  State state(g.size() * kVoxels);
+  for (size_t r = 0; r < region.size(); ++r) {
+    const Voxel& v = region[r];
+    const size_t at = size_t(g.find({v.x >> kShift, v.y >> kShift, v.z >> kShift})) * kVoxels + size_t(localIndex(v.x, v.y, v.z));
+    std::copy_n(result.triples[r].begin(), 3, &state.triples[at * 3]);
+    setColour(state, at, refiner.exemplars());
+  }
+  region = {};
+  result.triples = {};
+  Matches matches(g.size() * kVoxels);
+  for (int p = 1; p <= passes; ++p) {
+    refiner.search(2 * p - 1, state, matches, ctx);
+    refiner.vote(2 * p, matches, state, ctx);
+    stage.advance(p, passes);
+  }
+
+  result.triples.resize(voxels.size());
+  result.distinctVoxels = 0;
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    const Voxel& v = voxels[i];
+    const size_t at = size_t(g.find({v.x >> kShift, v.y >> kShift, v.z >> kShift})) * kVoxels + size_t(localIndex(v.x, v.y, v.z));
+    std::copy_n(&state.triples[at * 3], 3, result.triples[i].begin());
+    // The first request of a voxel marks it (phase one above the last vote's).
+    result.distinctVoxels += g.phase[at] == int8_t(2 * passes);
+    g.phase[at] = int8_t(2 * passes + 1);
+  }
+  stage.finish(std::to_string(passes) + " passes over " + std::to_string(result.voxelsSynthesized()) + " voxels");
+  return result;
+}
+
+SolidSynthesisResult refineSolidBox(const SolidAnalysis& a, const VoxelBox& box, const SolidSynthesisOptions& options,
+                                    SolidLevelCache* cache, const Context& ctx) {
+  // In slabs of about 2^20 voxels, each a list of voxels (bounded memory; the values do not depend
+  // on the slabs), but at least 4 margins thick, so that the margins add at most half the work.
+  const int64_t slice = int64_t(box.nx) * box.ny;
+  const int64_t thick = std::max<int64_t>((int64_t(1) << 20) / slice, 4 * refineMargin(options.refinePasses));
+  const int depth = int(std::min<int64_t>(thick, box.nz));
+  SolidSynthesisResult result;
+  result.triples.resize(size_t(box.count()));
+  std::vector<Voxel> voxels;
+  for (int z0 = 0; z0 < box.nz; z0 += depth) {
+    const int nz = std::min(depth, box.nz - z0);
+    voxels.clear();
+    for (int z = z0; z < z0 + nz; ++z)
+      for (int y = 0; y < box.ny; ++y)
+        for (int x = 0; x < box.nx; ++x) voxels.push_back({box.x + x, box.y + y, box.z + z});
+    const SolidSynthesisResult part = refineSolid(a, voxels, options, cache, ctx);
+    std::copy(part.triples.begin(), part.triples.end(), result.triples.begin() + z0 * slice);
+    if (result.levels.empty()) result.levels = part.levels;
+    else
+      for (size_t l = 0; l < part.levels.size(); ++l) {
+        result.levels[l].voxels += part.levels[l].voxels;
+        result.levels[l].corrections += part.levels[l].corrections;
+        result.levels[l].seconds += part.levels[l].seconds;
+      }
+  }
+  result.distinctVoxels = box.count();
+  return result;
+}
+
+} // namespace texfab::synthesis
