@@ -2,9 +2,10 @@
 #pragma once
 // Slice refinement of lazy solid synthesis: the search and vote of
 //   J. Kopf, C.-W. Fu, D. Cohen-Or, O. Deussen, D. Lischinski, T.-T. Wong. Solid Texture Synthesis
-//   from 2D Exemplars. SIGGRAPH 2007: §3.1 (each voxel's three slice neighbourhoods, across x, y
-//   and z, matched with neighbourhoods of that axis' exemplar), §3.2 (each voxel takes the colours
-//   its neighbours' matches predict for it, weighted by their matching error),
+//   from 2D Exemplars. ACM TOG 26(3), SIGGRAPH 2007: §3.2 (search: each voxel's three slice
+//   neighbourhoods, across x, y and z, matched with neighbourhoods of that axis' exemplar), §3.1
+//   (optimization: each voxel takes the colours its neighbours' matches predict for it, weighted
+//   by their matching error),
 // run after the finest level of Dong et al. 2008 (synthesize_solid.h), whose triples it starts from.
 //
 // One pass:
@@ -18,7 +19,7 @@
 //     match, weighted by 1 / (error + 512); each of the voxel's three coordinates becomes the
 //     prediction of its exemplar nearest the weighted mean colour.
 // The result is again a triple of exemplar pixels, so companion maps follow it, and its three
-// colours agree, so their mean keeps the exemplar's contrast.
+// colours are chosen to agree, so their mean regresses less to grey.
 //
 // Deviations from Kopf et al., on purpose: k-coherence candidates instead of a search of every
 // exemplar window; the vote picks exemplar pixels (three, one per exemplar) instead of averaging
@@ -50,8 +51,8 @@ constexpr int refineMargin(int passes) { return passes * (kRefineSearchRadius + 
 
 /// Triples of `voxels` after options.refinePasses passes (>= 1): Dong et al.'s triples of every
 /// voxel within refineMargin (synthesizeSolid without refinement: any backend, the cache), then the
-/// passes on the CPU. Level statistics are those of that synthesis. Stages: those of synthesis,
-/// then "refinement".
+/// passes on the CPU. Level statistics are those of that synthesis. Stages: "refinement region"
+/// (the region's masks), those of synthesis, then "refinement".
 SolidSynthesisResult refineSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
                                  const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx);
 
