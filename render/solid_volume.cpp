@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/solid_volume.h"
 
+#include "synthesis/refine_solid.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -59,11 +61,18 @@ SolidVolumeResult synthesizeSolidVolume(const SolidAnalysis& analysis, const Sol
   return result;
 }
 
-double solidVolumeMemoryBytes(int n, double scale) {
+double solidVolumeMemoryBytes(int n, double scale, int refinePasses) {
   // One slab of triples (12 bytes) at the synthesized resolution, a slab of colours at the
-  // output's, and 512 MiB for the synthesis of one slab's dependency chain.
+  // output's, and 512 MiB for the synthesis of one slab's dependency chain; refinement works in
+  // slabs of its own (refineSolidBox), about 100 bytes per voxel of their region.
   const double side = std::ceil(n / scale) + 1, slab = std::ceil(std::min(n, kSlab) / scale) + 1;
-  return side * side * slab * 12 + double(n) * n * std::min(n, kSlab) * 12 + 512.0 * (1 << 20);
+  double refine = 0;
+  if (refinePasses > 0) {
+    const double margin = synthesis::refineMargin(refinePasses);
+    const double depth = std::min(slab, std::max(double(1 << 20) / (side * side), 4 * margin));
+    refine = side * side * (depth + 2 * margin) * 100.0;
+  }
+  return side * side * slab * 12 + double(n) * n * std::min(n, kSlab) * 12 + 512.0 * (1 << 20) + refine;
 }
 
 } // namespace texfab::render

@@ -46,7 +46,7 @@ SolidVolumeResult synthesizeSolidVolume(const synthesis::SolidAnalysis& analysis
                                         const std::function<void(const Image&)>& slice, const Context& ctx = {});
 
 /// Peak memory of synthesizeSolidVolume, in bytes: a slab of triples and colours plus one
-/// synthesis working set.
-double solidVolumeMemoryBytes(int n, double scale);
+/// synthesis working set (and the refinement's slab, refine_solid.h, with refinement passes).
+double solidVolumeMemoryBytes(int n, double scale, int refinePasses = 0);
 
 } // namespace texfab::render

@@ -751,7 +751,10 @@ void SolidSynthesisOptions::validate() const {
     throw Error("refinement passes must be in [0, 4], got " + std::to_string(refinePasses));
 }
 
-double synthesizeSolidMemoryBytes(int64_t voxels) { return double(voxels) * 40.0; }
+double synthesizeSolidMemoryBytes(int64_t voxels, int refinePasses) {
+  const double region = refinePasses > 0 ? double(1 + 2 * refineMargin(refinePasses)) * 100.0 : 0.0;
+  return double(voxels) * (40.0 + region);
+}
 
 int64_t SolidSynthesisResult::voxelsSynthesized() const {
   int64_t n = 0;

@@ -194,8 +194,9 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<co
                                      const Context& ctx = {});
 
 /// Peak memory of synthesizeSolid for `voxels` requested voxels (a plane, points), in bytes: the
-/// request, its triples and colours, and the finest level's masks.
-double synthesizeSolidMemoryBytes(int64_t voxels);
+/// request, its triples and colours, and the finest level's masks; with refinement passes, a thin
+/// request's region (refine_solid.h) at about 100 bytes per voxel.
+double synthesizeSolidMemoryBytes(int64_t voxels, int refinePasses = 0);
 
 /// Triples of every voxel of `box`, x fastest, then y, then z.
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& analysis, const VoxelBox& box,

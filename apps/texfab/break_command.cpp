@@ -166,6 +166,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   render::TextureMeshOptions interiorCost;  // the cut faces' atlas costs as a solid texture job's
   interiorCost.mode = render::TextureMode::Solid;
   interiorCost.atlas = o.interior.atlas;
+  interiorCost.solid = o.interior.solid;
   checkMemory(render::textureMeshMemoryBytes(interiorCost) +
                   (job.exemplar.empty() ? 0.0 : render::textureMeshMemoryBytes(o.outer)),
               "the atlases of the outer and the cut faces");

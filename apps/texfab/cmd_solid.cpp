@@ -129,7 +129,7 @@ std::vector<Vec3> readPoints(const std::string& path, double scale) {
 std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidExemplars&)> prepareVolume(
     const SolidJob& job, Run& run) {
   const int n = job.volume;
-  checkMemory(render::solidVolumeMemoryBytes(n, job.scale), "--volume " + std::to_string(n));
+  checkMemory(render::solidVolumeMemoryBytes(n, job.scale, job.options.refinePasses), "--volume " + std::to_string(n));
   if (!job.raw.empty()) {
     std::error_code ec;
     const auto space = fs::space(fs::absolute(job.raw).parent_path(), ec);
@@ -169,7 +169,7 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
   for (const Vec3& corner : {job.origin, Vec3(job.origin + job.width * job.u), Vec3(job.origin + job.height * job.v),
                              Vec3(job.origin + job.width * job.u + job.height * job.v)})
     checkPosition(corner, job.scale, "--plane");
-  checkMemory(synthesis::synthesizeSolidMemoryBytes(int64_t(job.width) * job.height),
+  checkMemory(synthesis::synthesizeSolidMemoryBytes(int64_t(job.width) * job.height, job.options.refinePasses),
               "a " + std::to_string(job.width) + "x" + std::to_string(job.height) + " plane");
   checkImageWritable(job.output);
   const fs::path out = run.output(job.output);
