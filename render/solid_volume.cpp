@@ -21,18 +21,6 @@ Image solidColorImage(std::span<const Triple> triples, const SolidExemplars& e, 
   return image;
 }
 
-void addLevelStats(std::vector<SolidLevelStats>& total, const SolidSynthesisResult& r) {
-  if (total.empty()) {
-    total = r.levels;
-    return;
-  }
-  for (size_t i = 0; i < r.levels.size() && i < total.size(); ++i) {
-    total[i].voxels += r.levels[i].voxels;
-    total[i].corrections += r.levels[i].corrections;
-    total[i].seconds += r.levels[i].seconds;
-  }
-}
-
 SolidVolumeResult synthesizeSolidVolume(const SolidAnalysis& analysis, const SolidExemplars& e, int n, double scale,
                                         const SolidSynthesisOptions& options, SolidLevelCache* cache,
                                         const std::function<void(const Image&)>& slice, const Context& ctx) {

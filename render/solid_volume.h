@@ -27,9 +27,6 @@ struct SolidExemplars {
 Image solidColorImage(std::span<const synthesis::Triple> triples, const SolidExemplars& exemplars, int width,
                       int height);
 
-/// Adds the level statistics of `r` to `total` (per level, same schedule).
-void addLevelStats(std::vector<synthesis::SolidLevelStats>& total, const synthesis::SolidSynthesisResult& r);
-
 struct SolidVolumeResult {
   std::vector<synthesis::SolidLevelStats> levels;  ///< summed over slabs, coarsest first
   int64_t requestedVoxels = 0;                     ///< n^3

@@ -50,6 +50,15 @@ public:
     }
     return it->second;
   }
+  /// The voxel at index i of chunk `slot`, and the index (slot * kVoxels + i) of a voxel the grid
+  /// holds.
+  Voxel voxel(size_t slot, int i) const {
+    const GridKey& k = keys_[slot];
+    return {k[0] * kSide + (i & (kSide - 1)), k[1] * kSide + ((i >> kShift) & (kSide - 1)), k[2] * kSide + (i >> (2 * kShift))};
+  }
+  size_t index(const Voxel& v) const {
+    return size_t(find({v.x >> kShift, v.y >> kShift, v.z >> kShift})) * kVoxels + size_t(localIndex(v.x, v.y, v.z));
+  }
   /// The slots of a chunk's 27 neighbours, x fastest (-1: absent).
   std::array<int32_t, 27> neighbours(size_t slot) const {
     std::array<int32_t, 27> out{};
@@ -85,11 +94,10 @@ void dilate(Grid& g, int from, int to, int radius) {
     GridKey lastKey = g.key(0);
     size_t slot = 0;
     for (size_t s = 0; s < chunks; ++s) {
-      const GridKey origin = g.key(s);
       for (int i = 0; i < kVoxels; ++i) {
         if (!mark[s * kVoxels + size_t(i)]) continue;
-        std::array<int64_t, 3> p{origin[0] * kSide + (i & (kSide - 1)), origin[1] * kSide + ((i >> kShift) & (kSide - 1)),
-                                 origin[2] * kSide + (i >> (2 * kShift))};
+        const Voxel v = g.voxel(s, i);
+        std::array<int64_t, 3> p{v.x, v.y, v.z};
         const int64_t centre = p[size_t(axis)];
         for (int64_t t = centre - radius; t <= centre + radius; ++t) {
           p[size_t(axis)] = t;
@@ -329,15 +337,11 @@ SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> 
   }
   for (int phase = 2 * passes; phase >= 1; --phase) dilate(g, phase, phase - 1, phase % 2 == 0 ? kV : kR);
 
-  // Dong et al.'s triples of the whole region.
+  // Dong et al.'s triples of the whole region, listed in the grid's order.
   std::vector<Voxel> region;
   for (size_t slot = 0; slot < g.size(); ++slot)
     for (int i = 0; i < kVoxels; ++i)
-      if (g.phase[slot * kVoxels + size_t(i)] >= 0) {
-        const GridKey& k = g.key(slot);
-        region.push_back({k[0] * kSide + (i & (kSide - 1)), k[1] * kSide + ((i >> kShift) & (kSide - 1)),
-                          k[2] * kSide + (i >> (2 * kShift))});
-      }
+      if (g.phase[slot * kVoxels + size_t(i)] >= 0) region.push_back(g.voxel(slot, i));
   regionStage.finish(std::to_string(region.size()) + " voxels for " + std::to_string(voxels.size()) + " requested");
   SolidSynthesisOptions dong = options;
   dong.refinePasses = 0;
@@ -346,12 +350,11 @@ SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> 
   Stage stage(ctx, "refinement");
   Refiner refiner(a, g);
   State state(g.size() * kVoxels);
-  for (size_t r = 0; r < region.size(); ++r) {
-    const Voxel& v = region[r];
-    const size_t at = size_t(g.find({v.x >> kShift, v.y >> kShift, v.z >> kShift})) * kVoxels + size_t(localIndex(v.x, v.y, v.z));
-    std::copy_n(result.triples[r].begin(), 3, &state.triples[at * 3]);
-    setColour(state, at, refiner.exemplars());
-  }
+  for (size_t at = 0, r = 0; at < g.phase.size(); ++at)
+    if (g.phase[at] >= 0) {
+      std::copy_n(result.triples[r++].begin(), 3, &state.triples[at * 3]);
+      setColour(state, at, refiner.exemplars());
+    }
   region = {};
   result.triples = {};
   Matches matches(g.size() * kVoxels);
@@ -365,7 +368,7 @@ SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> 
   result.distinctVoxels = 0;
   for (size_t i = 0; i < voxels.size(); ++i) {
     const Voxel& v = voxels[i];
-    const size_t at = size_t(g.find({v.x >> kShift, v.y >> kShift, v.z >> kShift})) * kVoxels + size_t(localIndex(v.x, v.y, v.z));
+    const size_t at = g.index(v);
     std::copy_n(&state.triples[at * 3], 3, result.triples[i].begin());
     // The first request of a voxel marks it (phase one above the last vote's).
     result.distinctVoxels += g.phase[at] == int8_t(2 * passes);
@@ -393,13 +396,7 @@ SolidSynthesisResult refineSolidBox(const SolidAnalysis& a, const VoxelBox& box,
         for (int x = 0; x < box.nx; ++x) voxels.push_back({box.x + x, box.y + y, box.z + z});
     const SolidSynthesisResult part = refineSolid(a, voxels, options, cache, ctx);
     std::copy(part.triples.begin(), part.triples.end(), result.triples.begin() + z0 * slice);
-    if (result.levels.empty()) result.levels = part.levels;
-    else
-      for (size_t l = 0; l < part.levels.size(); ++l) {
-        result.levels[l].voxels += part.levels[l].voxels;
-        result.levels[l].corrections += part.levels[l].corrections;
-        result.levels[l].seconds += part.levels[l].seconds;
-      }
+    addLevelStats(result.levels, part);
   }
   result.distinctVoxels = box.count();
   return result;

@@ -756,6 +756,18 @@ double synthesizeSolidMemoryBytes(int64_t voxels, int refinePasses) {
   return double(voxels) * (40.0 + region);
 }
 
+void addLevelStats(std::vector<SolidLevelStats>& total, const SolidSynthesisResult& r) {
+  if (total.empty()) {
+    total = r.levels;
+    return;
+  }
+  for (size_t i = 0; i < r.levels.size() && i < total.size(); ++i) {
+    total[i].voxels += r.levels[i].voxels;
+    total[i].corrections += r.levels[i].corrections;
+    total[i].seconds += r.levels[i].seconds;
+  }
+}
+
 int64_t SolidSynthesisResult::voxelsSynthesized() const {
   int64_t n = 0;
   for (const auto& l : levels) n += l.voxels;

@@ -142,6 +142,9 @@ struct SolidSynthesisResult {
   int64_t voxelsSynthesized() const;     ///< sum over levels
 };
 
+/// Adds the level statistics of `r` to `total` (per level, same schedule; an empty total takes them).
+void addLevelStats(std::vector<SolidLevelStats>& total, const SolidSynthesisResult& r);
+
 /// Final values of coarse levels, kept across requests in 4^3 bricks (a brick may hold only the
 /// voxels a request computed: `valid`; later requests add to it), least recently used evicted
 /// beyond `maxBytes`. Owned by the caller; one cache serves one (analysis, options) pair
