@@ -11,6 +11,7 @@
 #include "render/image/parallel.h"
 #include "render/image/text.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/refine_solid.h"
 #include "synthesis/synthesize_surface.h"
 
 #include <algorithm>
@@ -82,9 +83,9 @@ void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
 }
 
 double textureMeshMemoryBytes(const TextureMeshOptions& o) {
-  // Solid refinement: the bundled elephant's peak grew from 1.2 to 5.7 GB with one pass (2048^2).
-  const double bytesPerTexel = o.mode == TextureMode::Solid ? 440.0 + 1100.0 * o.solid.refinePasses : 220.0;
-  return double(o.atlas.pack.width) * double(o.atlas.pack.height) * bytesPerTexel;
+  const double texels = double(o.atlas.pack.width) * double(o.atlas.pack.height);
+  if (o.mode != TextureMode::Solid) return texels * 220.0;
+  return texels * 440.0 + synthesis::refineSolidMemoryBytes(int64_t(texels), o.solid.refinePasses);
 }
 
 namespace {

@@ -85,7 +85,8 @@ void checkCompanionMaps(const TextureExemplar& exemplar, TextureMode mode);
 
 /// Peak memory of textureMesh at the options' atlas size and mode, in bytes. Measured at 2048^2 on
 /// an 89K-triangle mesh (texture_bench): 218 bytes per atlas texel in surface mode, 440 in solid
-/// mode (lazy synthesis of about one voxel per texel).
+/// mode (lazy synthesis of about one voxel per texel), plus refinement's slab
+/// (synthesis::refineSolidMemoryBytes).
 double textureMeshMemoryBytes(const TextureMeshOptions& options);
 
 /// Stages reported through ctx: atlas, tangent field (surface mode), fields, synthesis (solid mode:

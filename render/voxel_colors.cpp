@@ -10,14 +10,7 @@
 
 namespace texfab::render {
 
-namespace {
-
-} // namespace
-
 // ---- the solid texture ---------------------------------------------------------------------------
-
-int64_t& coordinate(synthesis::Voxel& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
-int64_t coordinate(const synthesis::Voxel& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
 
 // The distinct solid voxels that the prepared layers' shell voxels sample, and their colours,
 // sorted with the model axis along the print's rows fastest (the grid's modelAxisOfX: a run of a
@@ -29,7 +22,7 @@ struct SolidVoxelColors::Samples {
 
   bool less(const synthesis::Voxel& a, const synthesis::Voxel& b) const {
     for (int axis : order)
-      if (coordinate(a, axis) != coordinate(b, axis)) return coordinate(a, axis) < coordinate(b, axis);
+      if (a[axis] != b[axis]) return a[axis] < b[axis];
     return false;
   }
 };
@@ -78,7 +71,7 @@ void SolidVoxelColors::prepare(std::span<const geometry::LayerSpans> layers, con
   for (const geometry::LayerSpans& layer : layers)
     for (int r = 0; r < layer.rows(); ++r) {
       const synthesis::Voxel row = solidVoxel(0, grid_.height - 1 - r, layer.layer);
-      const int64_t slow[2] = {coordinate(row, next.order[0]), coordinate(row, next.order[1])};
+      const int64_t slow[2] = {row[next.order[0]], row[next.order[1]]};
       for (const geometry::VoxelSpan& s : layer.row(r)) {
         if (!s.shell) continue;
         if (contiguous) {
@@ -98,10 +91,10 @@ void SolidVoxelColors::prepare(std::span<const geometry::LayerSpans> layers, con
          ++i)
       merged.hi = std::max(merged.hi, runs[i].hi);
     synthesis::Voxel v;
-    coordinate(v, next.order[0]) = merged.slow[0];
-    coordinate(v, next.order[1]) = merged.slow[1];
+    v[next.order[0]] = merged.slow[0];
+    v[next.order[1]] = merged.slow[1];
     for (int64_t f = merged.lo; f <= merged.hi; ++f) {
-      coordinate(v, fast) = f;
+      v[fast] = f;
       next.voxels.push_back(v);
     }
   }
@@ -124,8 +117,8 @@ void SolidVoxelColors::colors(int layer, int y, int begin, int end, float* rgba)
                              [&](const auto& a, const auto& b) { return s.less(a, b); });
   for (int x = begin; x < end; ++x, rgba += 4) {
     const int64_t along = fastCoordinate(x);
-    while (at + 1 < s.voxels.end() && coordinate(*at, fast) < along) ++at;
-    assert(at != s.voxels.end() && coordinate(*at, fast) == along && "a voxel outside the prepared shell");
+    while (at + 1 < s.voxels.end() && (*at)[fast] < along) ++at;
+    assert(at != s.voxels.end() && (*at)[fast] == along && "a voxel outside the prepared shell");
     const float* c = &s.rgb[3 * size_t(at - s.voxels.begin())];
     std::copy(c, c + 3, rgba);
     rgba[3] = 1.0f;

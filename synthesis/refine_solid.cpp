@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
+#include <cstdlib>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
@@ -28,7 +30,7 @@ constexpr int kTaps = (2 * kR + 1) * (2 * kR + 1);
 constexpr int kMaxSum = 3 * 255;  // colours at 3x the 8-bit scale: a voxel's is the sum of its three
 constexpr uint64_t kWeightOne = uint64_t(1) << 40;  // weights < 2^31: 32 bits each
 constexpr int kErrorFloor = 512;
-static_assert(kR >= 1 && kR + 1 <= kSide && kV <= kSide);
+static_assert(kR >= 1 && kR + 1 <= kSide && kV < kSide);  // dilations shift by less than a chunk
 
 int localIndex(int64_t x, int64_t y, int64_t z) {
   return int(((z & (kSide - 1)) * kSide + (y & (kSide - 1))) * kSide + (x & (kSide - 1)));
@@ -83,37 +85,74 @@ int64_t voxelAt(const std::array<int32_t, 27>& nb, int x, int y, int z) {
   return slot < 0 ? -1 : int64_t(slot) * kVoxels + localIndex(x, y, z);
 }
 
+// A chunk's voxels as bits: bit y * kSide + x of word z.
+using Bits = std::array<uint64_t, kSide>;
+static_assert(kSide * kSide == 64);
+
+bool any(const Bits& b) {
+  return std::any_of(b.begin(), b.end(), [](uint64_t w) { return w != 0; });
+}
+
+// The bits of a chunk moved by t voxels along `axis` (0 < |t| < kSide): those that stay in the
+// chunk, and those that land in its neighbour on that side.
+std::pair<Bits, Bits> shifted(const Bits& b, int axis, int t) {
+  constexpr uint64_t kEveryRow = 0x0101010101010101ull;
+  const int s = std::abs(t);
+  Bits stay{}, spill{};
+  for (int z = 0; z < kSide; ++z) {
+    const uint64_t w = b[size_t(z)];
+    if (axis == 0) {  // within each row's byte
+      const uint64_t low = ((uint64_t(1) << s) - 1) * kEveryRow, high = ~(((uint64_t(1) << (kSide - s)) - 1) * kEveryRow);
+      stay[size_t(z)] = t > 0 ? (w << s) & ~low : (w >> s) & ~high;
+      spill[size_t(z)] = t > 0 ? (w >> (kSide - s)) & low : (w << (kSide - s)) & high;
+    } else if (axis == 1) {  // whole rows
+      stay[size_t(z)] = t > 0 ? w << (kSide * s) : w >> (kSide * s);
+      spill[size_t(z)] = t > 0 ? w >> (64 - kSide * s) : w << (64 - kSide * s);
+    } else {  // whole words
+      const int to = z + t;
+      (to >= 0 && to < kSide ? stay[size_t(to)] : spill[size_t(to < 0 ? to + kSide : to - kSide)]) = w;
+    }
+  }
+  return {stay, spill};
+}
+
 // Every voxel whose phase is at least `from` lends phase `to` (if higher than its own) to each
-// voxel within `radius` per axis: three one-axis dilations.
+// voxel within `radius` per axis: three one-axis dilations of the chunks' bits.
 void dilate(Grid& g, int from, int to, int radius) {
-  std::vector<uint8_t> mark(g.size() * kVoxels);
-  for (size_t i = 0; i < mark.size(); ++i) mark[i] = g.phase[i] >= from;
+  std::vector<Bits> mark(g.size());
+  for (size_t slot = 0; slot < g.size(); ++slot)
+    for (int i = 0; i < kVoxels; ++i)
+      if (g.phase[slot * kVoxels + size_t(i)] >= from) mark[slot][size_t(i >> 6)] |= uint64_t(1) << (i & 63);
   for (int axis = 0; axis < 3; ++axis) {
-    std::vector<uint8_t> next(mark.size(), 0);
-    const size_t chunks = g.size();
-    GridKey lastKey = g.key(0);
-    size_t slot = 0;
-    for (size_t s = 0; s < chunks; ++s) {
-      for (int i = 0; i < kVoxels; ++i) {
-        if (!mark[s * kVoxels + size_t(i)]) continue;
-        const Voxel v = g.voxel(s, i);
-        std::array<int64_t, 3> p{v.x, v.y, v.z};
-        const int64_t centre = p[size_t(axis)];
-        for (int64_t t = centre - radius; t <= centre + radius; ++t) {
-          p[size_t(axis)] = t;
-          const GridKey key{p[0] >> kShift, p[1] >> kShift, p[2] >> kShift};
-          if (key != lastKey) {
-            lastKey = key, slot = g.get(key);
-            if (next.size() < g.size() * kVoxels) next.resize(g.size() * kVoxels, 0);
-          }
-          next[slot * kVoxels + size_t(localIndex(p[0], p[1], p[2]))] = 1;
-        }
+    std::vector<Bits> next(mark.size());
+    const size_t chunks = mark.size();  // chunks added below only receive
+    for (size_t slot = 0; slot < chunks; ++slot) {
+      if (!any(mark[slot])) continue;
+      Bits stay = mark[slot];
+      std::array<Bits, 2> spill{};  // to the neighbour below, above
+      for (int t = -radius; t <= radius; ++t) {
+        if (t == 0) continue;
+        const auto [in, out] = shifted(mark[slot], axis, t);
+        for (int z = 0; z < kSide; ++z) stay[size_t(z)] |= in[size_t(z)], spill[t > 0][size_t(z)] |= out[size_t(z)];
+      }
+      for (int z = 0; z < kSide; ++z) next[slot][size_t(z)] |= stay[size_t(z)];
+      for (int side = 0; side < 2; ++side) {
+        if (!any(spill[size_t(side)])) continue;
+        GridKey key = g.key(slot);
+        key[size_t(axis)] += side ? 1 : -1;
+        const size_t neighbour = g.get(key);
+        if (neighbour >= next.size()) next.resize(g.size()), mark.resize(g.size());
+        for (int z = 0; z < kSide; ++z) next[neighbour][size_t(z)] |= spill[size_t(side)][size_t(z)];
       }
     }
     mark = std::move(next);
   }
-  for (size_t i = 0; i < mark.size(); ++i)
-    if (mark[i]) g.phase[i] = std::max(g.phase[i], int8_t(to));
+  for (size_t slot = 0; slot < mark.size(); ++slot)
+    for (int z = 0; z < kSide; ++z)
+      for (uint64_t w = mark[slot][size_t(z)]; w != 0; w &= w - 1) {
+        int8_t& phase = g.phase[slot * kVoxels + size_t(z) * 64 + size_t(std::countr_zero(w))];
+        phase = std::max(phase, int8_t(to));
+      }
 }
 
 // One exemplar at the finest level, as the passes read it: colours padded by kR (wrapped or
@@ -321,12 +360,10 @@ private:
   std::array<Exemplar, 3> ex_;
 };
 
-} // namespace
-
-SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
-                                 const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx) {
+// Refines one slab of a request: every requested voxel's region at once.
+SolidSynthesisResult refineSlab(const SolidAnalysis& a, std::span<const Voxel> voxels,
+                                const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx) {
   const int passes = options.refinePasses;
-  if (passes < 1) throw Error("refineSolid needs at least one pass");
   // Phases of every voxel: the requested ones take part in the last vote; each phase reads the
   // one before within its radius (a vote the searches within kV, a search the votes within kR).
   Stage regionStage(ctx, "refinement region");
@@ -378,12 +415,62 @@ SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> 
   return result;
 }
 
+// Slabs are at least 4 margins thick, so that the margins add at most half the work.
+int64_t minSlabDepth(int passes) { return 4 * refineMargin(passes); }
+
+} // namespace
+
+double refineSolidMemoryBytes(int64_t voxels, int passes) {
+  if (passes < 1) return 0;
+  // A slab holds up to a quarter slab more than kRefineSlabVoxels, and the end of a layer.
+  return double(std::min<int64_t>(voxels, kRefineSlabVoxels * 3 / 2)) * 140.0 * (1 + 2 * refineMargin(passes));
+}
+
+SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
+                                 const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx,
+                                 int64_t slabVoxels) {
+  if (options.refinePasses < 1) throw Error("refineSolid needs at least one pass");
+  if (int64_t(voxels.size()) <= slabVoxels) return refineSlab(a, voxels, options, cache, ctx);
+  // The requests ordered along the axis of their largest extent (the index, below 2^32, in the low
+  // bits: stable), cut into slabs between layers across it.
+  std::array<int64_t, 3> low{}, high{};
+  low.fill(std::numeric_limits<int64_t>::max()), high.fill(std::numeric_limits<int64_t>::min());
+  for (const Voxel& v : voxels)
+    for (int c = 0; c < 3; ++c) {
+      low[size_t(c)] = std::min(low[size_t(c)], v[c]);
+      high[size_t(c)] = std::max(high[size_t(c)], v[c]);
+    }
+  int axis = 2;
+  for (int c = 1; c >= 0; --c)
+    if (high[size_t(c)] - low[size_t(c)] > high[size_t(axis)] - low[size_t(axis)]) axis = c;
+  std::vector<uint64_t> order(voxels.size());
+  for (size_t i = 0; i < voxels.size(); ++i) order[i] = uint64_t(voxels[i][axis] + kMaxSolidPosition) << 32 | i;
+  std::sort(order.begin(), order.end());
+  auto layer = [&](size_t k) { return int64_t(order[k] >> 32); };
+  auto fills = [&](size_t b, size_t e) {  // the slab [b, e) needs no more (the rest: at least a quarter slab)
+    return int64_t(e - b) >= slabVoxels && layer(e) >= layer(b) + minSlabDepth(options.refinePasses) &&
+           layer(e) != layer(e - 1) && int64_t(order.size() - e) >= slabVoxels / 4;
+  };
+  SolidSynthesisResult result;
+  result.triples.resize(voxels.size());
+  std::vector<Voxel> part;
+  for (size_t b = 0, e = 0; b < order.size(); b = e) {
+    while (e < order.size() && !fills(b, e)) ++e;
+    part.clear();
+    for (size_t k = b; k < e; ++k) part.push_back(voxels[uint32_t(order[k])]);
+    SolidSynthesisResult slab = refineSlab(a, part, options, cache, ctx);
+    for (size_t k = b; k < e; ++k) result.triples[uint32_t(order[k])] = slab.triples[k - b];
+    addLevelStats(result.levels, slab);
+    result.distinctVoxels += slab.distinctVoxels;  // a voxel's requests share a layer, so a slab
+  }
+  return result;
+}
+
 SolidSynthesisResult refineSolidBox(const SolidAnalysis& a, const VoxelBox& box, const SolidSynthesisOptions& options,
-                                    SolidLevelCache* cache, const Context& ctx) {
-  // In slabs of about 2^20 voxels, each a list of voxels (bounded memory; the values do not depend
-  // on the slabs), but at least 4 margins thick, so that the margins add at most half the work.
+                                    SolidLevelCache* cache, const Context& ctx, int64_t slabVoxels) {
+  if (options.refinePasses < 1) throw Error("refineSolid needs at least one pass");
   const int64_t slice = int64_t(box.nx) * box.ny;
-  const int64_t thick = std::max<int64_t>((int64_t(1) << 20) / slice, 4 * refineMargin(options.refinePasses));
+  const int64_t thick = std::max<int64_t>(slabVoxels / slice, minSlabDepth(options.refinePasses));
   const int depth = int(std::min<int64_t>(thick, box.nz));
   SolidSynthesisResult result;
   result.triples.resize(size_t(box.count()));
@@ -394,7 +481,7 @@ SolidSynthesisResult refineSolidBox(const SolidAnalysis& a, const VoxelBox& box,
     for (int z = z0; z < z0 + nz; ++z)
       for (int y = 0; y < box.ny; ++y)
         for (int x = 0; x < box.nx; ++x) voxels.push_back({box.x + x, box.y + y, box.z + z});
-    const SolidSynthesisResult part = refineSolid(a, voxels, options, cache, ctx);
+    const SolidSynthesisResult part = refineSlab(a, voxels, options, cache, ctx);
     std::copy(part.triples.begin(), part.triples.end(), result.triples.begin() + z0 * slice);
     addLevelStats(result.levels, part);
   }

@@ -49,16 +49,28 @@ inline constexpr int kRefineGain16 = 24;       ///< the search targets' gain, in
 /// Voxels, per axis, that `passes` refinement passes read around a voxel.
 constexpr int refineMargin(int passes) { return passes * (kRefineSearchRadius + kRefineVoteRadius); }
 
-/// Triples of `voxels` after options.refinePasses passes (>= 1): Dong et al.'s triples of every
-/// voxel within refineMargin (synthesizeSolid without refinement: any backend, the cache), then the
-/// passes on the CPU. Level statistics are those of that synthesis. Stages: "refinement region"
-/// (the region's masks), those of synthesis, then "refinement".
-SolidSynthesisResult refineSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
-                                 const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx);
+/// Voxels a request refines at once: larger requests refine in slabs of about this many requested
+/// voxels (bounded memory), across the axis of their largest extent (a box's: z), cut between
+/// layers and at least 4 margins thick (the margins add at most half the work). The values do not
+/// depend on the slabs.
+inline constexpr int64_t kRefineSlabVoxels = int64_t(1) << 20;
 
-/// The same for every voxel of `box`, x fastest, then y, then z (synthesizeSolidBox), refined in
-/// slabs of about 2^20 voxels, at least 4 margins thick.
+/// Peak memory that refining `voxels` requested voxels adds to their synthesis, in bytes: one
+/// slab's region (a surface's: about 13 voxels per requested one at one pass, 1,250 bytes per
+/// requested voxel on the bundled elephant's texture job).
+double refineSolidMemoryBytes(int64_t voxels, int passes);
+
+/// Triples of `voxels` after options.refinePasses passes (>= 1): per slab, Dong et al.'s triples of
+/// every voxel within refineMargin (synthesizeSolid without refinement: any backend, the cache),
+/// then the passes on the CPU. Level statistics are those of that synthesis. Stages, per slab:
+/// "refinement region" (the region's masks), those of synthesis, then "refinement".
+SolidSynthesisResult refineSolid(const SolidAnalysis& analysis, std::span<const Voxel> voxels,
+                                 const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx,
+                                 int64_t slabVoxels = kRefineSlabVoxels);
+
+/// The same for every voxel of `box`, x fastest, then y, then z (synthesizeSolidBox).
 SolidSynthesisResult refineSolidBox(const SolidAnalysis& analysis, const VoxelBox& box,
-                                    const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx);
+                                    const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx,
+                                    int64_t slabVoxels = kRefineSlabVoxels);
 
 } // namespace texfab::synthesis

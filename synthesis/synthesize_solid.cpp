@@ -752,8 +752,7 @@ void SolidSynthesisOptions::validate() const {
 }
 
 double synthesizeSolidMemoryBytes(int64_t voxels, int refinePasses) {
-  const double region = refinePasses > 0 ? double(1 + 2 * refineMargin(refinePasses)) * 100.0 : 0.0;
-  return double(voxels) * (40.0 + region);
+  return double(voxels) * 40.0 + refineSolidMemoryBytes(voxels, refinePasses);
 }
 
 void addLevelStats(std::vector<SolidLevelStats>& total, const SolidSynthesisResult& r) {

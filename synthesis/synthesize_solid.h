@@ -59,6 +59,8 @@ namespace texfab::synthesis {
 /// A finest-level voxel position. |x|, |y|, |z| <= kMaxSolidPosition.
 struct Voxel {
   int64_t x = 0, y = 0, z = 0;
+  int64_t& operator[](int axis) { return axis == 0 ? x : axis == 1 ? y : z; }
+  int64_t operator[](int axis) const { return axis == 0 ? x : axis == 1 ? y : z; }
   bool operator==(const Voxel&) const = default;
 };
 inline constexpr int64_t kMaxSolidPosition = int64_t(1) << 30;
@@ -110,7 +112,7 @@ struct SolidSynthesisOptions {
   /// Passes of slice refinement after the finest level (Kopf et al. 2007's search and vote,
   /// refine_solid.h); 0 (default): none, the paper's triples. Each pass makes a voxel read its
   /// neighbours within 4 voxels, so a request synthesizes a region 8 voxels thicker per pass, and
-  /// a pass costs about 10x the default synthesis of a 128^3 volume. Ten GIMP patterns, contrast /
+  /// one pass makes a 128^3 volume about 7x slower. Ten GIMP patterns, contrast /
   /// 7x7 fidelity over the 2-D synthesis': default 0.63 / 1.56; one pass after a contrast gain of 2
   /// 0.80 / 1.58 (the gain alone 0.88 / 1.89). [0, 4]
   /// Figures: docs/measurements.md#slice-refinement.
@@ -197,8 +199,8 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& analysis, std::span<co
                                      const Context& ctx = {});
 
 /// Peak memory of synthesizeSolid for `voxels` requested voxels (a plane, points), in bytes: the
-/// request, its triples and colours, and the finest level's masks; with refinement passes, a thin
-/// request's region (refine_solid.h) at about 100 bytes per voxel.
+/// request, its triples and colours, and the finest level's masks; with refinement passes, one
+/// slab's region (refineSolidMemoryBytes).
 double synthesizeSolidMemoryBytes(int64_t voxels, int refinePasses = 0);
 
 /// Triples of every voxel of `box`, x fastest, then y, then z.

@@ -16,6 +16,7 @@
 #include "render/slice_writer.h"
 #include "render/texture_mesh.h"
 #include "render/voxel_colors.h"
+#include "synthesis/refine_solid.h"
 
 #include <algorithm>
 #include <memory>
@@ -141,7 +142,13 @@ void runSlice(SliceJob& job) {
   const auto [first, count] = layerRange(job, grid.layers);
   job.slice.firstLayer = first;
   job.slice.layerCount = count;
-  checkMemory(double(render::sliceMemoryBytes(grid, job.slice, job.common.threads > 0 ? job.common.threads : 16)),
+  // A batch's solid voxels are at most its print voxels; refinement's slab is the part that grows.
+  const int64_t batchVoxels = int64_t(grid.width) * grid.height * job.slice.batchLayers;
+  const double refinement = exemplar && job.mode == ColorMode::Solid
+                                ? synthesis::refineSolidMemoryBytes(batchVoxels, job.refinePasses)
+                                : 0.0;
+  checkMemory(double(render::sliceMemoryBytes(grid, job.slice, job.common.threads > 0 ? job.common.threads : 16)) +
+                  refinement,
               "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
                   " voxels with its batch (lower --dpi or the size)");
   load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle") + "; print " +

@@ -8,6 +8,7 @@
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"
+#include "synthesis/refine_solid.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 #include "test_support.h"
@@ -721,6 +722,27 @@ TEST(SolidRefinement, AnySubsetAgreesWithTheBox) {
   size_t changed = 0;
   for (size_t i = 0; i < dong.triples.size(); ++i) changed += dong.triples[i] != whole.triples[i];
   EXPECT_GT(changed, dong.triples.size() / 2);
+}
+
+// Large requests refine in slabs along z (bounded memory); the slabs change no value, neither in a
+// box nor in a shuffled list with repeats, and a voxel requested twice is counted once.
+TEST(SolidRefinement, SlabsChangeNoValue) {
+  const SolidAnalysis& a = analysis32();
+  SolidSynthesisOptions o;
+  o.seed = 4;
+  o.refinePasses = 1;
+  const VoxelBox box{3, -7, -20, 9, 7, 40};  // slabs of 16 layers (4 margins) at 100 voxels
+  const Context ctx{.threads = 2};
+  const SolidSynthesisResult whole = refineSolidBox(a, box, o, nullptr, ctx, box.count());
+  EXPECT_EQ(refineSolidBox(a, box, o, nullptr, ctx, 100).triples, whole.triples);
+
+  std::vector<Voxel> list = boxVoxels(box);
+  uint32_t state = 5;
+  for (size_t i = list.size(); i > 1; --i) std::swap(list[i - 1], list[(state = pcgHash(state)) % i]);
+  list.insert(list.end(), list.begin(), list.begin() + 300);
+  const SolidSynthesisResult slabs = refineSolid(a, list, o, nullptr, ctx, 100);
+  EXPECT_EQ(slabs.distinctVoxels, box.count());
+  for (size_t i = 0; i < list.size(); ++i) ASSERT_EQ(slabs.triples[i], fromBox(whole, box, list[i])) << i;
 }
 
 // Three different exemplars that do not tile: every refined coordinate stays in its level's valid
