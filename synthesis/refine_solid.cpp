@@ -451,17 +451,22 @@ SolidSynthesisResult refineSolid(const SolidAnalysis& a, std::span<const Voxel> 
     return int64_t(e - b) >= slabVoxels && layer(e) >= layer(b) + minSlabDepth(options.refinePasses) &&
            layer(e) != layer(e - 1) && int64_t(order.size() - e) >= slabVoxels / 4;
   };
+  std::vector<size_t> cuts{0};
+  for (size_t e = 0; e < order.size(); cuts.push_back(e))
+    while (e < order.size() && !fills(cuts.back(), e)) ++e;
   SolidSynthesisResult result;
   result.triples.resize(voxels.size());
   std::vector<Voxel> part;
-  for (size_t b = 0, e = 0; b < order.size(); b = e) {
-    while (e < order.size() && !fills(b, e)) ++e;
+  for (size_t s = 0; s + 1 < cuts.size(); ++s) {
+    const size_t b = cuts[s], e = cuts[s + 1];
+    Stage stage(ctx, "refinement slab " + std::to_string(s + 1) + "/" + std::to_string(cuts.size() - 1));
     part.clear();
     for (size_t k = b; k < e; ++k) part.push_back(voxels[uint32_t(order[k])]);
-    SolidSynthesisResult slab = refineSlab(a, part, options, cache, ctx);
+    SolidSynthesisResult slab = refineSlab(a, part, options, cache, stage.inner());
     for (size_t k = b; k < e; ++k) result.triples[uint32_t(order[k])] = slab.triples[k - b];
     addLevelStats(result.levels, slab);
     result.distinctVoxels += slab.distinctVoxels;  // a voxel's requests share a layer, so a slab
+    stage.finish(std::to_string(e - b) + " requested voxels");
   }
   return result;
 }
@@ -472,18 +477,25 @@ SolidSynthesisResult refineSolidBox(const SolidAnalysis& a, const VoxelBox& box,
   const int64_t slice = int64_t(box.nx) * box.ny;
   const int64_t thick = std::max<int64_t>(slabVoxels / slice, minSlabDepth(options.refinePasses));
   const int depth = int(std::min<int64_t>(thick, box.nz));
-  SolidSynthesisResult result;
-  result.triples.resize(size_t(box.count()));
+  const int slabs = (box.nz + depth - 1) / depth;
   std::vector<Voxel> voxels;
-  for (int z0 = 0; z0 < box.nz; z0 += depth) {
-    const int nz = std::min(depth, box.nz - z0);
+  auto layers = [&](int z0, int nz) {  // the voxels of layers [z0, z0 + nz), in the box's order
     voxels.clear();
     for (int z = z0; z < z0 + nz; ++z)
       for (int y = 0; y < box.ny; ++y)
         for (int x = 0; x < box.nx; ++x) voxels.push_back({box.x + x, box.y + y, box.z + z});
-    const SolidSynthesisResult part = refineSlab(a, voxels, options, cache, ctx);
+    return std::span<const Voxel>(voxels);
+  };
+  if (slabs == 1) return refineSlab(a, layers(0, box.nz), options, cache, ctx);
+  SolidSynthesisResult result;
+  result.triples.resize(size_t(box.count()));
+  for (int z0 = 0; z0 < box.nz; z0 += depth) {
+    const int nz = std::min(depth, box.nz - z0);
+    Stage stage(ctx, "refinement slab " + std::to_string(z0 / depth + 1) + "/" + std::to_string(slabs));
+    const SolidSynthesisResult part = refineSlab(a, layers(z0, nz), options, cache, stage.inner());
     std::copy(part.triples.begin(), part.triples.end(), result.triples.begin() + z0 * slice);
     addLevelStats(result.levels, part);
+    stage.finish(std::to_string(nz) + " layers");
   }
   result.distinctVoxels = box.count();
   return result;
