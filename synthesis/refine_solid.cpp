@@ -18,9 +18,10 @@
 namespace texfab::synthesis {
 namespace {
 
-// The refined region lives in sparse 8^3 chunks. Each voxel records the last phase it takes part
-// in: phase 2p - 1 is the search of pass p, phase 2p its vote (phase 0: Dong et al.'s triples),
-// -1 none. Every radius is at most 8, so a chunk's reads stay within its 27 neighbours.
+// The refined region lives in sparse 8^3 chunks. Each voxel records the last pass whose vote it
+// takes part in (0: Dong et al.'s triples only, -1: outside the region), and per axis the last pass
+// whose search matches its slice across that axis (0: none). Every radius is less than 8, so a
+// chunk's reads stay within its 27 neighbours.
 constexpr int kShift = 3;
 constexpr int kSide = 1 << kShift;
 constexpr int kVoxels = kSide * kSide * kSide;
@@ -48,7 +49,8 @@ public:
     const auto [it, added] = slots_.try_emplace(k, uint32_t(keys_.size()));
     if (added) {
       keys_.push_back(k);
-      phase.resize(keys_.size() * kVoxels, -1);
+      pass.resize(keys_.size() * kVoxels, -1);
+      searched.resize(keys_.size() * kVoxels);
     }
     return it->second;
   }
@@ -71,7 +73,8 @@ public:
     return out;
   }
 
-  std::vector<int8_t> phase;  // size() * kVoxels
+  std::vector<int8_t> pass;                     // size() * kVoxels
+  std::vector<std::array<int8_t, 3>> searched;  // size() * kVoxels
 
 private:
   std::unordered_map<GridKey, uint32_t, GridKeyHash> slots_;
@@ -116,14 +119,20 @@ std::pair<Bits, Bits> shifted(const Bits& b, int axis, int t) {
   return {stay, spill};
 }
 
-// Every voxel whose phase is at least `from` lends phase `to` (if higher than its own) to each
-// voxel within `radius` per axis: three one-axis dilations of the chunks' bits.
-void dilate(Grid& g, int from, int to, int radius) {
+// The voxels of the grid where `pred(index)` holds, as bits.
+template <class Pred> std::vector<Bits> select(const Grid& g, Pred&& pred) {
   std::vector<Bits> mark(g.size());
   for (size_t slot = 0; slot < g.size(); ++slot)
     for (int i = 0; i < kVoxels; ++i)
-      if (g.phase[slot * kVoxels + size_t(i)] >= from) mark[slot][size_t(i >> 6)] |= uint64_t(1) << (i & 63);
+      if (pred(slot * kVoxels + size_t(i))) mark[slot][size_t(i >> 6)] |= uint64_t(1) << (i & 63);
+  return mark;
+}
+
+// `mark` dilated by `radius` along every axis but `across` (the slices across that axis): one-axis
+// dilations of the chunks' bits. Chunks the dilation reaches join the grid.
+void dilate(Grid& g, std::vector<Bits>& mark, int radius, int across) {
   for (int axis = 0; axis < 3; ++axis) {
+    if (axis == across) continue;
     std::vector<Bits> next(mark.size());
     const size_t chunks = mark.size();  // chunks added below only receive
     for (size_t slot = 0; slot < chunks; ++slot) {
@@ -147,12 +156,36 @@ void dilate(Grid& g, int from, int to, int radius) {
     }
     mark = std::move(next);
   }
+  mark.resize(g.size());
+}
+
+// fn(index) for every voxel of `mark`.
+template <class Fn> void forEachBit(const std::vector<Bits>& mark, Fn&& fn) {
   for (size_t slot = 0; slot < mark.size(); ++slot)
     for (int z = 0; z < kSide; ++z)
-      for (uint64_t w = mark[slot][size_t(z)]; w != 0; w &= w - 1) {
-        int8_t& phase = g.phase[slot * kVoxels + size_t(z) * 64 + size_t(std::countr_zero(w))];
-        phase = std::max(phase, int8_t(to));
-      }
+      for (uint64_t w = mark[slot][size_t(z)]; w != 0; w &= w - 1)
+        fn(slot * kVoxels + size_t(z) * 64 + size_t(std::countr_zero(w)));
+}
+
+// The region of each pass, from the requested voxels (their vote: pass `passes`) down. The vote of
+// pass p at a voxel reads the axis-q matches of its neighbours within kV in its slice across q, so
+// axis q is searched at pass p there; each such search reads the colours within kR in the same
+// slice, whose voxels therefore take part in the vote of pass p - 1 (0: Dong et al.'s triples).
+void markRegion(Grid& g, int passes) {
+  for (int p = passes; p >= 1; --p) {
+    const std::vector<Bits> votes = select(g, [&](size_t i) { return g.pass[i] >= p; });
+    std::vector<Bits> reads;
+    for (int q = 0; q < 3; ++q) {
+      std::vector<Bits> search = votes;
+      dilate(g, search, kV, q);
+      forEachBit(search, [&](size_t i) { g.searched[i][size_t(q)] = std::max(g.searched[i][size_t(q)], int8_t(p)); });
+      dilate(g, search, kR, q);
+      reads.resize(g.size());
+      for (size_t slot = 0; slot < search.size(); ++slot)
+        for (int z = 0; z < kSide; ++z) reads[slot][size_t(z)] |= search[slot][size_t(z)];
+    }
+    forEachBit(reads, [&](size_t i) { g.pass[i] = std::max(g.pass[i], int8_t(p - 1)); });
+  }
 }
 
 // One exemplar at the finest level, as the passes read it: colours padded by kR (wrapped or
@@ -236,14 +269,15 @@ class Refiner {
 public:
   Refiner(const SolidAnalysis& a, Grid& g) : g_(g), ex_{exemplarOf(a, 0), exemplarOf(a, 1), exemplarOf(a, 2)} {}
 
-  void search(int phase, const State& s, Matches& m, const Context& ctx) const {
-    forEachVoxel(phase, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
-      for (int q = 0; q < 3; ++q) searchAxis(nb, x, y, z, q, s, m, at);
+  void search(int pass, const State& s, Matches& m, const Context& ctx) const {
+    forEachVoxel(pass - 1, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
+      for (int q = 0; q < 3; ++q)
+        if (g_.searched[at][size_t(q)] >= pass) searchAxis(nb, x, y, z, q, s, m, at);
     });
   }
 
-  void vote(int phase, const Matches& m, State& s, const Context& ctx) const {
-    forEachVoxel(phase, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
+  void vote(int pass, const Matches& m, State& s, const Context& ctx) const {
+    forEachVoxel(pass, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
       voteAt(nb, x, y, z, m, s, at);
     });
   }
@@ -251,15 +285,15 @@ public:
   const std::array<Exemplar, 3>& exemplars() const { return ex_; }
 
 private:
-  // fn(chunk's neighbours, chunk-local x, y, z, index) for every voxel of phase >= `phase`, chunks in
+  // fn(chunk's neighbours, chunk-local x, y, z, index) for every voxel of pass >= `pass`, chunks in
   // parallel.
-  template <class Fn> void forEachVoxel(int phase, const Context& ctx, Fn&& fn) const {
+  template <class Fn> void forEachVoxel(int pass, const Context& ctx, Fn&& fn) const {
     parallelFor(0, int(g_.size()), ctx, [&](int s0, int s1) {
       for (int slot = s0; slot < s1; ++slot) {
         const auto nb = g_.neighbours(size_t(slot));
         for (int i = 0; i < kVoxels; ++i) {
           const size_t at = size_t(slot) * kVoxels + size_t(i);
-          if (g_.phase[at] >= phase) fn(nb, i & (kSide - 1), (i >> kShift) & (kSide - 1), i >> (2 * kShift), at);
+          if (g_.pass[at] >= pass) fn(nb, i & (kSide - 1), (i >> kShift) & (kSide - 1), i >> (2 * kShift), at);
         }
       }
     });
@@ -364,21 +398,18 @@ private:
 SolidSynthesisResult refineSlab(const SolidAnalysis& a, std::span<const Voxel> voxels,
                                 const SolidSynthesisOptions& options, SolidLevelCache* cache, const Context& ctx) {
   const int passes = options.refinePasses;
-  // Phases of every voxel: the requested ones take part in the last vote; each phase reads the
-  // one before within its radius (a vote the searches within kV, a search the votes within kR).
   Stage regionStage(ctx, "refinement region");
   Grid g;
-  for (const Voxel& v : voxels) {
-    g.phase[g.get({v.x >> kShift, v.y >> kShift, v.z >> kShift}) * kVoxels + size_t(localIndex(v.x, v.y, v.z))] =
-        int8_t(2 * passes);
-  }
-  for (int phase = 2 * passes; phase >= 1; --phase) dilate(g, phase, phase - 1, phase % 2 == 0 ? kV : kR);
+  for (const Voxel& v : voxels)
+    g.pass[g.get({v.x >> kShift, v.y >> kShift, v.z >> kShift}) * kVoxels + size_t(localIndex(v.x, v.y, v.z))] =
+        int8_t(passes);
+  markRegion(g, passes);
 
   // Dong et al.'s triples of the whole region, listed in the grid's order.
   std::vector<Voxel> region;
   for (size_t slot = 0; slot < g.size(); ++slot)
     for (int i = 0; i < kVoxels; ++i)
-      if (g.phase[slot * kVoxels + size_t(i)] >= 0) region.push_back(g.voxel(slot, i));
+      if (g.pass[slot * kVoxels + size_t(i)] >= 0) region.push_back(g.voxel(slot, i));
   regionStage.finish(std::to_string(region.size()) + " voxels for " + std::to_string(voxels.size()) + " requested");
   SolidSynthesisOptions dong = options;
   dong.refinePasses = 0;
@@ -387,8 +418,8 @@ SolidSynthesisResult refineSlab(const SolidAnalysis& a, std::span<const Voxel> v
   Stage stage(ctx, "refinement");
   Refiner refiner(a, g);
   State state(g.size() * kVoxels);
-  for (size_t at = 0, r = 0; at < g.phase.size(); ++at)
-    if (g.phase[at] >= 0) {
+  for (size_t at = 0, r = 0; at < g.pass.size(); ++at)
+    if (g.pass[at] >= 0) {
       std::copy_n(result.triples[r++].begin(), 3, &state.triples[at * 3]);
       setColour(state, at, refiner.exemplars());
     }
@@ -396,8 +427,8 @@ SolidSynthesisResult refineSlab(const SolidAnalysis& a, std::span<const Voxel> v
   result.triples = {};
   Matches matches(g.size() * kVoxels);
   for (int p = 1; p <= passes; ++p) {
-    refiner.search(2 * p - 1, state, matches, ctx);
-    refiner.vote(2 * p, matches, state, ctx);
+    refiner.search(p, state, matches, ctx);
+    refiner.vote(p, matches, state, ctx);
     stage.advance(p, passes);
   }
 
@@ -407,9 +438,9 @@ SolidSynthesisResult refineSlab(const SolidAnalysis& a, std::span<const Voxel> v
     const Voxel& v = voxels[i];
     const size_t at = g.index(v);
     std::copy_n(&state.triples[at * 3], 3, result.triples[i].begin());
-    // The first request of a voxel marks it (phase one above the last vote's).
-    result.distinctVoxels += g.phase[at] == int8_t(2 * passes);
-    g.phase[at] = int8_t(2 * passes + 1);
+    // The first request of a voxel marks it (one above the last pass).
+    result.distinctVoxels += g.pass[at] == int8_t(passes);
+    g.pass[at] = int8_t(passes + 1);
   }
   stage.finish(std::to_string(passes) + " passes over " + std::to_string(result.voxelsSynthesized()) + " voxels");
   return result;

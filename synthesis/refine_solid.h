@@ -30,9 +30,10 @@
 // Figures: docs/measurements.md#slice-refinement.
 //
 // Laziness: pass p at a voxel reads pass p - 1 within kRefineSearchRadius + kRefineVoteRadius
-// voxels per axis, so refined voxels are a pure function of position: a request synthesizes Dong
-// et al.'s triples within refineMargin(passes) of every requested voxel, then refines a shrinking
-// region, pass by pass.
+// voxels in its three slices, so refined voxels are a pure function of position: a request
+// synthesizes Dong et al.'s triples of every voxel those reads reach (at most refineMargin(passes)
+// per axis away), then refines a shrinking region, pass by pass, searching each axis only where a
+// vote reads its matches (in the slice across that axis around each voting voxel).
 
 #include "render/image/context.h"
 #include "synthesis/solid_analysis.h"
