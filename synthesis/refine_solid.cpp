@@ -120,7 +120,7 @@ std::pair<Bits, Bits> shifted(const Bits& b, int axis, int t) {
 }
 
 // The voxels of the grid where `pred(index)` holds, as bits.
-template <class Pred> std::vector<Bits> select(const Grid& g, Pred&& pred) {
+template <class Pred> std::vector<Bits> maskWhere(const Grid& g, Pred&& pred) {
   std::vector<Bits> mark(g.size());
   for (size_t slot = 0; slot < g.size(); ++slot)
     for (int i = 0; i < kVoxels; ++i)
@@ -173,7 +173,7 @@ template <class Fn> void forEachBit(const std::vector<Bits>& mark, Fn&& fn) {
 // slice, whose voxels therefore take part in the vote of pass p - 1 (0: Dong et al.'s triples).
 void markRegion(Grid& g, int passes) {
   for (int p = passes; p >= 1; --p) {
-    const std::vector<Bits> votes = select(g, [&](size_t i) { return g.pass[i] >= p; });
+    const std::vector<Bits> votes = maskWhere(g, [&](size_t i) { return g.pass[i] >= p; });
     std::vector<Bits> reads;
     for (int q = 0; q < 3; ++q) {
       std::vector<Bits> search = votes;
