@@ -724,8 +724,9 @@ TEST(SolidRefinement, AnySubsetAgreesWithTheBox) {
   EXPECT_GT(changed, dong.triples.size() / 2);
 }
 
-// Large requests refine in slabs along z (bounded memory); the slabs change no value, neither in a
-// box nor in a shuffled list with repeats, and a voxel requested twice is counted once.
+// Large requests refine in slabs (bounded memory; here across z, the box's longest axis); the
+// slabs change no value, neither in a box nor in a shuffled list with repeats, and a voxel
+// requested twice is counted once.
 TEST(SolidRefinement, SlabsChangeNoValue) {
   const SolidAnalysis& a = analysis32();
   SolidSynthesisOptions o;
