@@ -2,9 +2,9 @@
 #include "synthesis/refine_solid.h"
 
 #include "render/image/parallel.h"
+#include "synthesis/chunk_index.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/hash.h"
 
 #include <algorithm>
 #include <array>
@@ -12,7 +12,6 @@
 #include <cstdlib>
 #include <cstdint>
 #include <limits>
-#include <unordered_map>
 #include <vector>
 
 namespace texfab::synthesis {
@@ -39,25 +38,21 @@ int localIndex(int64_t x, int64_t y, int64_t z) {
 
 class Grid {
 public:
-  size_t size() const { return keys_.size(); }
-  const GridKey& key(size_t slot) const { return keys_[slot]; }
-  int32_t find(const GridKey& k) const {
-    const auto it = slots_.find(k);
-    return it == slots_.end() ? -1 : int32_t(it->second);
-  }
+  size_t size() const { return chunks_.size(); }
+  const GridKey& key(size_t slot) const { return chunks_.keys()[slot]; }
+  int32_t find(const GridKey& k) const { return chunks_.find(k); }
   uint32_t get(const GridKey& k) {
-    const auto [it, added] = slots_.try_emplace(k, uint32_t(keys_.size()));
+    const auto [slot, added] = chunks_.insert(k);
     if (added) {
-      keys_.push_back(k);
-      pass.resize(keys_.size() * kVoxels, -1);
-      searched.resize(keys_.size() * kVoxels);
+      pass.resize(size() * kVoxels, -1);
+      searched.resize(size() * kVoxels);
     }
-    return it->second;
+    return slot;
   }
   /// The voxel at index i of chunk `slot`, and the index (slot * kVoxels + i) of a voxel the grid
   /// holds.
   Voxel voxel(size_t slot, int i) const {
-    const GridKey& k = keys_[slot];
+    const GridKey& k = key(slot);
     return {k[0] * kSide + (i & (kSide - 1)), k[1] * kSide + ((i >> kShift) & (kSide - 1)), k[2] * kSide + (i >> (2 * kShift))};
   }
   size_t index(const Voxel& v) const {
@@ -66,7 +61,7 @@ public:
   /// The slots of a chunk's 27 neighbours, x fastest (-1: absent).
   std::array<int32_t, 27> neighbours(size_t slot) const {
     std::array<int32_t, 27> out{};
-    const GridKey& k = keys_[slot];
+    const GridKey& k = key(slot);
     for (int dz = -1, i = 0; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx, ++i) out[size_t(i)] = find({k[0] + dx, k[1] + dy, k[2] + dz});
@@ -77,8 +72,7 @@ public:
   std::vector<std::array<int8_t, 3>> searched;  // size() * kVoxels
 
 private:
-  std::unordered_map<GridKey, uint32_t, GridKeyHash> slots_;
-  std::vector<GridKey> keys_;
+  ChunkIndex chunks_;
 };
 
 // Index of the voxel at chunk-local (x, y, z), each in [-kSide, 2 kSide), through the chunk's

@@ -6,6 +6,7 @@
 #include "render/image/error.h"
 #include "render/image/parallel.h"
 #include "synthesis/backend.h"
+#include "synthesis/chunk_index.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/cpu/synthesis_kernels.h"
@@ -24,7 +25,6 @@
 #include <set>
 #include <string>
 #include <stdexcept>
-#include <unordered_map>
 
 namespace texfab::synthesis {
 
@@ -125,31 +125,27 @@ template <int Shift = kChunkShift> inline int localIndex(int64_t x, int64_t y, i
 
 // Dense chunks of (2^Shift)^3 voxels, N values of T per voxel, created on demand (filled with
 // `fill`).
-template <class T, int N, int Shift = kChunkShift> struct ChunkStore {
+template <class T, int N, int Shift = kChunkShift> struct ChunkStore : ChunkIndex {
   static constexpr int kVoxels = 1 << (3 * Shift);
   T fill{};
-  std::unordered_map<ChunkKey, uint32_t, GridKeyHash> index;
-  std::vector<ChunkKey> keys;
   std::vector<std::unique_ptr<T[]>> chunks;
 
-  int32_t find(const ChunkKey& k) const {
-    const auto it = index.find(k);
-    return it == index.end() ? -1 : int32_t(it->second);
-  }
   uint32_t get(const ChunkKey& k) {
-    const auto [it, inserted] = index.try_emplace(k, uint32_t(keys.size()));
-    if (inserted) {
-      keys.push_back(k);
+    const auto [slot, added] = insert(k);
+    if (added) {
       chunks.emplace_back(new T[size_t(kVoxels) * N]);
       std::fill_n(chunks.back().get(), size_t(kVoxels) * N, fill);
     }
-    return it->second;
+    return slot;
   }
   T* at(uint32_t slot) { return chunks[slot].get(); }
   const T* at(uint32_t slot) const { return chunks[slot].get(); }
-  size_t size() const { return keys.size(); }
   size_t bytes() const { return chunks.size() * size_t(kVoxels) * N * sizeof(T); }
-  void release() { *this = ChunkStore{fill, {}, {}, {}}; }
+  void release() {
+    const T keep = fill;
+    *this = ChunkStore{};
+    fill = keep;
+  }
 };
 
 // last[v] per voxel (-1 = not needed), see solid_kernels.h.
@@ -262,7 +258,7 @@ struct Engine {
   // Chunk `slot` with a halo, its voxels needed after step t spread to their 3-neighborhoods.
   void spread(const Mask& m, uint32_t slot, int t, int8_t* g) const {
     const int8_t* c = m.at(slot);
-    const ChunkKey key = m.keys[slot];
+    const ChunkKey key = m.keys()[slot];
     std::fill_n(g, kGatheredVoxels, int8_t(-1));
     for (int z = 0; z < kChunk; ++z)
       for (int y = 0; y < kChunk; ++y)
@@ -298,7 +294,7 @@ struct Engine {
     };
     std::vector<Write> writes;
     for (size_t k = 0; k < from.size(); ++k) {
-      const ChunkKey key = m.keys[from[k]];  // by value: m.get() may move m.keys
+      const ChunkKey key = m.keys()[from[k]];  // by value: m.get() may move m.keys()
       int bit = 0;
       forNeighbours([&](int dx, int dy, int dz) {
         if (reach[k] >> bit & 1) writes.push_back({m.get({key[0] + dx, key[1] + dy, key[2] + dz}), uint32_t(k), uint32_t(bit)});
@@ -363,7 +359,7 @@ struct Engine {
     std::vector<Octant> octants;
     for (int s = 0; s < n; ++s) {
       if (need[size_t(s)].none()) continue;
-      const ChunkKey key = child.keys[size_t(s)];
+      const ChunkKey key = child.keys()[size_t(s)];
       Octant oc{uint32_t(s), f.get(key), -1, {}, {}, {}};
       for (int b = 0; b < 8; ++b) {
         const uint64_t needed = brickNeed(need[size_t(s)], b & 1, b >> 1 & 1, b >> 2);
@@ -380,7 +376,7 @@ struct Engine {
     parallelFor(0, int(octants.size()), ctx, [&](int i0, int i1) {
       for (int i = i0; i < i1; ++i) {
         const Octant& oc = octants[size_t(i)];
-        const ChunkKey key = child.keys[oc.child];
+        const ChunkKey key = child.keys()[oc.child];
         uint32_t* fv = f.at(oc.block);
         int8_t* mv = oc.mask >= 0 ? m.at(uint32_t(oc.mask)) : nullptr;
         for (int b = 0; b < 8; ++b)
@@ -415,7 +411,7 @@ struct Engine {
     const auto T = int8_t(steps(li));
     for (size_t s = 0; s < m.size(); ++s) {
       const int8_t* c = m.at(uint32_t(s));
-      const ChunkKey key = m.keys[s];
+      const ChunkKey key = m.keys()[s];
       for (int bz = 0; bz < kChunk; bz += kBrickSide)
         for (int by = 0; by < kChunk; by += kBrickSide)
           for (int bx = 0; bx < kChunk; bx += kBrickSide) {
@@ -448,7 +444,7 @@ struct Engine {
   // Step 0 of one chunk: initialization (coarsest level) or upsampling, then colours.
   void start(int li, uint32_t slot, const cpu::SolidTables& tables, ChunkValues& out) {
     const Mask& m = masks[size_t(li)];
-    const ChunkKey key = m.keys[slot];
+    const ChunkKey key = m.keys()[slot];
     const int8_t* last = m.at(slot);
     const VolumeGrid grid{key[0] * kChunk, key[1] * kChunk, key[2] * kChunk, kChunk, kChunk, kChunk};
     if (li == 0) {
@@ -469,7 +465,7 @@ struct Engine {
   void correct(int li, uint32_t slot, int t, const std::vector<int32_t>& before, std::vector<ChunkValues>& pool,
                const cpu::SolidTables& tables, Gathered& g, ChunkValues& out) {
     const Mask& m = masks[size_t(li)];
-    const ChunkKey key = m.keys[slot];
+    const ChunkKey key = m.keys()[slot];
     const int8_t* last = m.at(slot);
     int lo[3] = {kChunk, kChunk, kChunk}, hi[3] = {0, 0, 0};  // chunk-local box [lo, hi)
     for (int z = 0; z < kChunk; ++z)
@@ -534,7 +530,7 @@ struct Engine {
   template <class Emit> void finishChunk(int li, uint32_t slot, const uint32_t* triples, const Emit& emit) {
     if (li == top()) return emit(slot, triples);
     const Mask& m = masks[size_t(li)];
-    const ChunkKey key = m.keys[slot];
+    const ChunkKey key = m.keys()[slot];
     const int8_t* last = m.at(slot);
     const auto T = int8_t(steps(li));
     for (int bz = 0; bz < kChunk; bz += kBlock)
@@ -591,11 +587,11 @@ struct Engine {
   template <class Emit> void synthesizeLevelOnDevice(int li, const Emit& emit) {
     const Mask& m = masks[size_t(li)];
     vulkan::SolidLevelInput level;
-    level.keys = m.keys;
+    level.keys = m.keys();
     level.last = [&](uint32_t slot) { return m.at(slot); };
     if (li > 0)
       level.parents = [&](uint32_t slot) -> const uint32_t* {
-        const int32_t ps = finals[size_t(li) - 1].find(m.keys[slot]);  // the block of this chunk's parents
+        const int32_t ps = finals[size_t(li) - 1].find(m.keys()[slot]);  // the block of this chunk's parents
         if (ps < 0) throw std::logic_error("lazy solid synthesis: parent values missing");
         return finals[size_t(li) - 1].at(uint32_t(ps));
       };
@@ -626,13 +622,13 @@ struct Engine {
     std::vector<uint32_t> order(n);
     for (size_t s = 0; s < n; ++s) order[s] = uint32_t(s);
     std::sort(order.begin(), order.end(), [&](uint32_t p, uint32_t q) {
-      const ChunkKey &kp = m.keys[p], &kq = m.keys[q];
+      const ChunkKey &kp = m.keys()[p], &kq = m.keys()[q];
       return std::tie(kp[2], kp[1], kp[0]) < std::tie(kq[2], kq[1], kq[0]);
     });
     std::vector<std::pair<size_t, size_t>> layers;
     for (size_t b = 0; b < n;) {
       size_t e = b + 1;
-      while (e < n && m.keys[order[e]][2] == m.keys[order[b]][2]) ++e;
+      while (e < n && m.keys()[order[e]][2] == m.keys()[order[b]][2]) ++e;
       layers.push_back({b, e});
       b = e;
     }
@@ -908,7 +904,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   engine.run([&](uint32_t slot, const uint32_t* values) {
     if (slot >= seeded) return;
     int64_t b[3], e[3];
-    clip(mask.keys[slot], b, e);
+    clip(mask.keys()[slot], b, e);
     for (int64_t z = b[2]; z < e[2]; ++z)
       for (int64_t y = b[1]; y < e[1]; ++y)
         for (int64_t x = b[0]; x < e[0]; ++x) {
