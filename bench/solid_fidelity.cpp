@@ -4,8 +4,9 @@
 // colours their triples by several rules, then prints per rule: luminance contrast ratio (standard
 // deviation of luminance, slice / exemplar), 7x7 neighbourhood fidelity relative to the 2-D
 // synthesis of the same exemplar, the same on both halved (5x5 neighbourhoods: structure at twice
-// the scale, "coarse"), histogram distance, and the shifted-self correlation of 256^2 planes at the
-// exemplar's period. The 2-D synthesis and a random-pixel image are the baselines.
+// the scale, "coarse"), 7x7 completeness relative to the 2-D synthesis', histogram distance, and
+// the shifted-self correlation of 256^2 planes at the exemplar's period. The 2-D synthesis and a
+// random-pixel image are the baselines; a flat and a blurred image ("~flat", "~blurred") give scale.
 //   build/bench/solid_fidelity models/exemplars/marble.png /usr/share/gimp/2.0/patterns/Stone/rock.pat
 // Environment: SIDE (crop), N (plane side), BIG (repetition plane side), JITTER, OFFSET, PASSES, FINEST,
 // INTERLEAVE, MATCH (matchColors 0/1), GAIN (contrastGain), REFINE (refinePasses), STRIPS, KEPT, COHIT, LEVELS, K2D (analysis and
@@ -212,6 +213,7 @@ int main(int argc, char** argv) {
     const SynthesisResult s2 = synthesize2d(a2, {0, 0, n, n}, {}, kCtx);
     const Image im2 = applyCoords(s2.coords, e);
     const double f2 = neighborhoodFidelity(im2, e, fo), h2 = histogramDistance(im2, e);
+    const double k2 = neighborhoodCompleteness(im2, e, fo);
     const Image eh = downsample(e, 2);
     FidelityOptions coarse = fo;
     coarse.radius = 2;
@@ -228,6 +230,31 @@ int main(int argc, char** argv) {
     const double fr = neighborhoodFidelity(rnd, e, fo);
     std::printf("\n%s %dx%d: 2D contrast %.3f fidelity %.4f (random %.4f) hist %.4f shifted %.3f\n", argv[i], e.width,
                 e.height, lumStd(im2) / exStd, f2, fr, h2, sc2);
+    // Two images that lose the exemplar's contrast, for scale: a flat one of its mean colour, and
+    // its 2-D synthesis box-blurred (3x3). Listed with the rules as "~flat" and "~blurred".
+    {
+      Image flat(n, n, ch), blurred(n, n, ch);
+      for (int c = 0; c < ch; ++c) {
+        double mean = 0;
+        for (int y = 0; y < e.height; ++y)
+          for (int x = 0; x < e.width; ++x) mean += e.at(x, y, c) / (double(e.width) * e.height);
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x) {
+            double box = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) box += im2.at((x + dx + n) % n, (y + dy + n) % n, c) / 9;
+            flat.at(x, y, c) = float(mean), blurred.at(x, y, c) = float(box);
+          }
+      }
+      for (const auto& [name, im] : {std::pair<std::string, const Image&>{"~flat", flat}, {"~blurred", blurred}}) {
+        const double c = lumStd(im) / exStd, f = neighborhoodFidelity(im, e, fo) / f2;
+        const double k = neighborhoodCompleteness(im, e, fo) / k2, h = histogramDistance(im, e) / h2;
+        std::printf("  %-8s contrast %.3f fidratio %.3f compratio %.3f\n", name.c_str(), c, f, k);
+        auto& sum = sums[name];
+        sum.resize(6);
+        sum[0] += c, sum[1] += f, sum[2] += h, sum[4] += neighborhoodFidelity(downsample(im, 2), eh, coarse) / g2, sum[5] += k;
+      }
+    }
 
     // Colour rules.
     const SolidLevel& fin = a.levels.back();
@@ -325,7 +352,7 @@ int main(int argc, char** argv) {
     for (const auto& [name, rule] : rules) {
       if (const char* only = std::getenv("RULES"); only && std::string(",") .append(only).append(",").find("," + name + ",") == std::string::npos) continue;
       size_t at = 0;
-      double cr = 0, fid = 0, hist = 0, shifted = 0, coarseFid = 0;
+      double cr = 0, fid = 0, hist = 0, shifted = 0, coarseFid = 0, comp = 0;
       std::string line;
       auto image = [&](const Plane& p) {
         Image im(p.w, p.h, ch);
@@ -338,6 +365,7 @@ int main(int argc, char** argv) {
         const Image im = image(p);
         const double c = lumStd(im) / exStd, f = neighborhoodFidelity(im, e, fo), hd = histogramDistance(im, e);
         cr += c / 4, fid += f / 4, hist += hd / 4, coarseFid += neighborhoodFidelity(downsample(im, 2), eh, coarse) / 4;
+        comp += neighborhoodCompleteness(im, e, fo) / 4;
         std::snprintf(buf, sizeof buf, " %s:%.2f/%.2f/%.3f", p.name.c_str(), c, f / f2, hd);
         line += buf;
         if (std::getenv("SAVE")) writeImage(im, std::string("/tmp/solidfid-") + name + "-" + p.name + ".png");
@@ -349,15 +377,16 @@ int main(int argc, char** argv) {
         std::snprintf(buf, sizeof buf, " sc_%s:%.2f", p.name.c_str(), s);
         line += buf;
       }
-      std::printf("  %-8s contrast %.3f fidratio %.3f coarseratio %.3f hist %.4f (2D %.4f) shifted %.3f |%s\n", name.c_str(), cr,
-                  fid / f2, coarseFid / g2, hist, h2, shifted, line.c_str());
+      std::printf("  %-8s contrast %.3f fidratio %.3f compratio %.3f coarseratio %.3f hist %.4f (2D %.4f) shifted %.3f |%s\n",
+                  name.c_str(), cr, fid / f2, comp / k2, coarseFid / g2, hist, h2, shifted, line.c_str());
       auto& s = sums[name];
-      s.resize(5);
-      s[0] += cr, s[1] += fid / f2, s[2] += hist / h2, s[3] += shifted, s[4] += coarseFid / g2;
+      s.resize(6);
+      s[0] += cr, s[1] += fid / f2, s[2] += hist / h2, s[3] += shifted, s[4] += coarseFid / g2, s[5] += comp / k2;
     }
   }
   std::printf("\nmeans over %d exemplars (contrast, fidelity ratio, histogram ratio vs 2D, shifted):\n", argc - 1);
   for (const auto& [name, s] : sums)
-    std::printf("  %-8s %.3f %.3f %.3f %.3f coarse fidelity ratio %.3f\n", name.c_str(), s[0] / (argc - 1), s[1] / (argc - 1),
-                s[2] / (argc - 1), s[3] / (argc - 1), s[4] / (argc - 1));
+    std::printf("  %-8s %.3f %.3f %.3f %.3f coarse fidelity ratio %.3f completeness ratio %.3f\n", name.c_str(),
+                s[0] / (argc - 1), s[1] / (argc - 1), s[2] / (argc - 1), s[3] / (argc - 1), s[4] / (argc - 1),
+                s[5] / (argc - 1));
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/quality_measures.h"
 
+#include "render/image/crop.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
 #include "synthesis/synthesize_2d.h"
@@ -98,6 +99,29 @@ double fidelityOf(std::span<const float> patches, const Image& exemplar, int rad
   return std::accumulate(nearest.begin(), nearest.end(), 0.0) / double(nearest.size());
 }
 
+/// Neighborhoods of `image` centred on a regular grid of about `samples` texels (all if 0),
+/// wrapping around its borders or only wholly inside it.
+std::vector<float> sampledNeighborhoods(const Image& image, int r, int samples, bool toroidal) {
+  const int side = 2 * r + 1, c = colorChannelCount(image);
+  if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
+  if (image.width < side || image.height < side)
+    throw Error("image is smaller than the " + std::to_string(side) + "x" + std::to_string(side) + " fidelity neighborhood");
+  const int m = toroidal ? 0 : r;  // margin of the centres
+  const int iw = image.width - 2 * m, ih = image.height - 2 * m;
+  int step = 1;
+  if (samples > 0 && int64_t(iw) * ih > samples) step = std::max(1, int(std::lround(std::sqrt(double(iw) * ih / samples))));
+  std::vector<float> patches;
+  for (int y = m; y < image.height - m; y += step)
+    for (int x = m; x < image.width - m; x += step)
+      for (int j = -r; j <= r; ++j)
+        for (int i = -r; i <= r; ++i) {
+          const float* p = image.pixel(((x + i) % image.width + image.width) % image.width,
+                                       ((y + j) % image.height + image.height) % image.height);
+          patches.insert(patches.end(), p, p + c);
+        }
+  return patches;
+}
+
 } // namespace
 
 double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx) {
@@ -105,28 +129,18 @@ double patchFidelity(std::span<const float> patches, const Image& exemplar, int 
 }
 
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, const Context& ctx) {
-  const int r = options.radius, side = 2 * r + 1;
-  if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
-  if (image.width < side || image.height < side)
-    throw Error("image is smaller than the " + std::to_string(side) + "x" + std::to_string(side) + " fidelity neighborhood");
   if (colorChannelCount(image) != colorChannelCount(exemplar))
     throw Error("image and exemplar differ in colour channels (grey versus RGB)");
-  const int c = colorChannelCount(image);
+  return fidelityOf(sampledNeighborhoods(image, options.radius, options.samples, false), exemplar, options.radius,
+                    options.toroidal, ctx);
+}
 
-  // Output neighborhoods on a regular grid of interior texels.
-  const int iw = image.width - 2 * r, ih = image.height - 2 * r;
-  int step = 1;
-  if (options.samples > 0 && int64_t(iw) * ih > options.samples)
-    step = std::max(1, int(std::lround(std::sqrt(double(iw) * ih / options.samples))));
-  std::vector<float> patches;
-  for (int y = r; y < image.height - r; y += step)
-    for (int x = r; x < image.width - r; x += step)
-      for (int j = -r; j <= r; ++j)
-        for (int i = -r; i <= r; ++i) {
-          const float* p = image.pixel(x + i, y + j);
-          patches.insert(patches.end(), p, p + c);
-        }
-  return fidelityOf(patches, exemplar, r, options.toroidal, ctx);
+double neighborhoodCompleteness(const Image& image, const Image& exemplar, const FidelityOptions& options,
+                                const Context& ctx) {
+  if (colorChannelCount(image) != colorChannelCount(exemplar))
+    throw Error("image and exemplar differ in colour channels (grey versus RGB)");
+  return fidelityOf(sampledNeighborhoods(exemplar, options.radius, options.samples, options.toroidal), image,
+                    options.radius, false, ctx);
 }
 
 double histogramDistance(const Image& image, const Image& exemplar) {
@@ -251,6 +265,9 @@ QualityReport measureQuality(const Image& image, const Image& exemplar, const Co
                              const FidelityOptions& fidelity, const Context& ctx) {
   QualityReport report;
   report.fidelity = neighborhoodFidelity(image, exemplar, fidelity, ctx);
+  const int cw = std::min(image.width, 2 * exemplar.width), ch = std::min(image.height, 2 * exemplar.height);
+  report.completeness =
+      neighborhoodCompleteness(crop(image, (image.width - cw) / 2, (image.height - ch) / 2, cw, ch), exemplar, fidelity, ctx);
   report.histogramDistance = histogramDistance(image, exemplar);
   report.contrast = contrastRatio(image, exemplar);
   if (image.width > exemplar.width && image.height > exemplar.height)

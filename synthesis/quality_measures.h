@@ -17,7 +17,7 @@ namespace texfab::synthesis {
 
 struct FidelityOptions {
   int radius = 3;      ///< neighborhoods are (2*radius+1)^2: 7x7 by default
-  int samples = 2048;  ///< output neighborhoods measured (a regular grid); 0 = all of them
+  int samples = 2048;  ///< neighborhoods measured on a regular grid (the image's; completeness: the exemplar's); 0 = all
   bool toroidal = true; ///< exemplar neighborhoods wrap; false: only those wholly inside it (a photograph)
 };
 
@@ -26,6 +26,16 @@ struct FidelityOptions {
 /// Output neighborhoods must lie inside the image; the image needs 2*radius+1 texels per side.
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options = {},
                             const Context& ctx = {});
+
+/// Neighborhood completeness, the reverse direction of fidelity: mean over exemplar neighborhoods
+/// (about `samples` on a regular grid; toroidal, or wholly inside) of the RMS difference to the
+/// nearest neighborhood wholly inside the image, by exact search. Lower is better. Fidelity alone
+/// favours flat images (a flat one matches the exemplar's flat regions); completeness asks that
+/// the image show all of the exemplar, its dark cracks and bright speckles too. Together they are
+/// the bidirectional similarity of Simakov et al. 2008, "Summarizing visual data using
+/// bidirectional similarity".
+double neighborhoodCompleteness(const Image& image, const Image& exemplar, const FidelityOptions& options = {},
+                                const Context& ctx = {});
 
 /// Fidelity of neighborhoods gathered elsewhere (e.g. resampled from a surface texture in
 /// exemplar space): `patches` holds (2*radius+1)^2 neighborhoods of the exemplar's colour channels
@@ -68,6 +78,9 @@ double contrastRatio(const Image& image, const Image& exemplar);
 /// All measures at once; coherence and coverage need the coordinate map.
 struct QualityReport {
   double fidelity = 0;
+  /// neighborhoodCompleteness() in the image's centre, at most twice the exemplar's size per side
+  /// (the exact search over all of a large image's windows would take minutes).
+  double completeness = 0;
   double histogramDistance = 0;
   double contrast = 0;  ///< contrastRatio()
   double shiftedCorrelation = 0;

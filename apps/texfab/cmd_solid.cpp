@@ -231,8 +231,8 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
   };
 }
 
-// --report: each slice's quality measures against its exemplar, and its fidelity against that of a
-// 2-D synthesis of the same size from that exemplar (the fidelity ratio).
+// --report: each slice's quality measures against its exemplar, and its fidelity and completeness
+// against those of a 2-D synthesis of the same size from that exemplar (the ratios).
 nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, const render::SolidExemplars& e) {
   const Image* exemplars[3] = {&e.x, &e.y, &e.z};
   // One baseline per distinct exemplar: the slices of a request all have one size.
@@ -248,7 +248,7 @@ nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, co
     return baselines.emplace_back(&ex, b).second;
   };
   nlohmann::json j = nlohmann::json::object();
-  double contrast = 0, ratio = 0;
+  double contrast = 0, ratio = 0, completeness = 0;
   for (const MeasuredSlice& slice : slices) {
     const Image& ex = *exemplars[slice.axis];
     const synthesis::QualityReport& b = baselineOf(ex, slice.image);
@@ -256,14 +256,17 @@ nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, co
     const synthesis::QualityReport q =
         synthesis::measureQuality(slice.image, synthesis::solidColorView(ex, slice.image.channels), nullptr, {},
                                   stage.inner());
-    stage.finish("contrast " + figure(q.contrast) + ", fidelity " + figure(q.fidelity / b.fidelity) + "x 2-D synthesis'");
+    stage.finish("contrast " + figure(q.contrast) + ", fidelity " + figure(q.fidelity / b.fidelity) +
+                 "x and completeness " + figure(q.completeness / b.completeness) + "x 2-D synthesis'");
     j[slice.name] = toJson(q, b);
     contrast += q.contrast / double(slices.size());
     ratio += q.fidelity / b.fidelity / double(slices.size());
+    completeness += q.completeness / b.completeness / double(slices.size());
   }
   run.note("slices keep " + figure(100 * contrast) + " % of the exemplar's contrast; their fidelity is " +
-           figure(ratio) + "x a 2-D synthesis' (1 = as faithful)");
-  return {{"slices", j}, {"contrast_ratio", contrast}, {"fidelity_ratio", ratio}};
+           figure(ratio) + "x and their completeness " + figure(completeness) +
+           "x a 2-D synthesis' (1 = as faithful, as complete)");
+  return {{"slices", j}, {"contrast_ratio", contrast}, {"fidelity_ratio", ratio}, {"completeness_ratio", completeness}};
 }
 
 void runSolid(SolidJob& job) {

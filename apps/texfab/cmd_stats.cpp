@@ -51,6 +51,8 @@ void runStats(const StatsJob& args) {
 
   std::printf("fidelity             %.4f   (7x7 RMS distance to the nearest exemplar neighborhood; lower is better)\n",
               q.fidelity);
+  std::printf("completeness         %.4f   (the reverse: exemplar neighborhoods to the image's nearest; lower is better)\n",
+              q.completeness);
   std::printf("histogram distance   %.4f   (largest per-channel earth mover's distance)\n", q.histogramDistance);
   std::printf("contrast ratio       %.4f   (luminance standard deviation, image / exemplar; 1 = kept)\n", q.contrast);
   if (std::isnan(q.shiftedCorrelation))
@@ -62,6 +64,8 @@ void runStats(const StatsJob& args) {
   if (baseline) {
     std::printf("fidelity ratio       %.4f   (fidelity / a 2-D synthesis' of the same size, %.4f; 1 = as faithful)\n",
                 q.fidelity / baseline->fidelity, baseline->fidelity);
+    std::printf("completeness ratio   %.4f   (completeness / the same 2-D synthesis', %.4f; 1 = shows as much of it)\n",
+                q.completeness / baseline->completeness, baseline->completeness);
     std::printf("2-D histogram dist.  %.4f   (the same 2-D synthesis')\n", baseline->histogramDistance);
     std::printf("2-D contrast ratio   %.4f   (the same 2-D synthesis')\n", baseline->contrast);
   }

@@ -68,7 +68,10 @@ json toJson(const render::TextureMeasures& m, double requestedPixelsPerUnit) {
 }
 
 json toJson(const synthesis::QualityReport& q) {
-  json j = {{"fidelity", q.fidelity}, {"histogram_distance", q.histogramDistance}, {"contrast_ratio", q.contrast}};
+  json j = {{"fidelity", q.fidelity},
+            {"completeness", q.completeness},
+            {"histogram_distance", q.histogramDistance},
+            {"contrast_ratio", q.contrast}};
   j["shifted_correlation"] = std::isnan(q.shiftedCorrelation) ? json(nullptr) : json(q.shiftedCorrelation);
   if (q.coherence) j["coherence"] = *q.coherence;
   if (q.coverage) j["coverage"] = *q.coverage;
@@ -79,6 +82,7 @@ json toJson(const synthesis::QualityReport& q, const synthesis::QualityReport& b
   json j = toJson(q);
   j["baseline_2d"] = toJson(baseline);
   j["fidelity_ratio"] = q.fidelity / baseline.fidelity;
+  j["completeness_ratio"] = q.completeness / baseline.completeness;
   return j;
 }
 

@@ -195,7 +195,8 @@ TEST(CliSynth, StatsReportsTheMeasures) {
                                (dir / "c.exr").string() + " --baseline-2d --report " + (dir / "s.json").string() +
                                cacheArg(dir));
   ASSERT_EQ(o.status, 0) << o.err;
-  for (const char* word : {"fidelity", "histogram", "coherence", "coverage", "shifted", "fidelity ratio"})
+  for (const char* word : {"fidelity", "completeness", "histogram", "coherence", "coverage", "shifted", "fidelity ratio",
+                           "completeness ratio"})
     EXPECT_NE(o.out.find(word), std::string::npos) << word;
   std::ifstream in(dir / "s.json");
   const nlohmann::json s = nlohmann::json::parse(in);
@@ -203,6 +204,7 @@ TEST(CliSynth, StatsReportsTheMeasures) {
   EXPECT_LT(s["coherence"].get<double>(), 1.0);
   // The 2-D baseline is the synthesis `synth` made with its defaults (seed 1): the same image.
   EXPECT_EQ(s["fidelity_ratio"].get<double>(), 1.0);
+  EXPECT_EQ(s["completeness_ratio"].get<double>(), 1.0);
   EXPECT_EQ(s["baseline_2d"]["histogram_distance"], s["histogram_distance"]);
   // A tiling of the exemplar measures as one.
   ASSERT_EQ(texfab("synth " + kBrick + " -q -o " + (dir / "t.png").string() + " --size 256 --jitter 0 --coords " +
@@ -214,6 +216,7 @@ TEST(CliSynth, StatsReportsTheMeasures) {
   const nlohmann::json tj = nlohmann::json::parse(in2);
   EXPECT_DOUBLE_EQ(tj["coherence"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(tj["fidelity"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(tj["completeness"].get<double>(), 0.0);  // the centre 2x2 tiles hold every window
   EXPECT_NEAR(tj["shifted_correlation"].get<double>(), 1.0, 1e-9);
 }
 

@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
+#include "render/image/crop.h"
 #include "render/image/error.h"
+#include "render/image/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 namespace texfab::synthesis {
 namespace {
@@ -40,6 +43,38 @@ TEST(QualityMeasures, FidelityOfNoiseIsWorseThanOfTheTiling) {
   const Image exemplar = test::noiseImage(16, 16);
   const double noise = neighborhoodFidelity(test::noiseImage(40, 40, 99), exemplar, {3, 0});
   EXPECT_GT(noise, 0.2);  // uniform noise: RMS difference of two independent uniforms is ~0.4
+}
+
+TEST(QualityMeasures, CompletenessIsZeroForATilingThatHoldsEveryWindow) {
+  // A 2x2 tiling holds every toroidal 7x7 window of the exemplar wholly inside it; a single copy
+  // misses the windows across the wrap.
+  const Image exemplar = test::noiseImage(16, 16);
+  EXPECT_DOUBLE_EQ(neighborhoodCompleteness(applyCoords(tiling(32, 32, 16, 16), exemplar), exemplar, {3, 0}), 0.0);
+  EXPECT_GT(neighborhoodCompleteness(exemplar, exemplar, {3, 0}), 0.1);
+  FidelityOptions inside{3, 0, false};
+  EXPECT_DOUBLE_EQ(neighborhoodCompleteness(exemplar, exemplar, inside), 0.0);
+}
+
+TEST(QualityMeasures, CompletenessPenalizesWhatFidelityMisses) {
+  // A flat image of the exemplar's mean colour matches the exemplar's flat regions: fidelity rates
+  // it better than the exemplar's pixels shuffled. Completeness, the reverse direction, finds none
+  // of the exemplar's dark or bright windows in it.
+  const Image exemplar = crop(readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png"), 0, 0, 64, 64);
+  CoordMap shuffled = tiling(160, 160, 64, 64);
+  uint32_t state = 12345;
+  for (uint32_t& c : shuffled.coords) state = state * 1664525u + 1013904223u, c = packCoord((state >> 8) % 64, (state >> 20) % 64);
+  Image flat(160, 160, exemplar.channels);
+  for (int c = 0; c < exemplar.channels; ++c) {
+    double mean = 0;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) mean += exemplar.at(x, y, c) / (64 * 64);
+    for (int y = 0; y < 160; ++y)
+      for (int x = 0; x < 160; ++x) flat.at(x, y, c) = float(mean);
+  }
+  const double flatFidelity = neighborhoodFidelity(flat, exemplar);
+  EXPECT_LT(flatFidelity, neighborhoodFidelity(applyCoords(shuffled, exemplar), exemplar));
+  EXPECT_GT(neighborhoodCompleteness(flat, exemplar), 2 * flatFidelity);
+  EXPECT_DOUBLE_EQ(neighborhoodCompleteness(applyCoords(tiling(160, 160, 64, 64), exemplar), exemplar), 0.0);
 }
 
 TEST(QualityMeasures, HistogramDistanceIsTheEarthMoversDistance) {

@@ -80,6 +80,8 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
     EXPECT_GT(m["contrast_ratio"].get<double>(), 0.1) << axis;
     EXPECT_DOUBLE_EQ(m["fidelity_ratio"].get<double>(),
                      m["fidelity"].get<double>() / m["baseline_2d"]["fidelity"].get<double>());
+    EXPECT_DOUBLE_EQ(m["completeness_ratio"].get<double>(),
+                     m["completeness"].get<double>() / m["baseline_2d"]["completeness"].get<double>());
   }
   const Image plane = readImage(dir / "p.png");
   const Image slice = readImage(dir / "vol" / "slice_00007.png");
