@@ -4,7 +4,7 @@
 #include "synthesis/vulkan/solid_level.h"
 
 #include "render/image/parallel.h"
-#include "synthesis/hash.h"
+#include "synthesis/chunk_index.h"
 #include "synthesis/vulkan/solid_kernels.h"
 
 #include <algorithm>
@@ -17,7 +17,6 @@ namespace texfab::synthesis::vulkan {
 namespace {
 
 using Key = GridKey;
-using KeyIndex = std::unordered_map<Key, uint32_t, GridKeyHash>;
 
 // The chunks of one part: those it finishes (its centre) first, then its halo.
 struct Part {
@@ -26,19 +25,19 @@ struct Part {
 };
 
 // The chunks within `halo` chunks of the centre chunks, the centre first.
-Part withHalo(const std::vector<Key>& keys, const KeyIndex& index, std::vector<uint32_t> centre, int halo) {
+Part withHalo(const ChunkIndex& index, std::vector<uint32_t> centre, int halo) {
   Part p;
   p.centre = centre.size();
   std::unordered_map<uint32_t, bool> seen;
   for (uint32_t s : centre) seen[s] = true;
   p.slots = std::move(centre);
   for (size_t i = 0; i < p.centre; ++i) {
-    const Key k = keys[p.slots[i]];
+    const Key k = index.keys()[p.slots[i]];
     for (int dz = -halo; dz <= halo; ++dz)
       for (int dy = -halo; dy <= halo; ++dy)
         for (int dx = -halo; dx <= halo; ++dx) {
-          const auto it = index.find({k[0] + dx, k[1] + dy, k[2] + dz});
-          if (it != index.end() && seen.emplace(it->second, true).second) p.slots.push_back(it->second);
+          const int32_t s = index.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (s >= 0 && seen.emplace(uint32_t(s), true).second) p.slots.push_back(uint32_t(s));
         }
   }
   return p;
@@ -46,14 +45,14 @@ Part withHalo(const std::vector<Key>& keys, const KeyIndex& index, std::vector<u
 
 // Splits `centre` in halves along its longest extent until each part with its halo holds at most
 // `maxChunks` chunks.
-void split(const std::vector<Key>& keys, const KeyIndex& index, std::vector<uint32_t> centre, int halo,
-           size_t maxChunks, std::vector<Part>& parts) {
-  Part part = withHalo(keys, index, centre, halo);
+void split(const ChunkIndex& index, std::vector<uint32_t> centre, int halo, size_t maxChunks, std::vector<Part>& parts) {
+  Part part = withHalo(index, centre, halo);
   if (part.slots.size() <= maxChunks) {
     parts.push_back(std::move(part));
     return;
   }
   if (centre.size() == 1) throw std::logic_error("solid level: one chunk and its halo exceed a binding");
+  const std::vector<Key>& keys = index.keys();
   int axis = 0;
   int64_t longest = -1;
   for (int a = 0; a < 3; ++a) {
@@ -65,12 +64,12 @@ void split(const std::vector<Key>& keys, const KeyIndex& index, std::vector<uint
   std::nth_element(centre.begin(), middle, centre.end(), [&](uint32_t p, uint32_t q) {
     return keys[p][size_t(axis)] < keys[q][size_t(axis)];
   });
-  split(keys, index, std::vector<uint32_t>(centre.begin(), middle), halo, maxChunks, parts);
-  split(keys, index, std::vector<uint32_t>(middle, centre.end()), halo, maxChunks, parts);
+  split(index, std::vector<uint32_t>(centre.begin(), middle), halo, maxChunks, parts);
+  split(index, std::vector<uint32_t>(middle, centre.end()), halo, maxChunks, parts);
 }
 
 // The device's inputs of a part: keys, masks, neighbours (slots within the part), parents.
-SolidChunks uploadPart(Commands& commands, const SolidLevelInput& level, const KeyIndex& index, const Part& part) {
+SolidChunks uploadPart(Commands& commands, const SolidLevelInput& level, const ChunkIndex& index, const Part& part) {
   const uint32_t n = uint32_t(part.slots.size());
   std::unordered_map<uint32_t, int32_t> local;
   for (uint32_t i = 0; i < n; ++i) local[part.slots[i]] = int32_t(i);
@@ -79,13 +78,13 @@ SolidChunks uploadPart(Commands& commands, const SolidLevelInput& level, const K
   std::vector<uint32_t> parents(level.parents ? size_t(n) * 512 * 3 : 0);
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t slot = part.slots[i];
-    const Key k = level.keys[slot];
+    const Key k = index.keys()[slot];
     for (int a = 0; a < 3; ++a) keys.push_back(int32_t(k[size_t(a)]));
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
-          const auto it = index.find({k[0] + dx, k[1] + dy, k[2] + dz});
-          const auto l = it == index.end() ? local.end() : local.find(it->second);
+          const int32_t s = index.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          const auto l = s < 0 ? local.end() : local.find(uint32_t(s));
           neighbours.push_back(l == local.end() ? -1 : l->second);
         }
     std::copy_n(level.last(slot), kSolidChunkVoxels, last.begin() + std::ptrdiff_t(i) * kSolidChunkVoxels);
@@ -128,7 +127,7 @@ Listed listFinished(const SolidLevelInput& level, const Part& part, const Contex
 
 // One part: every step on the device, then its centre's final triples to `finish`.
 void synthesizePart(Device& device, const SolidTables& tables, int contrastGain16, const SolidLevelInput& level,
-                    const KeyIndex& index, const Part& part, const SolidChunkSink& finish, const Context& ctx) {
+                    const ChunkIndex& index, const Part& part, const SolidChunkSink& finish, const Context& ctx) {
   // Only the voxels the caller reads (last == steps) come back, packed, centre chunk by chunk; a
   // part whose centre holds none has nothing to compute.
   const Listed listed = listFinished(level, part, ctx);
@@ -167,15 +166,15 @@ void synthesizeSolidLevel(Device& device, const cpu::SolidTables& tables, const 
                           const SolidChunkSink& finish, const Context& ctx) {
   const size_t n = level.keys.size();
   if (n == 0) return;
-  const std::vector<Key> keys(level.keys.begin(), level.keys.end());
-  KeyIndex index;
-  for (uint32_t s = 0; s < n; ++s) index.emplace(keys[s], s);
+  ChunkIndex index;  // slot s: level.keys[s]
+  for (const Key& k : level.keys)
+    if (!index.insert(k).second) throw std::logic_error("solid level: a chunk is listed twice");
   // A correction step reads 2 voxels around each voxel: T steps reach ceil(2T / 16) chunks.
   const int halo = (2 * level.steps + 15) / 16;
   std::vector<uint32_t> all(n);
   for (uint32_t s = 0; s < n; ++s) all[s] = s;
   std::vector<Part> parts;
-  split(keys, index, std::move(all), halo, SolidChunks::maxCount(device), parts);
+  split(index, std::move(all), halo, SolidChunks::maxCount(device), parts);
 
   const auto deviceTables = device.resident<SolidTables>(level.tablesKey, [&] {
     Commands commands(device);
