@@ -26,11 +26,13 @@ constexpr int kSide = 1 << kShift;
 constexpr int kVoxels = kSide * kSide * kSide;
 constexpr int kR = kRefineSearchRadius;
 constexpr int kV = kRefineVoteRadius;
+constexpr int kStride = kRefineSearchStride;
 constexpr int kTaps = (2 * kR + 1) * (2 * kR + 1);
 constexpr int kMaxSum = 3 * 255;  // colours at 3x the 8-bit scale: a voxel's is the sum of its three
 constexpr uint64_t kWeightOne = uint64_t(1) << 40;  // weights < 2^31: 32 bits each
 constexpr int kErrorFloor = 512;
 static_assert(kR >= 1 && kR + 1 <= kSide && kV < kSide);  // dilations shift by less than a chunk
+static_assert(kSide % kStride == 0 && kStride <= kV);       // every vote reads a searched window
 
 int localIndex(int64_t x, int64_t y, int64_t z) {
   return int(((z & (kSide - 1)) * kSide + (y & (kSide - 1))) * kSide + (x & (kSide - 1)));
@@ -266,7 +268,7 @@ public:
   void search(int pass, const State& s, Matches& m, const Context& ctx) const {
     forEachVoxel(pass - 1, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
       for (int q = 0; q < 3; ++q)
-        if (g_.searched[at][size_t(q)] >= pass) searchAxis(nb, x, y, z, q, s, m, at);
+        if (g_.searched[at][size_t(q)] >= pass && searches(q, x, y, z)) searchAxis(nb, x, y, z, q, s, m, at);
     });
   }
 
@@ -279,6 +281,13 @@ public:
   const std::array<Exemplar, 3>& exemplars() const { return ex_; }
 
 private:
+  // Whether the window across axis q centred on chunk-local (x, y, z) is searched: both in-slice
+  // coordinates on the stride's grid (chunks start on it).
+  static bool searches(int q, int x, int y, int z) {
+    const int c[3] = {x, y, z};
+    return c[(q + 1) % 3] % kStride == 0 && c[(q + 2) % 3] % kStride == 0;
+  }
+
   // fn(chunk's neighbours, chunk-local x, y, z, index) for every voxel of pass >= `pass`, chunks in
   // parallel.
   template <class Fn> void forEachVoxel(int pass, const Context& ctx, Fn&& fn) const {
@@ -358,6 +367,7 @@ private:
       for (int b = -kV; b <= kV; ++b)
         for (int a = -kV; a <= kV; ++a) {
           const auto d = sliceOffset(q, a, b);
+          if (!searches(q, (x + d[0]) & (kSide - 1), (y + d[1]) & (kSide - 1), (z + d[2]) & (kSide - 1))) continue;
           const size_t w = size_t(voxelAt(nb, x + d[0], y + d[1], z + d[2]));
           uint32_t p;
           if (!e.moved(m.coords[w * 3 + size_t(q)], -a, -b, p)) continue;

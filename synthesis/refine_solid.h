@@ -9,15 +9,17 @@
 // run after the finest level of Dong et al. 2008 (synthesize_solid.h), whose triples it starts from.
 //
 // One pass:
-//   search: for each voxel and axis, the 5x5 window of the voxels' colours (mean of three) in the
-//     slice across that axis, its contrast raised around the window's mean (gain 1.5), is compared
+//   search: for each axis, and each voxel whose two coordinates in the slice across it are even
+//     (a sparse set of windows that still overlap every voxel, as in Kwatra et al. 2005's texture
+//     optimization, on which Kopf et al. build), the 5x5 window of the voxels' colours (mean of
+//     three) in that slice, its contrast raised around the window's mean (gain 1.5), is compared
 //     with exemplar windows centred on k-coherence candidates: the 2-D candidate sets
 //     (SolidLevel::candidates2d) of the voxel's coordinate in that exemplar and of its four slice
 //     neighbours', shifted back by the neighbour's offset. The best is the voxel's match for that
 //     axis.
-//   vote: each slice neighbour within 2 (in the three slices) predicts the voxel's colour from its
-//     match, weighted by 1 / (error + 512); each of the voxel's three coordinates becomes the
-//     prediction of its exemplar nearest the weighted mean colour.
+//   vote: each searched slice neighbour within 2 (in the three slices; 4 to 9 per slice) predicts
+//     the voxel's colour from its match, weighted by 1 / (error + 512); each of the voxel's three
+//     coordinates becomes the prediction of its exemplar nearest the weighted mean colour.
 // The result is again a triple of exemplar pixels, so companion maps follow it, and its three
 // colours are chosen to agree, so their mean regresses less to grey.
 //
@@ -46,6 +48,7 @@ namespace texfab::synthesis {
 inline constexpr int kRefineSearchRadius = 2;  ///< 5x5 slice windows
 inline constexpr int kRefineVoteRadius = 2;    ///< predictions from slice neighbours within 2
 inline constexpr int kRefineGain16 = 24;       ///< the search targets' gain, in sixteenths (1.5)
+inline constexpr int kRefineSearchStride = 2;  ///< windows searched on every second voxel of a slice
 
 /// Voxels, per axis, that `passes` refinement passes read around a voxel.
 constexpr int refineMargin(int passes) { return passes * (kRefineSearchRadius + kRefineVoteRadius); }

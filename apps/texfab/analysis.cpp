@@ -40,7 +40,7 @@ void solidFidelityFlags(Flags& f, float& gain, int& refinePasses, const std::str
                " (Kopf et al. 2007's search and vote after the synthesis; 0 = off): with --contrast-gain 2, one pass "
                "keeps about 0.80 of the exemplar's contrast (0.63 by default) with small-scale structure as faithful "
                "as the default's. Slow: each pass synthesizes a region 8 voxels thicker than the one requested; one "
-               "pass takes about 7 times the default's time for a volume, 5 for a surface, 21 for a planar cut",
+               "pass takes about 3.5 times the default's time for a volume or a surface, 12 for a planar cut",
            {0, 4});
 }
 
