@@ -59,10 +59,14 @@ TEST(QualityMeasures, CompletenessPenalizesWhatFidelityMisses) {
   // A flat image of the exemplar's mean colour matches the exemplar's flat regions: fidelity rates
   // it better than the exemplar's pixels shuffled. Completeness, the reverse direction, finds none
   // of the exemplar's dark or bright windows in it.
-  const Image exemplar = crop(readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png"), 0, 0, 64, 64);
+  const Image marble = readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png");
+  const Image exemplar = crop(marble, 0, 0, 64, 64);
   CoordMap shuffled = tiling(160, 160, 64, 64);
   uint32_t state = 12345;
-  for (uint32_t& c : shuffled.coords) state = state * 1664525u + 1013904223u, c = packCoord((state >> 8) % 64, (state >> 20) % 64);
+  for (uint32_t& c : shuffled.coords) {
+    state = state * 1664525u + 1013904223u;  // a linear congruential sequence
+    c = packCoord((state >> 8) % 64, (state >> 20) % 64);
+  }
   Image flat(160, 160, exemplar.channels);
   for (int c = 0; c < exemplar.channels; ++c) {
     double mean = 0;
