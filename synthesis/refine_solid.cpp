@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 namespace texfab::synthesis {
@@ -36,6 +37,13 @@ static_assert(kSide % kStride == 0 && kStride <= kV);       // every vote reads 
 
 int localIndex(int64_t x, int64_t y, int64_t z) {
   return int(((z & (kSide - 1)) * kSide + (y & (kSide - 1))) * kSide + (x & (kSide - 1)));
+}
+
+// Whether the window across axis q centred on chunk-local (x, y, z) is ever searched: both in-slice
+// coordinates on the stride's grid (chunks start on it).
+bool searches(int q, int x, int y, int z) {
+  const int c[3] = {x, y, z};
+  return c[(q + 1) % 3] % kStride == 0 && c[(q + 2) % 3] % kStride == 0;
 }
 
 class Grid {
@@ -165,15 +173,23 @@ template <class Fn> void forEachBit(const std::vector<Bits>& mark, Fn&& fn) {
 
 // The region of each pass, from the requested voxels (their vote: pass `passes`) down. The vote of
 // pass p at a voxel reads the axis-q matches of its neighbours within kV in its slice across q, so
-// axis q is searched at pass p there; each such search reads the colours within kR in the same
-// slice, whose voxels therefore take part in the vote of pass p - 1 (0: Dong et al.'s triples).
+// axis q is searched at pass p there, where searches() allows; each such search reads the colours
+// within kR in the same slice, whose voxels therefore take part in the vote of pass p - 1 (0: Dong
+// et al.'s triples).
 void markRegion(Grid& g, int passes) {
+  std::array<Bits, 3> searchable{};  // per axis, the chunk voxels searches() allows
+  for (int q = 0; q < 3; ++q)
+    for (int i = 0; i < kVoxels; ++i)
+      if (searches(q, i & (kSide - 1), (i >> kShift) & (kSide - 1), i >> (2 * kShift)))
+        searchable[size_t(q)][size_t(i >> 6)] |= uint64_t(1) << (i & 63);
   for (int p = passes; p >= 1; --p) {
     const std::vector<Bits> votes = maskWhere(g, [&](size_t i) { return g.pass[i] >= p; });
     std::vector<Bits> reads;
     for (int q = 0; q < 3; ++q) {
       std::vector<Bits> search = votes;
       dilate(g, search, kV, q);
+      for (Bits& b : search)
+        for (int z = 0; z < kSide; ++z) b[size_t(z)] &= searchable[size_t(q)][size_t(z)];
       forEachBit(search, [&](size_t i) { g.searched[i][size_t(q)] = std::max(g.searched[i][size_t(q)], int8_t(p)); });
       dilate(g, search, kR, q);
       reads.resize(g.size());
@@ -268,7 +284,7 @@ public:
   void search(int pass, const State& s, Matches& m, const Context& ctx) const {
     forEachVoxel(pass - 1, ctx, [&](const std::array<int32_t, 27>& nb, int x, int y, int z, size_t at) {
       for (int q = 0; q < 3; ++q)
-        if (g_.searched[at][size_t(q)] >= pass && searches(q, x, y, z)) searchAxis(nb, x, y, z, q, s, m, at);
+        if (g_.searched[at][size_t(q)] >= pass) searchAxis(nb, x, y, z, q, s, m, at);
     });
   }
 
@@ -281,13 +297,6 @@ public:
   const std::array<Exemplar, 3>& exemplars() const { return ex_; }
 
 private:
-  // Whether the window across axis q centred on chunk-local (x, y, z) is searched: both in-slice
-  // coordinates on the stride's grid (chunks start on it).
-  static bool searches(int q, int x, int y, int z) {
-    const int c[3] = {x, y, z};
-    return c[(q + 1) % 3] % kStride == 0 && c[(q + 2) % 3] % kStride == 0;
-  }
-
   // fn(chunk's neighbours, chunk-local x, y, z, index) for every voxel of pass >= `pass`, chunks in
   // parallel.
   template <class Fn> void forEachVoxel(int pass, const Context& ctx, Fn&& fn) const {
@@ -369,10 +378,12 @@ private:
           const auto d = sliceOffset(q, a, b);
           if (!searches(q, (x + d[0]) & (kSide - 1), (y + d[1]) & (kSide - 1), (z + d[2]) & (kSide - 1))) continue;
           const size_t w = size_t(voxelAt(nb, x + d[0], y + d[1], z + d[2]));
+          const uint64_t weight = m.weights[w * 3 + size_t(q)];
+          // A searched window weighs at least 2^40 / (2^31 + 512); 0 is one never searched.
+          if (weight == 0) throw std::logic_error("refinement: a vote read a window that was not searched");
           uint32_t p;
           if (!e.moved(m.coords[w * 3 + size_t(q)], -a, -b, p)) continue;
           const int16_t* colour = e.colour3(int(coordU(p)), int(coordV(p)));
-          const uint64_t weight = m.weights[w * 3 + size_t(q)];
           for (int c = 0; c < 3; ++c) sum[c] += weight * uint64_t(colour[c]);
           total += weight;
           predictions[size_t(q)][size_t(count[size_t(q)]++)] = {p, colour};
