@@ -60,8 +60,8 @@ constexpr int refineMargin(int passes) { return passes * (kRefineSearchRadius + 
 inline constexpr int64_t kRefineSlabVoxels = int64_t(1) << 20;
 
 /// Peak memory that refining `voxels` requested voxels adds to their synthesis, in bytes: one
-/// slab's region (a surface's: about 13 voxels per requested one at one pass, 1,250 bytes per
-/// requested voxel on the bundled elephant's texture job).
+/// slab's region (a surface's: about 10 voxels per requested one at one pass; about 1,150 bytes per
+/// requested voxel measured on the bundled elephant's texture job, 1,260 estimated).
 double refineSolidMemoryBytes(int64_t voxels, int passes);
 
 /// Triples of `voxels` after options.refinePasses passes (>= 1): per slab, Dong et al.'s triples of

@@ -112,9 +112,9 @@ struct SolidSynthesisOptions {
   /// Passes of slice refinement after the finest level (Kopf et al. 2007's search and vote,
   /// refine_solid.h); 0 (default): none, the paper's triples. Each pass makes a voxel read its
   /// neighbours within 4 voxels, so a request synthesizes a region 8 voxels thicker per pass, and
-  /// one pass makes a 128^3 volume about 7x slower. Ten GIMP patterns, contrast /
-  /// 7x7 fidelity over the 2-D synthesis': default 0.63 / 1.56; one pass after a contrast gain of 2
-  /// 0.80 / 1.58 (the gain alone 0.88 / 1.89). [0, 4]
+  /// one pass makes a 128^3 volume about 3.5x slower. Ten GIMP patterns, contrast / 7x7 fidelity
+  /// over the 2-D synthesis': default 0.63 / 1.56; one pass after a contrast gain of 2 0.80 / 1.58
+  /// (the gain alone 0.88 / 1.89). [0, 4]
   /// Figures: docs/measurements.md#slice-refinement.
   int refinePasses = 0;
 
