@@ -149,25 +149,47 @@ inline void findBases(VoxelSearch& s, const uint32_t* in, const BaseLayout& b) {
 /// The largest colour record: 6x an 8-bit colour.
 inline constexpr int32_t kMaxColorRecord = 2 * (kSolidColorSums - 1);
 
+/// Lanes of a neighborhood's records after which their channels repeat: 16 records, whole 16-lane
+/// chunks, so that the gain's loops run over fixed patterns (and vectorize).
+inline constexpr int kRecordPeriod = 48;
+static_assert(kCrossLanes % kRecordPeriod == 0);
+
+/// v = clamp(m + (((v - m) * gain16) >> 4), 0, kMaxColorRecord) over `Lanes` lanes, m the channel's
+/// mean from the period's pattern. Padding lanes and the last record's 4th value hold 0 and stay 0
+/// (gain16 >= 16).
+template <int Lanes>
+inline void scaleRecords(int16_t* v, const int16_t (&mean)[kRecordPeriod], int32_t gain16) {
+  // In 16-bit lanes: ((x - m) * gain16) >> 4 == ((16 (x - m)) * (gain16 << 8)) >> 16, whose factors
+  // fit int16 (|x - m| <= 1530, gain16 <= 64): the high half of a 16-bit product.
+  const int16_t g = int16_t(gain16 << 8);
+  auto scale = [&](int16_t& x, int16_t m) {
+    const int16_t a = int16_t((x - m) * 16);
+    const int16_t d = int16_t((int32_t(a) * int32_t(g)) >> 16);
+    const int16_t y = int16_t(m + d);
+    x = y < 0 ? int16_t(0) : y > kMaxColorRecord ? int16_t(kMaxColorRecord) : y;
+  };
+  int b = 0;
+  for (; b + kRecordPeriod <= Lanes; b += kRecordPeriod)
+    for (int j = 0; j < kRecordPeriod; ++j) scale(v[b + j], mean[j]);
+  for (int j = 0; j < Lanes % kRecordPeriod; ++j) scale(v[b + j], mean[j]);
+}
+
 /// SolidTables::contrastGain16 applied to a gathered neighborhood: every record moved away from the
 /// mean of the 3-neighborhood's records (the planes hold some of the same records: the same values).
 inline void applyContrastGain(Neighborhood& n, int gain16) {
-  int32_t mean[3];
-  for (int ch = 0; ch < 3; ++ch) {
-    int32_t sum = 0;
-    for (int i = 0; i < kSolidCrossVoxels; ++i) sum += n.cross[3 * i + ch];
-    mean[ch] = (sum + kSolidCrossVoxels / 2) / kSolidCrossVoxels;
-  }
-  auto scale = [&](int16_t* values, int records) {
-    for (int i = 0; i < records; ++i)
-      for (int ch = 0; ch < 3; ++ch) {
-        int16_t& v = values[3 * i + ch];
-        v = int16_t(std::clamp(mean[ch] + (((int32_t(v) - mean[ch]) * gain16) >> 4), 0, kMaxColorRecord));
-      }
-  };
-  scale(n.cross, kSolidCrossVoxels);
-  scale(n.planes[0], 25);
-  scale(n.planes[1], 25);
+  int32_t sums[kRecordPeriod] = {};
+  for (int b = 0; b < kCrossLanes; b += kRecordPeriod)
+    for (int j = 0; j < kRecordPeriod; ++j) sums[j] += n.cross[b + j];
+  int32_t channel[3] = {0, 0, 0};
+  for (int r = 0; r < kRecordPeriod / 3; ++r)
+    for (int ch = 0; ch < 3; ++ch) channel[ch] += sums[3 * r + ch];
+  for (int32_t& c : channel) c = (c + kSolidCrossVoxels / 2) / kSolidCrossVoxels;
+  int16_t mean[kRecordPeriod];
+  for (int r = 0; r < kRecordPeriod / 3; ++r)
+    for (int ch = 0; ch < 3; ++ch) mean[3 * r + ch] = int16_t(channel[ch]);
+  scaleRecords<kCrossLanes>(n.cross, mean, gain16);
+  scaleRecords<kPlaneLanes>(n.planes[0], mean, gain16);
+  scaleRecords<kPlaneLanes>(n.planes[1], mean, gain16);
 }
 
 /// The current 3-neighborhood of one voxel (its colour records) and its E_x and E_y planes,
