@@ -32,8 +32,9 @@
 //   * the search sees voxel colours through a per-level histogram-matching table learned from the
 //     candidates (SolidSynthesisOptions::matchColors) instead of the mean of three; output colours
 //     are still the mean of three;
-//   * optionally, the search's targets are moved away from their neighborhood's mean
-//     (SolidSynthesisOptions::contrastGain), which trades neighbourhood fidelity for contrast;
+//   * the search's targets are moved away from their neighborhood's mean, twice their difference
+//     from it by default (SolidSynthesisOptions::contrastGain): slices keep more of the
+//     exemplar's contrast and structure, and match its small windows less closely;
 //   * the initialization reads the slab at a hashed offset per cell of 8 start-level voxels
 //     (SolidSynthesisOptions::offsetCells) instead of one tiling, whose period survived every level;
 //   * the volume has no size and nothing wraps: only exemplar coordinates wrap, and only those of a
@@ -102,19 +103,20 @@ struct SolidSynthesisOptions {
   /// colours (solidColors) stay the mean of three. false: the paper's rule.
   bool matchColors = true;
   /// Gain of the search's targets: each voxel of a 3-neighborhood is shown to the search at its
-  /// neighborhood's mean colour plus `contrastGain` times its difference from it. 1 (default): the
-  /// paper's targets. Above 1 the search prefers candidates with the exemplar's dark and bright
-  /// features over flat ones: slices keep more contrast (ten GIMP patterns: 0.63 -> 0.87 of the
-  /// exemplar's at 2) and histograms closer to the exemplar's, for worse 7x7 neighbourhood fidelity
-  /// (1.56 -> 1.88 times the 2-D synthesis'). [1, 4]
-  /// Figures: docs/measurements.md#contrast-gain-of-the-search-targets.
-  float contrastGain = 1.0f;
+  /// neighborhood's mean colour plus `contrastGain` times its difference from it; 1: the paper's
+  /// targets. At 2 (default) the search prefers candidates with the exemplar's dark and bright
+  /// features over flat ones: slices keep more contrast (ten GIMP patterns: 0.63 -> 0.88 of the
+  /// exemplar's), histograms twice as close to the exemplar's and more of its structure
+  /// (completeness), for worse 7x7 neighbourhood fidelity (1.56 -> 1.89 times the 2-D synthesis',
+  /// a measure that flat slices win). [1, 4]
+  /// Figures: docs/measurements.md#contrast-gain-of-the-search-targets, #a-default-gain-of-2.
+  float contrastGain = 2.0f;
   /// Passes of slice refinement after the finest level (Kopf et al. 2007's search and vote,
   /// refine_solid.h); 0 (default): none, the paper's triples. Each pass makes a voxel read its
   /// neighbours within 4 voxels, so a request synthesizes a region 8 voxels thicker per pass, and
   /// one pass makes a 128^3 volume about 3.5x slower. Ten GIMP patterns, contrast / 7x7 fidelity
-  /// over the 2-D synthesis': default 0.63 / 1.56; one pass after a contrast gain of 2 0.80 / 1.58
-  /// (the gain alone 0.88 / 1.89). [0, 4]
+  /// over the 2-D synthesis': the paper's search 0.63 / 1.56; the default contrast gain 0.88 / 1.89;
+  /// one pass after it 0.80 / 1.58. [0, 4]
   /// Figures: docs/measurements.md#slice-refinement.
   int refinePasses = 0;
 

@@ -31,15 +31,15 @@ CLI::Option* wrapFlag(Flags& f, WrapChoice& choice) {
 void solidFidelityFlags(Flags& f, float& gain, int& refinePasses, const std::string& what) {
   f.option("--contrast-gain", gain,
            "Contrast of the solid texture" + what +
-               ": 1 = the paper's search; higher values let its slices keep more of the exemplar's dark and bright "
-               "features (2: about 0.87 of the exemplar's contrast instead of 0.63), at the cost of less faithful "
+               ": 1 = the paper's search, whose slices keep about 0.63 of the exemplar's contrast; higher values keep "
+               "more of its dark and bright features, cracks and veins (2: about 0.88), at the cost of less faithful "
                "small-scale structure (which --refine restores)",
            {1, 4});
   f.option("--refine", refinePasses,
            "Passes of slice refinement of the solid texture" + what +
-               " (Kopf et al. 2007's search and vote after the synthesis; 0 = off): with --contrast-gain 2, one pass "
-               "keeps about 0.80 of the exemplar's contrast (0.63 by default) with small-scale structure as faithful "
-               "as the default's. Slow: each pass synthesizes a region 8 voxels thicker than the one requested; one "
+               " (Kopf et al. 2007's search and vote after the synthesis; 0 = off): at the default contrast gain, one "
+               "pass keeps about 0.80 of the exemplar's contrast with small-scale structure as faithful as the "
+               "paper's search (--contrast-gain 1). Slow: each pass synthesizes a region 8 voxels thicker than the one requested; one "
                "pass takes about 3.5 times the default's time for a volume or a surface, 12 for a planar cut",
            {0, 4});
 }

@@ -8,6 +8,7 @@
 #include "apps/texfab/cli.h"
 #include "render/break_model.h"
 #include "render/preview_renderer.h"
+#include "synthesis/synthesize_solid.h"
 
 #include <string>
 
@@ -17,8 +18,9 @@ struct BreakJob {
   std::string model, output, exemplar, interior, separate, preview;
   render::BreakModelOptions options;
   uint32_t seed = 1;
-  float contrastGain = 1;  ///< the solid textures' (outside in --mode solid, and the cut faces)
-  int refinePasses = 0;    ///< the same textures'
+  /// The solid textures' (outside in --mode solid, and the cut faces).
+  float contrastGain = synthesis::SolidSynthesisOptions{}.contrastGain;
+  int refinePasses = synthesis::SolidSynthesisOptions{}.refinePasses;
   double explode = 0;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;

@@ -17,6 +17,7 @@
 #include "render/texture_mesh.h"
 #include "render/voxel_colors.h"
 #include "synthesis/refine_solid.h"
+#include "synthesis/synthesize_solid.h"
 
 #include <algorithm>
 #include <memory>
@@ -38,8 +39,8 @@ struct SliceJob {
   ColorMode mode = ColorMode::Solid;
   double textureScale = 0, featureSize = 0;
   uint32_t seed = 1;
-  float contrastGain = 1;
-  int refinePasses = 0;
+  float contrastGain = synthesis::SolidSynthesisOptions{}.contrastGain;
+  int refinePasses = synthesis::SolidSynthesisOptions{}.refinePasses;
   int resolution = 2048;
   bool force = false;
   WrapChoice wrap = WrapChoice::Auto;

@@ -34,12 +34,12 @@ namespace texfab::golden {
 /// the commit message.
 inline constexpr const char* kWindow2d = "72908d5d3414dcbb";
 inline constexpr const char* kWindow2dClamp = "f938a9dcaf008e4f";
-inline constexpr const char* kSolidVolume = "27aa583fe74a68f6";
-inline constexpr const char* kSolidObliquePlane = "88431cfed679a0dd";
-inline constexpr const char* kSolidClampVolume = "8908ef52a00c4752";
+inline constexpr const char* kSolidVolume = "9d43c1e1bbb36ea4";
+inline constexpr const char* kSolidObliquePlane = "1024f66e6d415b7d";
+inline constexpr const char* kSolidClampVolume = "b014e0dd69a65782";
 inline constexpr const char* kAtlasTexelUvs = "66752b2be1750fd4";
 inline constexpr const char* kSurfaceTexture = "0b8d074efefb46ee";
-inline constexpr const char* kSolidTexture = "4f002f2f76713f1f";
+inline constexpr const char* kSolidTexture = "9daa397972e6428e";
 inline constexpr const char* kGlbBytes = "b4cb60ad089f5722";
 
 /// FNV-1a over bytes, continued from `h`.

@@ -115,7 +115,8 @@ TEST(CliSolid, VolumePlaneAndPointsAgree) {
 }
 
 // --contrast-gain reaches the search: a plane of a 64^2 crop of the bundled brick keeps more of the
-// exemplar's contrast at gain 2 than at the default, as the report measures it, and says its gain.
+// exemplar's contrast at gain 2 than at gain 1 (the paper's search), as the report measures it,
+// and says its gain.
 // --contrast-gain keeps more of the exemplar's contrast; --refine then brings the slice's
 // structure closer to the exemplar's (fidelity ratio) and keeps most of that contrast.
 TEST(CliSolid, ContrastGainAndRefinement) {

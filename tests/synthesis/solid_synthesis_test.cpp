@@ -328,22 +328,17 @@ TEST(SolidSynthesis, DependencyChainOfOneVoxel) {
   EXPECT_GT(s.exact, s.perPassDilation);
 }
 
-// Slices of a 64^3 volume measured against the exemplar with the 2-D measures: clearly better
-// than random voxels, and better than the exemplar extruded along z on slices across the
-// extrusion.
+// Slices of a 64^3 volume measured against the exemplar with the 2-D measures, against two
+// baselines: random voxels, and the exemplar extruded along z (on slices across the extrusion).
+// The paper's search (contrast gain 1), with both schedules: 7x7 fidelity clearly better than
+// random voxels' and better than the extrusion's. The default gain of 2 trades some of that
+// fidelity (a measure flat slices win) for contrast and a histogram closer to the exemplar's,
+// showing as much of the exemplar as the paper's search (completeness).
 TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
   const Image e = marble(64);
   const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
   const int n = 64;
-  // Both schedules: Jacobi passes (the default) and the paper's 8 sub-passes per pass.
-  for (int interleave : {1, 2}) {
-  SolidSynthesisOptions so;
-  so.interleave = interleave;
-  std::printf("[ solid    ] interleave %d (%d sub-passes per pass)\n", interleave, so.subpasses());
-  const SolidSynthesisResult r = synthesizeSolidBox(a, {0, 0, 0, n, n, n}, so, nullptr, Context{.threads = 2});
-  std::vector<float> colors;
-  solidColors(r.triples, e, e, e, colors);
-  const int ch = solidColorChannels(e, e, e);
+  const int ch = e.channels;
   auto slice = [&](auto value, int axis, int k) {
     Image s(n, n, ch);
     for (int j = 0; j < n; ++j)
@@ -353,32 +348,76 @@ TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
       }
     return s;
   };
-  auto synthesized = [&](int x, int y, int z, int c) { return colors[((size_t(z) * n + size_t(y)) * n + size_t(x)) * size_t(ch) + size_t(c)]; };
-  auto extruded = [&](int x, int y, int, int c) { return e.at(x, y, c); };
-  auto random = [&](int x, int y, int z, int c) {
+  const int layers[3] = {8, 31, 52};
+  const char* names[3] = {"x", "y", "z"};
+  struct Measures {
+    double fidelity = 0, completeness = 0, histogram = 0, contrast = 0;
+  };
+  // Per axis, the mean over the three layers.
+  auto measure = [&](auto value) {
+    std::array<Measures, 3> m{};
+    for (int axis = 0; axis < 3; ++axis)
+      for (int k : layers) {
+        const Image s = slice(value, axis, k);
+        m[size_t(axis)].fidelity += neighborhoodFidelity(s, e) / 3;
+        m[size_t(axis)].completeness += neighborhoodCompleteness(s, e) / 3;
+        m[size_t(axis)].histogram += histogramDistance(s, e) / 3;
+        m[size_t(axis)].contrast += contrastRatio(s, e) / 3;
+      }
+    return m;
+  };
+  const auto extruded = measure([&](int x, int y, int, int c) { return e.at(x, y, c); });
+  const auto random = measure([&](int x, int y, int z, int c) {
     const uint32_t h = voxelHash(3, 0, x, y, z, 0);
     return e.at(int(h % 64), int((h >> 8) % 64), c);
+  });
+  auto synthesized = [&](float gain, int interleave) {
+    SolidSynthesisOptions so;
+    so.contrastGain = gain;
+    so.interleave = interleave;
+    const SolidSynthesisResult r = synthesizeSolidBox(a, {0, 0, 0, n, n, n}, so, nullptr, Context{.threads = 2});
+    std::vector<float> colors;
+    solidColors(r.triples, e, e, e, colors);
+    const auto m = measure([&](int x, int y, int z, int c) {
+      return colors[((size_t(z) * n + size_t(y)) * n + size_t(x)) * size_t(ch) + size_t(c)];
+    });
+    for (int axis = 0; axis < 3; ++axis) {
+      const Measures &s = m[size_t(axis)], &x = extruded[size_t(axis)], &r = random[size_t(axis)];
+      std::printf("[ solid    ] gain %.0f, interleave %d, %s slices: fidelity %.4f (extruded %.4f, random %.4f), "
+                  "completeness %.4f (%.4f, %.4f), histogram %.4f, contrast %.3f\n",
+                  double(gain), interleave, names[axis], s.fidelity, x.fidelity, r.fidelity, s.completeness,
+                  x.completeness, r.completeness, s.histogram, s.contrast);
+      RecordProperty(std::string("fidelity_") + names[axis] + "_gain" + std::to_string(int(gain)) + "_interleave" +
+                         std::to_string(interleave),
+                     std::to_string(s.fidelity));
+      EXPECT_LT(s.histogram, 0.1) << names[axis];
+    }
+    return m;
   };
-  const char* names[3] = {"x", "y", "z"};
-  for (int axis = 0; axis < 3; ++axis) {
-    double fs = 0, fe = 0, fr = 0, hs = 0;
-    for (int k : {8, 31, 52}) {
-      const Image s = slice(synthesized, axis, k);
-      fs += neighborhoodFidelity(s, e) / 3;
-      hs += histogramDistance(s, e) / 3;
-      fe += neighborhoodFidelity(slice(extruded, axis, k), e) / 3;
-      fr += neighborhoodFidelity(slice(random, axis, k), e) / 3;
+  for (int interleave : {1, 2}) {  // the paper's search: Jacobi passes and 8 sub-passes per pass
+    const auto paper = synthesized(1, interleave);
+    for (int axis = 0; axis < 3; ++axis) {
+      EXPECT_LT(paper[size_t(axis)].fidelity, 0.6 * random[size_t(axis)].fidelity) << names[axis];
+      if (axis < 2) {
+        EXPECT_LT(paper[size_t(axis)].fidelity, extruded[size_t(axis)].fidelity) << names[axis];
+      }
     }
-    std::printf("[ solid    ] %s slices: fidelity synthesized %.4f, extruded %.4f, random %.4f; histogram %.4f\n",
-                names[axis], fs, fe, fr, hs);
-    RecordProperty(std::string("fidelity_") + names[axis] + "_interleave" + std::to_string(interleave), std::to_string(fs));
-    EXPECT_LT(fs, 0.6 * fr) << names[axis];
-    if (axis < 2) {
-      EXPECT_LT(fs, fe) << names[axis];  // slices across the extrusion
+    if (interleave != 1) continue;
+    const float gain = SolidSynthesisOptions{}.contrastGain;
+    EXPECT_GT(gain, 1);
+    const auto defaults = synthesized(gain, 1);
+    for (int axis = 0; axis < 3; ++axis) {
+      const Measures &d = defaults[size_t(axis)], &p = paper[size_t(axis)];
+      EXPECT_GT(d.contrast, 1.1 * p.contrast) << names[axis];
+      EXPECT_LT(d.histogram, 0.9 * p.histogram) << names[axis];
+      EXPECT_LT(d.completeness, 1.02 * p.completeness) << names[axis];
+      EXPECT_LT(d.completeness, 0.8 * random[size_t(axis)].completeness) << names[axis];
+      if (axis < 2) {
+        EXPECT_LT(d.completeness, 0.9 * extruded[size_t(axis)].completeness) << names[axis];
+      }
+      EXPECT_LT(d.fidelity, 0.7 * random[size_t(axis)].fidelity) << names[axis];
     }
-    EXPECT_LT(hs, 0.1) << names[axis];
   }
-}
 }
 
 // The correction kernel's x86 batches (SSE, AVX2 where the CPU has it) and its portable
