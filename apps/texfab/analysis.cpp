@@ -39,8 +39,9 @@ void solidFidelityFlags(Flags& f, float& gain, int& refinePasses, const std::str
            "Passes of slice refinement of the solid texture" + what +
                " (Kopf et al. 2007's search and vote after the synthesis; 0 = off): at the default contrast gain, one "
                "pass keeps about 0.80 of the exemplar's contrast with small-scale structure as faithful as the "
-               "paper's search (--contrast-gain 1). Slow: each pass synthesizes a region 8 voxels thicker than the one requested; one "
-               "pass takes about 3.5 times the default's time for a volume or a surface, 12 for a planar cut",
+               "paper's search (--contrast-gain 1). Slow: each pass synthesizes a region 8 voxels thicker than the "
+               "one requested; one pass takes about 3.5 times the default's time for a volume or a surface, 12 for a "
+               "planar cut",
            {0, 4});
 }
 

@@ -338,7 +338,7 @@ TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
   const Image e = marble(64);
   const SolidAnalysis a = analyzeSolid(e, e, e, {}, Context{.threads = 2});
   const int n = 64;
-  const int ch = e.channels;
+  const int ch = solidColorChannels(e, e, e);
   auto slice = [&](auto value, int axis, int k) {
     Image s(n, n, ch);
     for (int j = 0; j < n; ++j)
@@ -383,11 +383,11 @@ TEST(SolidSynthesis, SlicesLookLikeTheExemplar) {
     });
     for (int axis = 0; axis < 3; ++axis) {
       const Measures &s = m[size_t(axis)], &x = extruded[size_t(axis)], &r = random[size_t(axis)];
-      std::printf("[ solid    ] gain %.0f, interleave %d, %s slices: fidelity %.4f (extruded %.4f, random %.4f), "
+      std::printf("[ solid    ] gain %g, interleave %d, %s slices: fidelity %.4f (extruded %.4f, random %.4f), "
                   "completeness %.4f (%.4f, %.4f), histogram %.4f, contrast %.3f\n",
                   double(gain), interleave, names[axis], s.fidelity, x.fidelity, r.fidelity, s.completeness,
                   x.completeness, r.completeness, s.histogram, s.contrast);
-      RecordProperty(std::string("fidelity_") + names[axis] + "_gain" + std::to_string(int(gain)) + "_interleave" +
+      RecordProperty(std::string("fidelity_") + names[axis] + (gain == 1 ? "_paper" : "_default") + "_interleave" +
                          std::to_string(interleave),
                      std::to_string(s.fidelity));
       EXPECT_LT(s.histogram, 0.1) << names[axis];
