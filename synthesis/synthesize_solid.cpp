@@ -587,7 +587,7 @@ struct Engine {
   template <class Emit> void synthesizeLevelOnDevice(int li, const Emit& emit) {
     const Mask& m = masks[size_t(li)];
     vulkan::SolidLevelInput level;
-    level.keys = m.keys();
+    level.chunks = &m;
     level.last = [&](uint32_t slot) { return m.at(slot); };
     if (li > 0)
       level.parents = [&](uint32_t slot) -> const uint32_t* {

@@ -164,11 +164,9 @@ void synthesizePart(Device& device, const SolidTables& tables, int contrastGain1
 
 void synthesizeSolidLevel(Device& device, const cpu::SolidTables& tables, const SolidLevelInput& level,
                           const SolidChunkSink& finish, const Context& ctx) {
-  const size_t n = level.keys.size();
+  const ChunkIndex& index = *level.chunks;
+  const size_t n = index.size();
   if (n == 0) return;
-  ChunkIndex index;  // slot s: level.keys[s]
-  for (const Key& k : level.keys)
-    if (!index.insert(k).second) throw std::logic_error("solid level: a chunk is listed twice");
   // A correction step reads 2 voxels around each voxel: T steps reach ceil(2T / 16) chunks.
   const int halo = (2 * level.steps + 15) / 16;
   std::vector<uint32_t> all(n);

@@ -11,18 +11,17 @@
 // are computed again by the neighbouring part: a voxel's value does not depend on the part.
 
 #include "render/image/context.h"
+#include "synthesis/chunk_index.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/vulkan/runtime.h"
 
-#include <array>
 #include <cstdint>
 #include <functional>
-#include <span>
 
 namespace texfab::synthesis::vulkan {
 
 struct SolidLevelInput {
-  std::span<const std::array<int64_t, 3>> keys;             ///< the level's 16^3 chunks (position / 16)
+  const ChunkIndex* chunks = nullptr;  ///< the level's 16^3 chunks (position / 16), slots as the engine's
   std::function<const int8_t*(uint32_t slot)> last;         ///< a chunk's mask, 4096 values
   std::function<const uint32_t*(uint32_t slot)> parents;    ///< its parents' 8^3 triples; empty at the coarsest level
   uint64_t tablesKey = 0;  ///< a key of the level's tables' content: kept on the device between requests (0: not kept)
