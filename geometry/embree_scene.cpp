@@ -61,12 +61,17 @@ bool pointQueryCallback(RTCPointQueryFunctionArguments* args) {
   const Eigen::Vector3f q = closestPointOnTriangle(p, (*data->positions)[tri[0]], (*data->positions)[tri[1]],
                                                    (*data->positions)[tri[2]], uv);
   const float d = (q - p).norm();
-  if (d < args->query->radius) {
-    args->query->radius = d;
-    *data->best = {q, args->primID, uv, d, true};
-    return true;  // the query radius shrank
-  }
-  return false;
+  // The nearest triangle, ties to the smaller index: Embree's traversal order follows its BVH,
+  // which follows the instruction set it picked at run time (the CPU), and a point nearest to a
+  // shared vertex or edge is as near to every triangle around it. The radius stays just above the
+  // best distance so that every triangle at that distance is still visited.
+  const SurfacePoint& best = *data->best;
+  const bool nearer = best.found ? d < best.distance || (d == best.distance && args->primID < best.triangle)
+                                 : d < args->query->radius;
+  if (!nearer) return false;
+  *data->best = {q, args->primID, uv, d, true};
+  args->query->radius = std::nextafter(d, std::numeric_limits<float>::infinity());
+  return true;  // the query radius shrank
 }
 
 RTCRayHit toEmbree(const Ray& ray) {

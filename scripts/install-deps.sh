@@ -10,12 +10,14 @@ packages=(
   libopenimageio-dev openimageio-tools libtbb-dev libeigen3-dev nlohmann-json3-dev libcli11-dev
   libnanoflann-dev
   # meshes: glTF, Draco, 3MF, Embree, halfedge structures, CGAL (and its data set)
-  libtinygltf-dev libdraco-dev draco lib3mf-dev libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
+  libtinygltf-dev libdraco-dev draco lib3mf-dev libzip-dev libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
   # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest)
   zlib1g-dev libssl-dev
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
   # which Debian's blender package does not pull in)
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy
+  # the goldens on emulated CPUs (qemu-x86_64 -cpu ...): values must not follow the CPU
+  qemu-user
   # a real single-node Slurm for the distributed slicing test (started by the test, not as services)
   slurmctld slurmd slurm-client munge python3
   # Vulkan compute (optional at build time): loader and headers, the GLSL compiler, Mesa's

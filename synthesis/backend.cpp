@@ -25,6 +25,13 @@ std::shared_ptr<vulkan::Device> deviceFor(const Context& ctx) {
   if (ctx.backend == Backend::Cpu) return nullptr;
   try {
     auto device = vulkan::sharedDevice(ctx.device);
+    // A device of type CPU (lavapipe, llvmpipe) emulates a GPU on this machine's cores, an order of
+    // magnitude slower than the CPU backend: auto takes it only when it was asked for by index.
+    if (ctx.backend == Backend::Auto && device->info().type == "CPU" && !vulkan::deviceNamed(ctx.device)) {
+      note(ctx, "CPU (the Vulkan device " + device->info().name +
+                    " emulates a GPU on the CPU, slower than the CPU backend; --backend vulkan or --device N uses it)");
+      return nullptr;
+    }
     note(ctx, "Vulkan: " + device->info().name);
     return device;
   } catch (const Cancelled&) {

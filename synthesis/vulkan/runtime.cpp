@@ -552,6 +552,8 @@ std::shared_ptr<Device> sharedDevice(int index) {
   return d;
 }
 
+bool deviceNamed(int index) { return index >= 0 || deviceFromEnvironment() >= 0; }
+
 std::vector<DeviceInfo> listDevices() {
   try {
     const Instance instance;

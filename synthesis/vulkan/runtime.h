@@ -111,6 +111,9 @@ private:
 /// $TEXFAB_VULKAN_MAX_RANGE (bytes) lowers its binding range (DeviceOptions), for tests.
 std::shared_ptr<Device> sharedDevice(int index);
 
+/// Whether a device was asked for by its index: `index` >= 0, or $TEXFAB_VULKAN_DEVICE set.
+bool deviceNamed(int index);
+
 /// A storage buffer in device memory. Its contents are undefined until written.
 class Buffer {
 public:

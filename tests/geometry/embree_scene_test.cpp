@@ -138,3 +138,29 @@ TEST(EmbreeScene, ClosestPointMatchesBruteForce) {
   }
   EXPECT_FALSE(scene.closestPoint(Eigen::Vector3f(10, 10, 10), 0.5f).found);
 }
+
+// A point nearest to a corner of the cube is as near to every triangle around it: the answer is
+// the one of smallest index, not the first that Embree's traversal (which follows the CPU's
+// instruction set) happens to visit.
+TEST(EmbreeScene, ClosestPointTiesGoToTheSmallestTriangle) {
+  const Mesh cube = texfab::test::texturedCube();
+  const EmbreeScene scene(cube);
+  const Eigen::Vector3f box[2] = {scene.bounds().min, scene.bounds().max};
+  int cornersChecked = 0;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3f corner(box[c & 1].x(), box[(c >> 1) & 1].y(), box[(c >> 2) & 1].z());
+    const Eigen::Vector3f outside = corner + (corner - scene.bounds().center()).normalized();
+    uint32_t smallest = UINT32_MAX;
+    int around = 0;
+    for (uint32_t t = 0; t < cube.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        if (cube.corner(t, k) == corner) smallest = std::min(smallest, t), ++around;
+    ASSERT_GE(around, 3);
+    const geometry::SurfacePoint near = scene.closestPoint(outside, 10.0f);
+    ASSERT_TRUE(near.found);
+    EXPECT_EQ(near.triangle, smallest) << "corner " << c;
+    EXPECT_EQ(near.point, corner);
+    ++cornersChecked;
+  }
+  EXPECT_EQ(cornersChecked, 8);
+}

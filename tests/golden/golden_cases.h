@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// The fixed cases whose output bytes the golden tests hash. Each returns the FNV-1a 64 hash of
-// what texfab computes: exemplar coordinates, triples, texel UVs, image bytes, file bytes.
+// The fixed cases whose output bytes the golden tests hash. Each returns the FNV-1a 64 hashes of
+// what texfab computes, stage by stage (analysis, atlas, fields, synthesis, colour, bake, encode:
+// those the case passes through), so that a failure names the first stage whose values changed.
 // Inputs are small bundled data so that the whole suite runs in seconds. The cases that synthesize
 // take the backend of their kernels (the Vulkan tests run them on the device: same hashes).
 
@@ -21,6 +22,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <gtest/gtest.h>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -30,17 +32,29 @@
 
 namespace texfab::golden {
 
-/// The expected hashes (hex). A deliberate change of output updates them here, with its reason in
-/// the commit message.
-inline constexpr const char* kWindow2d = "72908d5d3414dcbb";
-inline constexpr const char* kWindow2dClamp = "f938a9dcaf008e4f";
-inline constexpr const char* kSolidVolume = "9d43c1e1bbb36ea4";
-inline constexpr const char* kSolidObliquePlane = "1024f66e6d415b7d";
-inline constexpr const char* kSolidClampVolume = "b014e0dd69a65782";
-inline constexpr const char* kAtlasTexelUvs = "66752b2be1750fd4";
-inline constexpr const char* kSurfaceTexture = "0b8d074efefb46ee";
-inline constexpr const char* kSolidTexture = "9daa397972e6428e";
-inline constexpr const char* kGlbBytes = "b4cb60ad089f5722";
+/// One stage's expected hash (hex).
+struct Stage {
+  const char* name;
+  const char* hash;
+};
+
+/// The expected hashes (hex), stage by stage. A deliberate change of output updates them here, with
+/// its reason in the commit message.
+inline constexpr Stage kWindow2d[] = {{"analysis", "ec0cf9cad759bed8"}, {"synthesis", "72908d5d3414dcbb"}};
+inline constexpr Stage kWindow2dClamp[] = {{"analysis", "27abfbbcef11983d"}, {"synthesis", "f938a9dcaf008e4f"}};
+inline constexpr Stage kSolidVolume[] = {
+    {"analysis", "39c22a9410faab61"}, {"synthesis", "3e8d8d343adfd9c7"}, {"colour", "9d43c1e1bbb36ea4"}};
+inline constexpr Stage kSolidObliquePlane[] = {{"analysis", "39c22a9410faab61"}, {"synthesis", "1024f66e6d415b7d"}};
+inline constexpr Stage kSolidClampVolume[] = {{"analysis", "376954e8afa4e8c9"}, {"synthesis", "b014e0dd69a65782"}};
+inline constexpr Stage kAtlasTexelUvs[] = {{"atlas", "66752b2be1750fd4"}};
+inline constexpr Stage kSurfaceTexture[] = {{"analysis", "ec0cf9cad759bed8"},
+                                            {"atlas", "427d4aeff5f1272e"},
+                                            {"fields", "37143214d25b59bb"},
+                                            {"synthesis", "3153ae9f5a2e5c79"},
+                                            {"bake", "3adea9d1a4d51a97"}};
+inline constexpr Stage kSolidTexture[] = {
+    {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "9daa397972e6428e"}};
+inline constexpr Stage kGlbBytes[] = {{"bake", "3adea9d1a4d51a97"}, {"encode", "b4cb60ad089f5722"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {
@@ -65,6 +79,68 @@ inline std::string hex(uint64_t h) {
   char s[17];
   std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
   return s;
+}
+
+/// What a case computed, stage by stage, in pipeline order.
+struct Stages {
+  std::vector<std::pair<std::string, uint64_t>> hashes;
+  Stages& add(const std::string& stage, uint64_t hash) {
+    hashes.emplace_back(stage, hash);
+    return *this;
+  }
+};
+
+/// Fails the current test unless `got` has the expected stages and hashes; the message names the
+/// first stage whose values changed (the later ones follow from it) and lists every new hash.
+inline void expectStages(const Stages& got, std::span<const Stage> expected) {
+  std::string firstChanged, all;
+  bool sameStages = got.hashes.size() == expected.size();
+  for (size_t i = 0; i < got.hashes.size(); ++i) {
+    const auto& [name, hash] = got.hashes[i];
+    sameStages = sameStages && name == expected[i].name;
+    const bool same = sameStages && hex(hash) == expected[i].hash;
+    if (!same && firstChanged.empty()) firstChanged = name;
+    all += (all.empty() ? "" : ", ") + name + " " + hex(hash) + (same ? "" : " (changed)");
+  }
+  if (!sameStages) ADD_FAILURE() << "the case's stages differ from the expected list: " << all;
+  else if (!firstChanged.empty())
+    ADD_FAILURE() << "values changed first at the " << firstChanged << " stage: " << all;
+}
+
+/// Hashes of the analyses' outputs (every table synthesis reads).
+inline uint64_t hashOf(const synthesis::ExemplarAnalysis& a) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (const synthesis::AnalysisLevel& l : a.levels) {
+    h = hashOf(l.appearance, h);
+    h = hashOf(l.neighborhood, h);
+    h = hashOf(l.candidates, h);
+  }
+  return h;
+}
+inline uint64_t hashOf(const synthesis::SolidProjection& p, uint64_t h) {
+  h = hashOf(p.mean, hashOf(p.basis, h));
+  return fnv1a(&p.divisor, sizeof p.divisor, h);
+}
+inline uint64_t hashOf(const synthesis::SolidAnalysis& a) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (const synthesis::SolidLevel& l : a.levels) {
+    for (int e = 0; e < 3; ++e) {
+      h = hashOf(l.colors[size_t(e)], h);
+      h = hashOf(l.candidates2d[size_t(e)], h);
+      h = hashOf(l.descriptors2d[size_t(e)], h);
+      h = hashOf(l.triples[size_t(e)], h);
+      h = hashOf(l.descriptors3d[size_t(e)], h);
+      h = fnv1a(l.searchColors[size_t(e)].data(), sizeof l.searchColors[size_t(e)], h);
+    }
+    h = hashOf(l.projection3d, hashOf(l.projection2d, h));
+  }
+  return h;
+}
+/// Triples, flattened.
+inline uint64_t hashOf(const std::vector<synthesis::Triple>& triples) {
+  std::vector<uint32_t> flat;
+  for (const synthesis::Triple& t : triples) flat.insert(flat.end(), t.begin(), t.end());
+  return hashOf(flat);
 }
 
 inline std::filesystem::path bundled(const std::string& relative) {
@@ -104,15 +180,20 @@ inline const synthesis::SolidAnalysis& solidClampAnalysis40() {
 /// The context of the synthesis of a case.
 inline Context synthesisContext(Backend backend) { return Context{.threads = 2, .backend = backend}; }
 
+/// The bundled brick's analysis.
+inline const synthesis::ExemplarAnalysis& brickAnalysis() {
+  static const synthesis::ExemplarAnalysis a =
+      synthesis::analyzeExemplar(readImage(bundled("exemplars/brick.png")), {}, Context{.threads = 2});
+  return a;
+}
+
 /// A 2-D window away from the origin, bundled brick, seed 7.
-inline uint64_t window2d(Backend backend = Backend::Cpu) {
-  const Image exemplar = readImage(bundled("exemplars/brick.png"));
-  const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(exemplar, {}, Context{.threads = 2});
+inline Stages window2d(Backend backend = Backend::Cpu) {
   synthesis::SynthesisOptions options;
   options.seed = 7;
   const synthesis::SynthesisResult r =
-      synthesis::synthesize2d(analysis, {-37, 11, 96, 80}, options, synthesisContext(backend));
-  return hashOf(r.coords.coords);
+      synthesis::synthesize2d(brickAnalysis(), {-37, 11, 96, 80}, options, synthesisContext(backend));
+  return Stages().add("analysis", hashOf(brickAnalysis())).add("synthesis", hashOf(r.coords.coords));
 }
 
 /// A 64x64 crop of the bundled stone photograph, which does not tile.
@@ -129,40 +210,39 @@ inline const synthesis::ExemplarAnalysis& clampAnalysis64() {
 }
 
 /// A 2-D window away from the origin from clampAnalysis64, seed 5.
-inline uint64_t window2dClamp(Backend backend = Backend::Cpu) {
+inline Stages window2dClamp(Backend backend = Backend::Cpu) {
   synthesis::SynthesisOptions options;
   options.seed = 5;
   const synthesis::SynthesisResult r =
       synthesis::synthesize2d(clampAnalysis64(), {-1000003, 77, 80, 72}, options, synthesisContext(backend));
-  return hashOf(r.coords.coords);
+  return Stages().add("analysis", hashOf(clampAnalysis64())).add("synthesis", hashOf(r.coords.coords));
 }
 
 /// A 12^3 box of the solid texture of marble32 with its colours.
-inline uint64_t solidVolume(Backend backend = Backend::Cpu) {
+inline Stages solidVolume(Backend backend = Backend::Cpu) {
   synthesis::SolidSynthesisOptions options;
   options.seed = 3;
   const synthesis::SolidSynthesisResult r =
       synthesis::synthesizeSolidBox(solidAnalysis32(), {5, -3, 7, 12, 12, 12}, options, nullptr, synthesisContext(backend));
-  std::vector<uint32_t> flat;
-  for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
   std::vector<float> colors;
   synthesis::solidColors(r.triples, marble32(), marble32(), marble32(), colors);
-  return hashOf(colors, hashOf(flat));
+  return Stages()
+      .add("analysis", hashOf(solidAnalysis32()))
+      .add("synthesis", hashOf(r.triples))
+      .add("colour", hashOf(colors, hashOf(r.triples)));
 }
 
 /// A 12^3 box of the solid texture of rock40, which does not tile (clamp).
-inline uint64_t solidClampVolume(Backend backend = Backend::Cpu) {
+inline Stages solidClampVolume(Backend backend = Backend::Cpu) {
   synthesis::SolidSynthesisOptions options;
   options.seed = 5;
   const synthesis::SolidSynthesisResult r = synthesis::synthesizeSolidBox(
       solidClampAnalysis40(), {-9, 30, 4, 12, 12, 12}, options, nullptr, synthesisContext(backend));
-  std::vector<uint32_t> flat;
-  for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
-  return hashOf(flat);
+  return Stages().add("analysis", hashOf(solidClampAnalysis40())).add("synthesis", hashOf(r.triples));
 }
 
 /// The voxels of an oblique 40x40 plane through the solid texture of marble32.
-inline uint64_t solidPlane(Backend backend = Backend::Cpu) {
+inline Stages solidPlane(Backend backend = Backend::Cpu) {
   std::vector<synthesis::Voxel> voxels;
   for (int j = 0; j < 40; ++j)
     for (int i = 0; i < 40; ++i) {
@@ -171,29 +251,26 @@ inline uint64_t solidPlane(Backend backend = Backend::Cpu) {
     }
   const synthesis::SolidSynthesisResult r =
       synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, synthesisContext(backend));
-  std::vector<uint32_t> flat;
-  for (const synthesis::Triple& t : r.triples) flat.insert(flat.end(), t.begin(), t.end());
-  return hashOf(flat);
+  return Stages().add("analysis", hashOf(solidAnalysis32())).add("synthesis", hashOf(r.triples));
 }
 
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 
 /// The bundled knot's atlas at 512^2: every corner's texel position.
-inline uint64_t atlasTexelUvs() {
+inline Stages atlasTexelUvs() {
   const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/knot1.off"));
   atlas::GenerateAtlasOptions options;
   options.pack.width = options.pack.height = 512;
   const atlas::GenerateAtlasResult r = atlas::generateAtlas(mesh, options);
-  return hashOf(r.atlas.texelUvs);
+  return Stages().add("atlas", hashOf(r.atlas.texelUvs));
 }
 
 inline render::TextureMeshResult textureElephant(render::TextureMode mode, Backend backend) {
   static const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
   static const Image brick = readImage(bundled("exemplars/brick.png"));
-  static const synthesis::ExemplarAnalysis analysis = synthesis::analyzeExemplar(brick, {}, Context{.threads = 2});
   render::TextureExemplar ex;
   ex.color = mode == render::TextureMode::Solid ? &marble32() : &brick;
-  ex.analysis = &analysis;
+  ex.analysis = &brickAnalysis();
   ex.solidAnalysis = &solidAnalysis32();
   render::TextureMeshOptions options;
   options.mode = mode;
@@ -203,26 +280,38 @@ inline render::TextureMeshResult textureElephant(render::TextureMode mode, Backe
   return render::textureMesh(mesh, ex, options, Context{.backend = backend});
 }
 
+/// The per-texel Jacobians of the finest surface level (texel -> exemplar pixels).
+inline uint64_t hashOfJacobians(const render::TextureMeshResult& r) { return hashOf(r.sites.jacobian); }
+
 /// The bundled elephant textured at 256^2 with the bundled brick: coordinates and base colour.
-inline uint64_t surfaceTexture(Backend backend = Backend::Cpu) {
+inline Stages surfaceTexture(Backend backend = Backend::Cpu) {
   const render::TextureMeshResult r = textureElephant(render::TextureMode::Surface, backend);
-  return hashOf8Bit(*r.baseColor) ^ hashOf(r.coords);
+  return Stages()
+      .add("analysis", hashOf(brickAnalysis()))
+      .add("atlas", hashOf(r.atlas.atlas.texelUvs))
+      .add("fields", hashOfJacobians(r))
+      .add("synthesis", hashOf(r.coords))
+      .add("bake", hashOf8Bit(*r.baseColor));
 }
 
 /// The same in solid mode with marble32.
-inline uint64_t solidTexture(Backend backend = Backend::Cpu) {
+inline Stages solidTexture(Backend backend = Backend::Cpu) {
   const render::TextureMeshResult r = textureElephant(render::TextureMode::Solid, backend);
-  return hashOf8Bit(*r.baseColor);
+  return Stages()
+      .add("analysis", hashOf(solidAnalysis32()))
+      .add("atlas", hashOf(r.atlas.atlas.texelUvs))
+      .add("bake", hashOf8Bit(*r.baseColor));
 }
 
 /// The bytes of the GLB of the surface-mode elephant.
-inline uint64_t glbBytes(Backend backend = Backend::Cpu) {
+inline Stages glbBytes(Backend backend = Backend::Cpu) {
   const test::TempDir dir("texfab-golden");
   const std::filesystem::path path = dir / "elephant.glb";
-  geometry::writeMesh(textureElephant(render::TextureMode::Surface, backend).mesh, path);
+  const render::TextureMeshResult r = textureElephant(render::TextureMode::Surface, backend);
+  geometry::writeMesh(r.mesh, path);
   std::ifstream in(path, std::ios::binary);
   const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return hashOf(bytes);
+  return Stages().add("bake", hashOf8Bit(*r.baseColor)).add("encode", hashOf(bytes));
 }
 
 #endif
