@@ -248,17 +248,17 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
     pass = packAt(charts, options.texelsPerUnit, W, pad, rounding, packer, ctx);
     report.passes = 1;
     if (pass.used < 0 || pass.used > H)
-      throw Error("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
-                  std::to_string(options.texelsPerUnit) + " texels per unit");
+      throw AtlasTooSmall("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
+                          std::to_string(options.texelsPerUnit) + " texels per unit");
   } else {
     DensitySearch search(charts, totalArea, rounding, packer, ctx);
     search.fit(W, H, pad, options.maxPasses);
     report.passes = search.passes();
     pass = std::move(search.best());
     if (pass.density == 0)
-      throw Error("the " + std::to_string(atlas.charts.size()) + " charts cannot fit a " + std::to_string(W) + "x" +
-                  std::to_string(H) + " atlas (each needs at least " + std::to_string(2 * pad + 3) +
-                  " texels per side with this gutter); use a larger --resolution or a simpler mesh");
+      throw AtlasTooSmall("the " + std::to_string(atlas.charts.size()) + " charts cannot fit a " + std::to_string(W) +
+                          "x" + std::to_string(H) + " atlas (each needs at least " + std::to_string(2 * pad + 3) +
+                          " texels per side with this gutter)");
   }
   atlas.width = W;
   atlas.height = H;

@@ -12,10 +12,25 @@
 #include "atlas/atlas.h"
 #include "geometry/mesh.h"
 #include "render/image/context.h"
+#include "render/image/error.h"
 
 #include <cstddef>
+#include <string>
+#include <utility>
 
 namespace texfab::atlas {
+
+/// The charts cannot fit the atlas size asked for. `which()` names the atlas of a job that has
+/// several ("outer", "interior"), so that the command line can name the flag that sizes it.
+class AtlasTooSmall : public Error {
+public:
+  explicit AtlasTooSmall(const std::string& message, std::string which = "atlas")
+      : Error(message), which_(std::move(which)) {}
+  const std::string& which() const { return which_; }
+
+private:
+  std::string which_;
+};
 
 struct PackChartsOptions {
   static constexpr int kMinSide = 16, kMaxSide = 16384, kMaxGutter = 64;

@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <fstream>
 #include <memory>
 
@@ -104,9 +105,22 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
     case MeshFormat::Stl: detail::writeStl(mesh, tmp, options.binary); break;
     case MeshFormat::Gltf: detail::writeGltf(mesh, path, tmp, false, options, sideFiles); break;
     case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options, sideFiles); break;
-    case MeshFormat::ThreeMf: detail::write3mf(mesh, path, tmp); break;
+    case MeshFormat::ThreeMf: detail::write3mf(mesh, path, tmp, millimetresPerUnit(mesh, options)); break;
     }
   });
+}
+
+double millimetresPerUnit(const Mesh& mesh, const MeshWriteOptions& options) {
+  if (options.millimetresPerUnit > 0) return options.millimetresPerUnit;
+  if (!(options.heightMm > 0)) return 1.0;
+  const Eigen::Vector3f up = options.up.normalized();
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (const Eigen::Vector3f& p : mesh.positions) {
+    lo = std::min(lo, p.dot(up));
+    hi = std::max(hi, p.dot(up));
+  }
+  if (!(hi > lo)) throw Error("the model has no height along its up axis: a print height cannot size it");
+  return options.heightMm / double(hi - lo);
 }
 
 void writeScene(std::span<const SceneNode> nodes, const fs::path& path, const MeshWriteOptions& options) {

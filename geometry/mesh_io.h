@@ -64,7 +64,17 @@ struct MeshWriteOptions {
   /// .gltf: buffers and images as data URIs inside the file; false (default) writes them beside
   /// it (<stem>.bin, <stem>_<n>.png, ...).
   bool embed = false;
+  /// 3MF (whose coordinates are millimetres): the length of one model unit in mm; 0 = from
+  /// heightMm. (0, 1e6] otherwise.
+  double millimetresPerUnit = 0;
+  /// 3MF, when millimetresPerUnit is 0: the model's extent along `up` in mm; 0 = one unit is 1 mm.
+  double heightMm = 0;
+  Eigen::Vector3f up{0, 1, 0};
 };
+
+/// The length of one model unit in mm that a 3MF of `mesh` gets with `options` (see above). Throws
+/// texfab::Error when heightMm is asked of a model with no extent along `up`.
+double millimetresPerUnit(const Mesh& mesh, const MeshWriteOptions& options);
 
 /// Writes `mesh`. What each format keeps:
 ///  - glTF/GLB: everything (per-corner attributes, PBR materials, textures); one primitive per

@@ -6,7 +6,10 @@
 // Writing: one mesh object with one build item; each material with a base colour texture becomes
 // a texture2d (its image as a PNG attachment under /3D/Textures/, its colour factor multiplied in,
 // KHR_texture_transform applied to the UVs) and its triangles carry their corners' UVs; the other
-// materials become one basematerials group (name and display colour). Reading takes every mesh
+// materials become one basematerials group (name and display colour). Coordinates are millimetres
+// (the model unit times MeshWriteOptions::millimetresPerUnit). lib3mf 1.8 writes its archive with
+// Zip64 fields on every entry and a date of 1980-00-00, which assimp (5.2) refuses: the archive is
+// re-packed with libzip (plain entries, deflated, dated 1980-01-01). Reading takes every mesh
 // object of every build item (with its transform), its texture coordinates and textures, and
 // base materials as plain colours.
 #include "geometry/mesh_formats.h"
@@ -14,6 +17,7 @@
 #include "render/image/image_io.h"
 
 #include <Model/COM/NMR_DLLInterfaces.h>
+#include <zip.h>
 
 #include <cmath>
 #include <map>
@@ -85,16 +89,70 @@ DWORD addTexture(PLib3MFModel* model, const Material& material, size_t m, const 
   return id;
 }
 
+// The zip archive `archive` written again to `file` with libzip: the same entries in the same order,
+// deflated, without Zip64 fields (under 4 GiB), dated 1980-01-01 00:00.
+void repackZip(const std::vector<BYTE>& archive, const fs::path& file, const std::string& where) {
+  zip_error_t error;
+  zip_error_init(&error);
+  zip_source_t* source = zip_source_buffer_create(archive.data(), archive.size(), 0, &error);
+  zip_t* in = source ? zip_open_from_source(source, ZIP_RDONLY, &error) : nullptr;
+  if (!in) {
+    if (source) zip_source_free(source);
+    const std::string why = zip_error_strerror(&error);
+    zip_error_fini(&error);
+    throw Error(where + ": cannot read lib3mf's archive: " + why);
+  }
+  std::vector<std::pair<std::string, std::vector<uint8_t>>> entries;
+  for (zip_int64_t i = 0, n = zip_get_num_entries(in, 0); i < n; ++i) {
+    zip_stat_t st;
+    zip_file_t* f = zip_stat_index(in, zip_uint64_t(i), 0, &st) == 0 ? zip_fopen_index(in, zip_uint64_t(i), 0) : nullptr;
+    if (!f) {
+      zip_discard(in);
+      throw Error(where + ": cannot read lib3mf's archive entry " + std::to_string(i));
+    }
+    std::vector<uint8_t> data(size_t(st.size));
+    const zip_int64_t got = zip_fread(f, data.data(), data.size());
+    zip_fclose(f);
+    if (got != zip_int64_t(data.size())) {
+      zip_discard(in);
+      throw Error(where + ": cannot read lib3mf's archive entry " + st.name);
+    }
+    entries.emplace_back(st.name, std::move(data));
+  }
+  zip_discard(in);
+
+  int code = 0;
+  zip_t* out = zip_open(file.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &code);
+  if (!out) throw Error(where + ": cannot create the file (libzip error " + std::to_string(code) + ")");
+  for (const auto& [name, data] : entries) {
+    zip_source_t* s = zip_source_buffer(out, data.data(), data.size(), 0);
+    const zip_int64_t index = s ? zip_file_add(out, name.c_str(), s, ZIP_FL_ENC_UTF_8) : -1;
+    if (index < 0) {
+      if (s) zip_source_free(s);
+      zip_discard(out);
+      throw Error(where + ": cannot add " + name + " to the archive");
+    }
+    zip_set_file_compression(out, zip_uint64_t(index), ZIP_CM_DEFLATE, 0);
+    zip_file_set_dostime(out, zip_uint64_t(index), 0, (1 << 5) | 1, 0);  // 1980-01-01 00:00
+  }
+  if (zip_close(out) != 0) {
+    const std::string why = zip_strerror(out);
+    zip_discard(out);
+    throw Error(where + ": cannot write the file: " + why);
+  }
+}
+
 } // namespace
 
-void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp) {
+void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp, double millimetresPerUnit) {
   const std::string where = path.string();
   Handle model, object, properties, group, writer, item;
   check(lib3mf_createmodel(model.out()), nullptr, where);
+  check(lib3mf_model_setunit(model.p, MODELUNIT_MILLIMETER), model.p, where);
   check(lib3mf_model_addmeshobject(model.p, object.out()), model.p, where);
   std::vector<MODELMESHVERTEX> vertices(mesh.positions.size());
   for (size_t i = 0; i < vertices.size(); ++i)
-    for (int k = 0; k < 3; ++k) vertices[i].m_fPosition[k] = mesh.positions[i][k];
+    for (int k = 0; k < 3; ++k) vertices[i].m_fPosition[k] = float(double(mesh.positions[i][k]) * millimetresPerUnit);
   std::vector<MODELMESHTRIANGLE> triangles(mesh.triangleCount());
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) triangles[t].m_nIndices[k] = mesh.triangles[t][size_t(k)];
@@ -153,7 +211,11 @@ void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp) {
   }
   check(lib3mf_model_addbuilditem(model.p, object.p, nullptr, item.out()), model.p, where);
   check(lib3mf_model_querywriter(model.p, "3mf", writer.out()), model.p, where);
-  check(lib3mf_writer_writetofileutf8(writer.p, tmp.c_str()), writer.p, where);
+  ULONG64 size = 0;
+  check(lib3mf_writer_getstreamsize(writer.p, &size), writer.p, where);
+  std::vector<BYTE> archive(static_cast<size_t>(size));
+  check(lib3mf_writer_writetobuffer(writer.p, archive.data(), size), writer.p, where);
+  repackZip(archive, tmp, where);
 }
 
 } // namespace texfab::geometry::detail

@@ -69,7 +69,8 @@ uint64_t mulMod(uint64_t x, uint64_t y) { return (x % kAdlerBase) * (y % kAdlerB
 
 } // namespace
 
-PngRowEncoder::PngRowEncoder(int width, int height, int channels, std::span<const Rgba8> palette)
+PngRowEncoder::PngRowEncoder(int width, int height, int channels, std::span<const Rgba8> palette,
+                             std::array<uint32_t, 2> pixelsPerMetre)
     : width_(width), height_(height), channels_(channels) {
   if (width < 1 || height < 1 || width > (1 << 24) || height > (1 << 24))
     throw Error("PNG size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
@@ -89,6 +90,13 @@ PngRowEncoder::PngRowEncoder(int width, int height, int channels, std::span<cons
     while (!trns.empty() && trns.back() == 255) trns.pop_back();  // trailing opaque entries may be left out
     appendChunk(header_, "PLTE", plte.data(), plte.size());
     if (!trns.empty()) appendChunk(header_, "tRNS", trns.data(), trns.size());
+  }
+  if (pixelsPerMetre[0] > 0 && pixelsPerMetre[1] > 0) {
+    std::vector<uint8_t> phys;
+    appendBigEndian(phys, pixelsPerMetre[0]);
+    appendBigEndian(phys, pixelsPerMetre[1]);
+    phys.push_back(1);  // unit: the metre
+    appendChunk(header_, "pHYs", phys.data(), phys.size());
   }
   stream_ = {0x78, 0x01};  // deflate, 32 KiB window, no dictionary, fastest
   put(1, 1);               // final block

@@ -9,7 +9,8 @@
 // for such a layer. Noise (the dithered shell) is coded as literals (8-9 bits per byte): files are
 // larger than zlib's where the shell is thick, never by more than 13 % of the raw size.
 //
-// Output: a valid PNG (ISO/IEC 15948): IHDR, PLTE and tRNS for indexed images, IDAT chunks of a
+// Output: a valid PNG (ISO/IEC 15948): IHDR, PLTE and tRNS for indexed images, pHYs when the
+// pixel size is given, IDAT chunks of a
 // zlib stream (RFC 1950) with filter type 0 on every row, IEND. Bytes depend only on the pixels.
 
 #include <array>
@@ -25,8 +26,10 @@ class PngRowEncoder {
 public:
   /// `channels`: 1 (palette indices, with `palette` of 1-256 colours; alpha < 255 is written as
   /// transparency), 3 (RGB) or 4 (RGBA), 8 bits each. Throws texfab::Error for sizes out of range
-  /// (1 to 2^24 per side) or a bad palette.
-  PngRowEncoder(int width, int height, int channels, std::span<const Rgba8> palette = {});
+  /// (1 to 2^24 per side) or a bad palette. `pixelsPerMetre` (x, y), when not zero, is written as
+  /// the pixels' physical size (pHYs), so that viewers and printer software know the print's scale.
+  PngRowEncoder(int width, int height, int channels, std::span<const Rgba8> palette = {},
+                std::array<uint32_t, 2> pixelsPerMetre = {0, 0});
 
   /// Appends the next row (top first): width * channels bytes. Palette indices must be in range.
   void addRow(const uint8_t* pixels);

@@ -342,6 +342,9 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
       color += kKeyColor.cwiseProduct(0.32f * diffuse + 0.32f * spec * f0) * nl;
     }
   }
+  // A weak fill light from the camera, never shadowed: faces in deep gaps (the cut faces of
+  // exploded pieces, the inside of a crack) keep their colour where the key and the sky do not reach.
+  color += 0.1f * diffuse * std::max(0.0f, -n.dot(dir));
   Vector3f ambient = Vector3f::Zero();
   if (o.aoSamples > 0) {
     Vector3f ta, tb;

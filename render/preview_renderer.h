@@ -2,10 +2,11 @@
 #pragma once
 // The preview renderer: an Embree ray tracer that shows a textured mesh the way a person wants to
 // look at it. Perspective camera on an orbit (azimuth/elevation around the model's up axis, from
-// its front), framed tightly on the model's projected vertices, stratified supersampling, textures filtered with mip maps whose level comes
-// from the ray footprint [Igehy 1999, "Tracing Ray Differentials"], tangent-space normal maps,
-// a key light with shadows, and a sky light with ambient occlusion. Deterministic: the same
-// inputs give the same image on any thread count.
+// its front), framed tightly on the model's projected vertices, stratified supersampling, textures
+// filtered with mip maps whose level comes from the ray footprint [Igehy 1999, "Tracing Ray
+// Differentials"], tangent-space normal maps, a key light with shadows, a weak fill light from the
+// camera, and a sky light with ambient occlusion. Deterministic: the same inputs give the same
+// image on any thread count.
 
 #include "geometry/embree_scene.h"
 #include "geometry/mesh.h"

@@ -78,7 +78,8 @@ void assembleRow(const LayerSetup& s, LayerDitherer* ditherer, int y, std::span<
 // One layer, rendered row by row into a PNG.
 std::vector<uint8_t> renderLayer(const LayerSetup& s, const geometry::LayerSpans& layer, StageClock& clock) {
   const geometry::PrintGrid& g = s.grid;
-  PngRowEncoder encoder(g.width, g.height, s.channels, s.palette);
+  PngRowEncoder encoder(g.width, g.height, s.channels, s.palette,
+                        {uint32_t(std::lround(1000.0 / g.pitchMm.x())), uint32_t(std::lround(1000.0 / g.pitchMm.y()))});
   std::optional<LayerDitherer> ditherer;
   if (s.options.dither != DitherMode::None) ditherer.emplace(*s.mixer, s.options.dither, s.noise, layer.layer, g.width);
   std::vector<float> shell(4 * size_t(g.width));

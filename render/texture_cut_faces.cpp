@@ -63,7 +63,11 @@ CutFaceTexture textureCutFaces(std::span<const geometry::Mesh> pieces, std::span
 
   CutFaceTexture r;
   Stage atlasStage(ctx, "atlas");
-  r.atlas = atlas::generateAtlas(mesh, o.atlas, ctx.nested());
+  try {
+    r.atlas = atlas::generateAtlas(mesh, o.atlas, ctx.nested());
+  } catch (const atlas::AtlasTooSmall& e) {
+    throw atlas::AtlasTooSmall(std::string("the cut faces' atlas: ") + e.what(), "interior");
+  }
   const atlas::Atlas& at = r.atlas.atlas;
   atlasStage.finish(std::to_string(r.atlas.report.charts) + " charts, utilization " +
                     std::to_string(int(100 * r.atlas.report.utilization)) + " %");

@@ -8,6 +8,7 @@
 #include "render/image/image_io.h"
 #include "render/image/memory.h"
 #include "render/image/text.h"
+#include "render/own_texels.h"
 
 #include <optional>
 
@@ -132,10 +133,12 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   wrapFlag(f, job.wrap);
   solidFidelityFlags(f, job.contrastGain, job.refinePasses, " on the cut faces (and outside with --mode solid)");
   f.option("--explode", job.explode, "Move the pieces apart by this factor of their offset from the centre", {0, 100});
-  f.text("--separate", job.separate, "Also write each piece to its own file in this new (or empty) folder");
+  f.text("--separate", job.separate,
+         "Also write each piece to its own file in this new (or empty) folder, with only its own part of the textures");
   f.modelOutput(job.write);
   f.text("--preview", job.preview, "Also render the pieces, exploded, to this image");
   f.size("--preview-size", job.previewOptions.width, job.previewOptions.height, "Preview size", {1, 16384});
+  f.camera(job.previewOptions.azimuthDegrees, job.previewOptions.elevationDegrees);
   f.up(job.up);
   f.common(job.common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
 }
@@ -190,9 +193,11 @@ void runBreak(const std::string& command, BreakJob& job) {
   Stage write(run.ctx(), "write");
   geometry::writeScene(render::sceneOf(model, job.explode), out, job.write);
   if (!separate.empty())
-    for (const geometry::SceneNode& node : render::sceneOf(model))
+    for (geometry::SceneNode node : render::sceneOf(model)) {
+      node.mesh = render::keepOwnTexels(node.mesh);  // its own part of the shared atlases
       geometry::writeScene(std::span(&node, 1), separate / (node.name + fs::path(job.output).extension().string()),
                            job.write);
+    }
   write.finish(job.output + (separate.empty() ? "" : ", " + counted(int64_t(model.pieces.size()), "file") + " in " +
                                                          job.separate));
   if (!job.preview.empty()) {

@@ -190,7 +190,8 @@ void Flags::common(CommonFlags& c, unsigned which) {
   if (which & Common::Backend) {
     choice("--backend", c.backend, {{"cpu", Backend::Cpu}, {"vulkan", Backend::Vulkan}, {"auto", Backend::Auto}},
            "Where the synthesis kernels run: cpu, vulkan (a Vulkan device; error without one) or auto (a Vulkan "
-           "device when there is one, else the CPU); the result does not depend on it");
+           "GPU when there is one, else the CPU; a device that emulates a GPU on the CPU only if --device names it); "
+           "the result does not depend on it");
     option("--device", c.device, "Vulkan device index (texfab info --devices lists them)", Range{0, 1024})
         ->default_str("$TEXFAB_VULKAN_DEVICE, else the best");
   }
@@ -220,6 +221,12 @@ CLI::Option* Flags::up(UpAxis& axis) {
                 "do); the view looks at its front");
 }
 
+void Flags::camera(float& azimuthDegrees, float& elevationDegrees) {
+  option("--azimuth", azimuthDegrees, "Camera angle around the up axis, degrees (0 = from the model's front)",
+         {-3600, 3600});
+  option("--elevation", elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
+}
+
 void Flags::modelOutput(geometry::MeshWriteOptions& o) {
   using geometry::TextureEncoding;
   flag("--draco", o.draco, "Compress the geometry with Draco (KHR_draco_mesh_compression; .glb and .gltf)");
@@ -243,6 +250,30 @@ void Flags::modelOutput(geometry::MeshWriteOptions& o) {
   format->default_str(nameOf(formats, o.textures));
   option("--texture-quality", o.textureQuality, "JPEG and WebP quality", Range{1, 100});
   flag("--embed", o.embed, ".gltf output: buffers and images inside the file as data URIs, not beside it");
+}
+
+void checkPrintSize(const geometry::MeshWriteOptions& o, const std::string& output) {
+  if ((o.millimetresPerUnit > 0 || o.heightMm > 0) && geometry::meshFormatOf(output) != geometry::MeshFormat::ThreeMf)
+    throw UsageError(std::string(o.heightMm > 0 ? "--height" : "--unit") + " sizes a 3MF output, not " + output);
+}
+
+void Flags::printSize(geometry::MeshWriteOptions& o) {
+  static const std::pair<const char*, double> units[] = {{"mm", 1.0},  {"cm", 10.0},   {"m", 1000.0},
+                                                         {"in", 25.4}, {"ft", 304.8}, {"um", 0.001}};
+  CLI::Option* unit = app_->add_option_function<std::string>(
+      "--unit",
+      [&o](const std::string& text) {
+        for (const auto& [name, mm] : units)
+          if (name == text) return void(o.millimetresPerUnit = mm);
+        throw CLI::ValidationError("--unit", "expected mm, cm, m, in, ft or um, got '" + text + "'");
+      },
+      "3MF output: the model's length unit (mm, cm, m, in, ft, um); 3MF is written in millimetres");
+  unit->type_name("mm|cm|m|in|ft|um");
+  CLI::Option* height =
+      option("--height", o.heightMm, "3MF output: scale the model to this height in mm along its up axis (--up)",
+             positive(1e5));
+  height->excludes(unit);
+  height->default_str("one model unit = 1 mm");
 }
 
 // Run ----------------------------------------------------------------------------------------

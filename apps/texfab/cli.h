@@ -113,6 +113,8 @@ struct CommonFlags {
 /// (glTF's and OBJ's).
 enum class UpAxis { Auto, PosX, NegX, PosY, NegY, PosZ, NegZ };
 Eigen::Vector3f upVector(UpAxis axis, const std::filesystem::path& model);
+/// Throws UsageError when --unit or --height (Flags::printSize) is given for an output that is not 3MF.
+void checkPrintSize(const geometry::MeshWriteOptions& options, const std::string& output);
 
 /// Declares the flags of one subcommand, bound to the fields they set.
 class Flags {
@@ -168,11 +170,15 @@ public:
                     bool powerOfTwo = false);
   /// --up, the model's up axis for previews.
   CLI::Option* up(UpAxis& axis);
+  /// --azimuth and --elevation: where a preview's camera stands (render::RenderOptions).
+  void camera(float& azimuthDegrees, float& elevationDegrees);
   /// The common flags the command takes (Common::Threads | ...).
   void common(CommonFlags& flags, unsigned which);
   /// How a written model stores its geometry and textures: --draco, --texture-format,
   /// --texture-quality, --embed.
   void modelOutput(geometry::MeshWriteOptions& options);
+  /// --unit and --height: the size of a 3MF output (3MF's coordinates are millimetres).
+  void printSize(geometry::MeshWriteOptions& options);
 
 private:
   CLI::Option* number(const std::string& flags, const std::string& help, const Range& range, bool integer,

@@ -122,6 +122,7 @@ geometry::Mesh withAtlasUvs(const geometry::Mesh& mesh, const atlas::Atlas& a, c
 
 void runAtlas(AtlasJob& job) {
   Run run("atlas", job.common);
+  checkPrintSize(job.write, job.output);
   const atlas::PackChartsOptions& pack = job.options.pack;
   checkMemory(atlas::atlasMemoryBytes(pack.width, pack.height),
               "a " + std::to_string(pack.width) + "x" + std::to_string(pack.height) + " atlas");
@@ -161,6 +162,7 @@ void runAtlas(AtlasJob& job) {
 
   Stage write(run.ctx(), "write");
   const geometry::Mesh textured = withAtlasUvs(mesh, result.atlas, run.ctx());
+  job.write.up = upVector(UpAxis::Auto, job.model);
   geometry::writeMesh(textured, out, job.write);
   if (!debug.empty()) writeDebugImages(debug, textured, result.atlas, result.fields, jacobians);
   write.finish(job.output);
@@ -183,8 +185,8 @@ Command addAtlasCommand(CLI::App& root) {
   atlas::GenerateAtlasOptions& o = job->options;
   Flags f(root.add_subcommand("atlas", "Build a texture atlas (charts, LSCM/ARAP parameterization, packing) "
                                       "and the surface fields for synthesis in it"));
-  f.input("model", job->model, "Input mesh (.obj .ply .off .stl .gltf .glb)");
-  f.text("-o,--output", job->output, "Output mesh with the atlas UVs (.glb .gltf .obj .ply)")->required();
+  f.input("model", job->model, "Input mesh (.obj .ply .off .stl .gltf .glb .3mf)");
+  f.text("-o,--output", job->output, "Output mesh with the atlas UVs (.glb .gltf .obj .ply .3mf)")->required();
   f.size("--resolution", o.pack.width, o.pack.height, "Atlas size",
          {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true);
   f.option("--gutter", o.pack.gutter, "Minimum empty texels between charts", {0, atlas::PackChartsOptions::kMaxGutter});
@@ -205,6 +207,7 @@ Command addAtlasCommand(CLI::App& root) {
   f.text("--debug-images", job->debugImages,
          "Write chart ids, normals, Jacobian magnitude/anisotropy, a checkerboard and checker.glb into this new folder");
   f.modelOutput(job->write);
+  f.printSize(job->write);
   f.common(job->common, Common::Threads | Common::Report | Common::Quiet);
   return {f.app(), [job] { runAtlas(*job); }};
 }

@@ -16,16 +16,19 @@ struct ConvertJob {
   std::string input, output;
   geometry::MeshWriteOptions options;
   bool ascii = false;
+  UpAxis up = UpAxis::Auto;
   CommonFlags common;
 };
 
 void runConvert(ConvertJob& job) {
   using namespace geometry;
   Run run("convert", job.common);
+  checkPrintSize(job.options, job.output);
   const MeshFormat out = meshFormatOf(job.output);  // a bad output name fails before reading
   if (job.options.draco && out != MeshFormat::Glb && out != MeshFormat::Gltf)
     throw UsageError("--draco needs a .glb or .gltf output, not " + job.output);
   job.options.binary = !job.ascii;
+  job.options.up = upVector(job.up, job.input);
   const std::filesystem::path staged = run.output(job.output);
   Stage read(run.ctx(), "read");
   const Mesh mesh = readMesh(job.input, run.ctx());
@@ -41,11 +44,13 @@ void runConvert(ConvertJob& job) {
 
 Command addConvertCommand(CLI::App& root) {
   auto job = std::make_shared<ConvertJob>();
-  Flags f(root.add_subcommand("convert", "Convert a model between OBJ(+MTL), PLY, OFF, STL, glTF and GLB "
+  Flags f(root.add_subcommand("convert", "Convert a model between OBJ(+MTL), PLY, OFF, STL, glTF, GLB and 3MF "
                                          "(keeps UVs, normals and materials where both formats can)"));
-  f.input("input", job->input, "Input model (.obj, .ply, .off, .stl, .gltf, .glb)");
-  f.input("output", job->output, "Output model; the format follows the extension");
+  f.input("input", job->input, "Input model (.obj, .ply, .off, .stl, .gltf, .glb, .3mf)");
+  f.input("output", job->output, "Output model (.obj, .ply, .off, .stl, .gltf, .glb, .3mf); the format follows the extension");
   f.modelOutput(job->options);
+  f.printSize(job->options);
+  f.up(job->up)->description("The model's up axis, along which --height measures (auto: z for STL, else y)");
   f.option("--draco-level", job->options.dracoLevel, "Draco compression level, 0 fast to 10 small", {0, 10});
   f.flag("--ascii", job->ascii, "Write ASCII PLY/STL instead of binary");
   f.common(job->common, Common::Quiet);

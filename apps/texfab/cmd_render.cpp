@@ -91,9 +91,7 @@ Command addRenderCommand(CLI::App& root) {
       ->required();
   f.size("--size", o.width, o.height, "Image size", {1, 16384});
   f.up(job->up);
-  f.option("--azimuth", o.azimuthDegrees, "Camera angle around the up axis, degrees (0 = from the model's front)",
-           {-3600, 3600});
-  f.option("--elevation", o.elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
+  f.camera(o.azimuthDegrees, o.elevationDegrees);
   f.option("--turntable", job->turntable, "Render N views evenly around the model instead of one", {0, 3600})
       ->default_str("");
   f.option("--spp", o.samplesPerPixel, "Samples per pixel (antialiasing; rounded down to a square)", {1, 4096});

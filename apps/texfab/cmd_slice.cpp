@@ -44,8 +44,19 @@ struct SliceJob {
   int resolution = 2048;
   bool force = false;
   WrapChoice wrap = WrapChoice::Auto;
+  UpAxis up = UpAxis::Auto;
   CommonFlags common;
 };
+
+// The model axis that points up in the print: as the previews stand the model (upVector).
+geometry::UpAxis printUpAxis(UpAxis axis, const fs::path& model) {
+  const Eigen::Vector3f v = upVector(axis, model);
+  const int a = v.x() != 0 ? 0 : v.y() != 0 ? 1 : 2;
+  const bool negative = v[a] < 0;
+  static const geometry::UpAxis positive[3] = {geometry::UpAxis::X, geometry::UpAxis::Y, geometry::UpAxis::Z};
+  static const geometry::UpAxis negatives[3] = {geometry::UpAxis::NegX, geometry::UpAxis::NegY, geometry::UpAxis::NegZ};
+  return negative ? negatives[a] : positive[a];
+}
 
 // --layers A:B (B exclusive) or --shard I/K (the I-th of K near-equal ranges) into first, count.
 std::pair<int, int> layerRange(const SliceJob& job, int layers) {
@@ -66,7 +77,8 @@ std::pair<int, int> layerRange(const SliceJob& job, int layers) {
   }
   if (job.layers.empty()) return {0, layers};
   const auto [a, b] = pair("--layers", job.layers, ':');
-  if (b <= a || b > layers)
+  if (b <= a) throw UsageError("--layers: expected A:B with A < B, got '" + job.layers + "'");
+  if (b > layers)
     throw Error("--layers " + job.layers + ": expected 0 <= A < B <= " + std::to_string(layers) + " (the print's layers)");
   return {int(a), int(b - a)};
 }
@@ -104,9 +116,10 @@ std::unique_ptr<render::VoxelColorSource> colorSource(const SliceJob& job, Run& 
     so.seed = job.seed;
     so.contrastGain = job.contrastGain;
     so.refinePasses = job.refinePasses;
-    // Default: one exemplar spans a quarter of the model's height.
+    // Default: one exemplar spans a quarter of the print's height (model units along the up axis).
     const geometry::BoundingBox box = geometry::boundingBox(mesh);
-    const double span = job.featureSize > 0 ? job.featureSize : (box.max.z() - box.min.z()) / 4;
+    const double height = std::abs((grid.rotation * (box.max - box.min).cast<double>()).z());
+    const double span = job.featureSize > 0 ? job.featureSize : height / 4;
     const double scale = job.textureScale > 0 ? job.textureScale : std::max(exemplar->width, exemplar->height) / span;
     source["colors"] = {{"mode", "solid"}, {"exemplar", name}, {"seed", job.seed},
                          {"contrast_gain", job.contrastGain}, {"refine_passes", job.refinePasses},
@@ -139,6 +152,7 @@ void runSlice(SliceJob& job) {
                    counted(int64_t(holes.boundaryEdges), "boundary edge") + ") with fans of triangles");
   std::optional<Image> exemplar;
   if (!job.exemplar.empty()) exemplar = readImage(job.exemplar);
+  job.grid.up = printUpAxis(job.up, job.model);
   const geometry::PrintGrid grid = geometry::printGrid(geometry::boundingBox(mesh), job.grid);
   const auto [first, count] = layerRange(job, grid.layers);
   job.slice.firstLayer = first;
@@ -152,7 +166,9 @@ void runSlice(SliceJob& job) {
                   refinement,
               "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
                   " voxels with its batch (lower --dpi or the size)");
-  load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle") + "; print " +
+  const Eigen::Vector3d size = grid.sizeMm();
+  load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle") + "; print " + figure(size.x()) +
+              " x " + figure(size.y()) + " x " + figure(size.z()) + " mm (wide x deep x tall), " +
               std::to_string(grid.width) + " x " + std::to_string(grid.height) + " x " + std::to_string(grid.layers) +
               " voxels");
 
@@ -201,7 +217,9 @@ Command addSliceCommand(CLI::App& root) {
                                        "solid texture and dithered"));
   f.input("model", job->model, "Closed model (.obj .ply .off .stl .gltf .glb .3mf)");
   f.text("-o,--output", job->output, "Output folder: slice_00000.png ... and slices.json")->required();
-  f.option("--height", g.heightMm, "Print height in mm (the model's z extent)", positive(10000));
+  f.up(job->up)->description("The model's up axis, along which layers stack (auto: z for STL, else y, as the "
+                              "previews stand the model); the model rests on the bed with its lowest point in layer 0");
+  f.option("--height", g.heightMm, "Print height in mm (the model's extent along --up)", positive(10000));
   f.option("--scale", g.mmPerUnit, "Millimetres per model unit (instead of --height; 0: use --height)", {0, 1e6});
   f.numbers("--dpi", 0, "X[,Y]", "Printer resolution in dots per inch (default 600,300)", positive(100000), false,
             [job](const std::vector<double>& v) {

@@ -128,6 +128,7 @@ int downsampleForAnalysis(render::TextureMeshOptions& o, Inputs& in, const Run& 
 
 void runTexture(TextureJob& job) {
   Run run("texture", job.common);
+  checkPrintSize(job.write, job.output);
   render::TextureMeshOptions& o = job.options;
   // Everything checkable is checked, and every output reserved, before any work.
   if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --scale or --feature-size, not both");
@@ -169,6 +170,7 @@ void runTexture(TextureJob& job) {
   const render::TextureMeshResult result = render::textureMesh(in.mesh, ex, o, run.ctx());
 
   Stage write(run.ctx(), "write");
+  job.write.up = upVector(job.up, job.model);
   geometry::writeMesh(result.mesh, out, job.write);
   if (result.height) writeImage(*result.height, heightOut);
   write.finish(job.output + (result.height ? ", " + heightOut.filename().string() : ""));
@@ -207,9 +209,9 @@ Command addTextureCommand(CLI::App& root) {
   Flags f(root.add_subcommand(
       "texture", "Synthesize a texture over a mesh from an exemplar and write the textured model "
                  "(surface: anisometric synthesis in the atlas; solid: the matching interior of the material)"));
-  f.input("model", job->model, "Input mesh (.obj .ply .off .stl .gltf .glb)");
+  f.input("model", job->model, "Input mesh (.obj .ply .off .stl .gltf .glb .3mf)");
   f.text("-e,--exemplar", job->exemplar, "Exemplar image (PNG, JPEG, TIFF, EXR, GIMP .pat)")->required();
-  f.text("-o,--output", job->output, "Textured model (.glb .gltf .obj)")->required();
+  f.text("-o,--output", job->output, "Textured model (.glb .gltf .obj .3mf)")->required();
   f.choice("--mode", o.mode, {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}},
            "surface (synthesis over the surface) or solid (a 3-D material, seamless)");
   f.option("--scale", o.textureScale,
@@ -233,8 +235,10 @@ Command addTextureCommand(CLI::App& root) {
          "Companion maps of the exemplar's size, synthesized with the same coordinates: "
          "normal=N.png,roughness=R.png,height=H.png (height is written as OUTPUT_height.png)");
   f.modelOutput(job->write);
+  f.printSize(job->write);
   f.text("--preview", job->preview, "Also render the textured model to this image");
   f.size("--preview-size", job->previewOptions.width, job->previewOptions.height, "Preview size", {1, 16384});
+  f.camera(job->previewOptions.azimuthDegrees, job->previewOptions.elevationDegrees);
   f.up(job->up);
   f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runTexture(*job); }};

@@ -9,6 +9,7 @@
 // stops at its next check and unwinds, removing its temporaries. A second one removes the
 // registered temporaries and exits at once.
 
+#include "atlas/pack_charts.h"
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "render/image/error.h"
@@ -124,6 +125,11 @@ int main(int argc, char** argv) {
     } catch (const cli::UsageError& e) {
       std::fprintf(stderr, "%s: error: %s (see '%s --help')\n", where.c_str(), e.what(), where.c_str());
       return 1;
+    } catch (const atlas::AtlasTooSmall& e) {
+      // The flag that sizes the atlas: --interior-resolution for the cut faces', else --resolution.
+      const char* flag = e.which() == "interior" ? "--interior-resolution" : "--resolution";
+      std::fprintf(stderr, "%s: error: %s; give a larger %s or a simpler mesh\n", where.c_str(), e.what(), flag);
+      return 2;
     } catch (const Error& e) {
       std::fprintf(stderr, "%s: error: %s\n", where.c_str(), e.what());
       return 2;

@@ -245,7 +245,7 @@ TEST(MeshIo, OutputsLoadInAssimp) {
   if (!haveProgram("assimp")) GTEST_SKIP() << "assimp (assimp-utils) not installed";
   TempDir dir("texfab-assimp");
   const Mesh cube = texturedCube();
-  for (const char* name : {"cube.glb", "cube.gltf", "cube.obj", "cube.ply", "cube.stl", "cube.off"}) {
+  for (const char* name : {"cube.glb", "cube.gltf", "cube.obj", "cube.ply", "cube.stl", "cube.off", "cube.3mf"}) {
     writeMesh(cube, dir / name);
     EXPECT_EQ(run("assimp info '" + (dir / name).string() + "'"), 0) << name;
   }

@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 namespace texfab::test {
 namespace {
@@ -120,6 +122,44 @@ TEST(ThreeMf, RoundTripThroughTexfabsReader) {
     ASSERT_EQ(std::lround(a.pixels[i] * 255.0f), std::lround(b.pixels[i] * 255.0f)) << i;
 }
 
+uint16_t little16(const std::string& b, size_t at) { return uint16_t(uint8_t(b[at]) | uint8_t(b[at + 1]) << 8); }
+uint32_t little32(const std::string& b, size_t at) { return uint32_t(little16(b, at)) | uint32_t(little16(b, at + 2)) << 16; }
+
+// 3MF is in millimetres: a unit scales the model's coordinates, a height its extent along the up
+// axis. The archive is plain zip, as every reader takes it (assimp 5.2 refused lib3mf's own, whose
+// entries carry Zip64 fields and the date 1980-00-00): no extra fields, a real date.
+TEST(ThreeMf, SizedInMillimetresInAPlainArchive) {
+  TempDir dir;
+  const geometry::Mesh cube = texturedCube();
+  geometry::writeMesh(cube, dir / "inches.3mf", {.millimetresPerUnit = 25.4});
+  const geometry::Mesh inches = geometry::readMesh(dir / "inches.3mf");
+  ASSERT_EQ(inches.positions.size(), cube.positions.size());
+  for (size_t i = 0; i < cube.positions.size(); ++i)
+    EXPECT_LT((inches.positions[i] - 25.4f * cube.positions[i]).norm(), 1e-4f) << i;
+
+  geometry::MeshWriteOptions tall;
+  tall.heightMm = 80;
+  tall.up = {0, 0, 1};
+  geometry::writeMesh(cube, dir / "tall.3mf", tall);
+  const geometry::BoundingBox box = geometry::boundingBox(geometry::readMesh(dir / "tall.3mf"));
+  EXPECT_NEAR(box.max.z() - box.min.z(), 80.0f, 1e-3f);
+  EXPECT_NEAR((box.max.x() - box.min.x()) / (box.max.z() - box.min.z()),
+              (geometry::boundingBox(cube).max.x() - geometry::boundingBox(cube).min.x()) /
+                  (geometry::boundingBox(cube).max.z() - geometry::boundingBox(cube).min.z()),
+              1e-5f);
+
+  std::ifstream in(dir / "tall.3mf", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  int entries = 0;
+  for (size_t at = 0; at + 30 <= bytes.size() && little32(bytes, at) == 0x04034b50; ++entries) {
+    EXPECT_EQ(little16(bytes, at + 28), 0) << "extra fields in entry " << entries;
+    EXPECT_EQ(little16(bytes, at + 12), (1 << 5) | 1) << "date of entry " << entries;  // 1980-01-01
+    EXPECT_EQ(little16(bytes, at + 6) & 8, 0);  // sizes in the header, no data descriptor
+    at += 30 + little16(bytes, at + 26) + little16(bytes, at + 28) + little32(bytes, at + 18);
+  }
+  EXPECT_GE(entries, 4);  // the model, content types, relationships, the texture
+}
+
 TEST(ThreeMf, ConvertAndTextureWriteIt) {
   TempDir dir;
   const fs::path obj = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/marble_cube.obj";
@@ -127,6 +167,16 @@ TEST(ThreeMf, ConvertAndTextureWriteIt) {
   const geometry::Mesh converted = geometry::readMesh(dir / "c.3mf");
   EXPECT_EQ(converted.triangleCount(), geometry::readMesh(obj).triangleCount());
   EXPECT_TRUE(converted.hasUvs());
+  // --height: the model's extent along its up axis (y for OBJ) in mm; only for 3MF.
+  ASSERT_EQ(test::runCli("convert '" + obj.string() + "' '" + (dir / "h.3mf").string() + "' -q --height 80").status, 0);
+  const geometry::BoundingBox sized = geometry::boundingBox(geometry::readMesh(dir / "h.3mf"));
+  EXPECT_NEAR(sized.max.y() - sized.min.y(), 80.0f, 1e-3f);
+  const test::CliResult notThreeMf =
+      test::runCli("convert '" + obj.string() + "' '" + (dir / "h.glb").string() + "' -q --height 80");
+  EXPECT_EQ(notThreeMf.status, 1) << notThreeMf.err;
+  EXPECT_NE(notThreeMf.err.find("--height"), std::string::npos) << notThreeMf.err;
+  EXPECT_FALSE(fs::exists(dir / "h.glb"));
+  EXPECT_EQ(test::runCli("convert '" + obj.string() + "' '" + (dir / "u.3mf").string() + "' -q --unit furlong").status, 1);
   const fs::path exemplar = fs::path(TEXFAB_SOURCE_DIR) / "models/exemplars/brick.png";
   const fs::path knot = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/knot1.off";
   ASSERT_EQ(test::runCli("texture '" + knot.string() + "' -e '" + exemplar.string() + "' -o '" + (dir / "t.3mf").string() +

@@ -4,6 +4,7 @@
 // the solid texture at their positions, re-cuts texture only their new faces (reusing the cache),
 // results do not depend on threads or runs, the exploded view shows every piece; bad input.
 #include "render/break_model.h"
+#include "render/own_texels.h"
 #include "render/crack_measures.h"
 #include "render/image/error.h"
 #include "render/image/image_io.h"
@@ -206,6 +207,46 @@ TEST(BreakModel, RefusesBadInput) {
   EXPECT_THROW(breakModel(makeSphere(16, 8), {}, InteriorExemplar{}, fractureOptions(3)), Error);
   BreakModelOptions zero = fractureOptions(0);
   EXPECT_THROW(breakModel(makeSphere(16, 8), {}, interior(), zero), Error);
+}
+
+} // namespace
+
+namespace {
+
+// keepOwnTexels (--separate): a piece's atlas shrinks to its triangles' texels, every texel a
+// triangle shows keeps its value, and a tiling material is left alone.
+TEST(OwnTexels, CropsTheAtlasToThePieceAndKeepsItsTexels) {
+  auto image = std::make_shared<Image>(64, 64, 3);
+  for (size_t i = 0; i < image->pixels.size(); ++i) image->pixels[i] = float((i * 2654435761u) % 255) / 255.0f;
+  geometry::Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 3}};
+  mesh.uvs = {{0.10f, 0.60f}, {0.30f, 0.60f}, {0.30f, 0.80f},  // material 0: a corner of the atlas
+              {0.10f, 0.60f}, {0.30f, 0.80f}, {0.10f, 0.80f},
+              {0.0f, 0.0f},   {2.5f, 0.0f},   {0.0f, 3.0f}};   // material 1 tiles
+  geometry::Material a, b;
+  a.baseColorTexture.image = image;
+  b.baseColorTexture.image = image;
+  mesh.materials = {a, b};
+  mesh.faceMaterials = {0, 0, 1};
+
+  const geometry::Mesh own = keepOwnTexels(mesh, 2);
+  const Image& crop = *own.materials[0].baseColorTexture.image;
+  EXPECT_LT(crop.width, 20);
+  EXPECT_LT(crop.height, 20);
+  EXPECT_EQ(own.materials[1].baseColorTexture.image, image);  // tiling: kept whole
+  EXPECT_EQ(own.uvs[6], mesh.uvs[6]);
+  auto texel = [](const Image& im, const Eigen::Vector2f& uv) {
+    const int x = int(std::floor(uv.x() * float(im.width))), y = int(std::floor((1 - uv.y()) * float(im.height)));
+    return Eigen::Vector3f(im.pixel(x, y));
+  };
+  for (size_t t = 0; t < 2; ++t)
+    for (float s : {0.2f, 0.5f, 0.8f}) {  // points inside the triangle
+      const float r = (1 - s) / 2;
+      const Eigen::Vector2f before = s * mesh.uvs[3 * t] + r * mesh.uvs[3 * t + 1] + r * mesh.uvs[3 * t + 2];
+      const Eigen::Vector2f after = s * own.uvs[3 * t] + r * own.uvs[3 * t + 1] + r * own.uvs[3 * t + 2];
+      EXPECT_EQ(texel(*image, before), texel(crop, after)) << t << " " << s;
+    }
 }
 
 } // namespace

@@ -93,6 +93,10 @@ TEST_F(CliBreak, FractureWritesValidPiecesAndAReport) {
     EXPECT_EQ(texfab::geometry::readMesh(part).triangleCount(), r["pieces"][size_t(i)]["triangles"].get<size_t>());
   }
   expectValid(dir / "parts" / "piece_000.glb");
+  // Each piece carries only its own texels: together they weigh little more than the whole.
+  uintmax_t parts = 0;
+  for (const auto& e : fs::directory_iterator(dir / "parts")) parts += fs::file_size(e.path());
+  EXPECT_LT(parts, 2 * fs::file_size(dir / "pieces.glb")) << parts;
 }
 
 TEST_F(CliBreak, SameBytesOnOneAndTwoThreads) {
@@ -152,6 +156,7 @@ TEST_F(CliBreak, BadInputFailsWithOneLineAndNoOutput) {
       {"fracture", model + " --pieces 3", "--interior", 1},
       {"fracture", quoted(dir / "crossing.obj") + interior + " --pieces 3", "intersects itself", 2},
       {"fracture", quoted(dir / "missing.off") + interior, "missing.off", 2},
+      {"fracture", model + interior + " --pieces 4 --interior-resolution 16", "larger --interior-resolution", 2},
       {"cut", model + interior + " --plane 0,0,0,0,0,0", "normal is zero", 1},
       {"cut", model + interior + " --plane nan,0,0,0,0,1", "--plane", 1},
       {"cut", model + interior + " --plane 1,2,3", "expected 6 comma-separated numbers", 1},

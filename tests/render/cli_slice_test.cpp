@@ -124,6 +124,7 @@ TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
   expectRefused(dir, model + " --layer 0", "--layer", 1);
   expectRefused(dir, model + " --shell -1", "--shell", 1);
   expectRefused(dir, model + " --layers 5:99999", "--layers");
+  expectRefused(dir, model + " --layers 5:2", "--layers", 1);
   expectRefused(dir, model + " --shard 3/3", "--shard", 1);
   expectRefused(dir, model + " --dither sparkle", "--dither", 1);
   expectRefused(dir, model + " --core gold", "no material named 'gold'");

@@ -76,6 +76,26 @@ TEST(PngRowEncoder, IndexedImagesKeepPaletteAndTransparency) {
     for (int c = 0; c < 4; ++c) ASSERT_EQ(std::lround(back.pixels[4 * i + size_t(c)] * 255.0f), palette[pixels[i]][size_t(c)]);
 }
 
+// Print layers say their pixel size (pHYs, pixels per metre): 600 x 300 dpi here. The chunk comes
+// before the image data and the image still decodes.
+TEST(PngRowEncoder, WritesThePixelSize) {
+  const std::vector<Rgba8> palette = {{0, 0, 0, 0}, {255, 255, 255, 255}};
+  const std::vector<uint8_t> pixels = runsAndNoise(50, 4, 1, 2, 3);
+  PngRowEncoder encoder(50, 4, 1, palette, {23622, 11811});
+  for (int y = 0; y < 4; ++y) encoder.addRow(&pixels[size_t(y) * 50]);
+  const std::vector<uint8_t> png = encoder.finish();
+  const std::string bytes(png.begin(), png.end());
+  const size_t at = bytes.find("pHYs");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_LT(at, bytes.find("IDAT"));
+  // Length 9, the type, x = 23622 = 0x5c46 and y = 11811 = 0x2e23 pixels per metre, unit 1 (metre).
+  const uint8_t expected[17] = {0, 0, 0, 9, 'p', 'H', 'Y', 's', 0, 0, 0x5c, 0x46, 0, 0, 0x2e, 0x23, 1};
+  EXPECT_TRUE(std::equal(expected, expected + 17, png.begin() + std::ptrdiff_t(at) - 4));
+  EXPECT_EQ(decodeImage(png, "phys.png").width, 50);
+  const std::vector<uint8_t> plain = encode(pixels, 50, 4, 1, palette);
+  EXPECT_EQ(std::string(plain.begin(), plain.end()).find("pHYs"), std::string::npos);
+}
+
 TEST(PngRowEncoder, RunsCompressAndBadUseIsRefused) {
   std::vector<uint8_t> row(5000, 3);
   PngRowEncoder encoder(5000, 200, 1, std::vector<Rgba8>(4, Rgba8{1, 2, 3, 255}));
