@@ -19,10 +19,11 @@ namespace texfab::atlas {
 
 void PackChartsOptions::validate() const {
   auto pow2 = [](int v) { return v > 0 && (v & (v - 1)) == 0; };
-  if (width < kMinSide || width > kMaxSide || height < kMinSide || height > kMaxSide)
+  const bool autoSize = width == 0 && height == 0 && texelsPerUnit > 0;
+  if (!autoSize && (width < kMinSide || width > kMaxSide || height < kMinSide || height > kMaxSide))
     throw Error("atlas size must be " + std::to_string(kMinSide) + " to " + std::to_string(kMaxSide) + " texels per side, got " + std::to_string(width) + "x" +
                 std::to_string(height));
-  if (powerOfTwo && (!pow2(width) || !pow2(height)))
+  if (!autoSize && powerOfTwo && (!pow2(width) || !pow2(height)))
     throw Error("atlas size must be a power of two, got " + std::to_string(width) + "x" + std::to_string(height));
   if (gutter < 0 || gutter > kMaxGutter)
     throw Error("gutter must be 0 to " + std::to_string(kMaxGutter) + " texels, got " + std::to_string(gutter));
@@ -225,13 +226,53 @@ void placeDegenerateTriangles(const geometry::Mesh& mesh, Atlas& atlas) {
   }
 }
 
+// Lays out smaller the charts longer than `side` texels at `density`: each is scaled to that
+// length. Returns how many.
+size_t shrinkLongCharts(std::vector<OrientedChart>& charts, double density, double side) {
+  size_t shrunk = 0;
+  for (OrientedChart& c : charts) {
+    const double length = std::max(c.extent.x(), c.extent.y()) * density;
+    if (!(length > side)) continue;
+    const double s = side / length;
+    for (Eigen::Vector2d& p : c.corners) p *= s;
+    c.extent *= s;
+    ++shrunk;
+  }
+  return shrunk;
+}
+
+// The smallest atlas that holds the charts at `density`: a strip about as wide as the square the
+// charts' texels fill at the packer's usual 75 %, widened until every chart fits across it, its
+// height what the packing used; both rounded up to multiples of 4.
+Pass packToFit(std::vector<OrientedChart>& charts, double totalArea, double density, int pad, double rounding,
+               const SkylinePackerOptions& packer, const Context& ctx, int& W, int& H, size_t& shrunk) {
+  auto up4 = [](double v) { return int(std::ceil(v / 4)) * 4; };
+  const double square = std::sqrt(totalArea / 0.75) * density + 2 * pad;
+  shrunk = shrinkLongCharts(charts, density, square - 2 * pad - 2);
+  W = std::max(PackChartsOptions::kMinSide, up4(square));
+  for (;;) {
+    Pass pass = packAt(charts, density, W, pad, rounding, packer, ctx);
+    if (pass.used >= 0) {
+      H = std::max(PackChartsOptions::kMinSide, up4(pass.used));
+      if (H <= PackChartsOptions::kMaxSide) return pass;
+    }
+    if (W >= PackChartsOptions::kMaxSide)
+      throw AtlasTooSmall("the charts need more than a " + std::to_string(PackChartsOptions::kMaxSide) + "^2 atlas at " +
+                          std::to_string(density) + " texels per unit");
+    W = std::min(PackChartsOptions::kMaxSide, up4(1.25 * W));
+  }
+}
+
 } // namespace
 
 PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const PackChartsOptions& options, const Context& ctx) {
   options.validate();
-  const int W = options.width, H = options.height;
+  int W = options.width, H = options.height;
+  const bool autoSize = W == 0 && H == 0;
   const int pad = (options.gutter + 1) / 2;
-  const double rounding = texelUvRounding(W, H);
+  // An atlas sized to fit is at most kMaxSide per side: round as that size does.
+  const double rounding =
+      autoSize ? texelUvRounding(PackChartsOptions::kMaxSide, PackChartsOptions::kMaxSide) : texelUvRounding(W, H);
   std::vector<OrientedChart> charts(atlas.charts.size());
   parallelFor(0, int(charts.size()), ctx, [&](int b, int e) {
     for (int i = b; i < e; ++i) charts[size_t(i)] = orientChart(atlas, atlas.charts[size_t(i)]);
@@ -244,13 +285,20 @@ PackChartsReport packCharts(const geometry::Mesh& mesh, Atlas& atlas, const Pack
   packer.holeBudget = options.holeFilling ? packer.holeBudget : 0;
   PackChartsReport report;
   Pass pass;
-  if (options.texelsPerUnit > 0) {
+  if (autoSize) {
+    pass = packToFit(charts, totalArea, options.texelsPerUnit, pad, rounding, packer, ctx, W, H, report.chartsShrunk);
+    report.passes = 1;
+  } else if (options.texelsPerUnit > 0) {
     pass = packAt(charts, options.texelsPerUnit, W, pad, rounding, packer, ctx);
     report.passes = 1;
     if (pass.used < 0 || pass.used > H)
       throw AtlasTooSmall("the charts do not fit a " + std::to_string(W) + "x" + std::to_string(H) + " atlas at " +
                           std::to_string(options.texelsPerUnit) + " texels per unit");
   } else {
+    // A chart that could not lie across the atlas at the density of a perfect packing would hold
+    // every chart's density down to its own.
+    const double ideal = std::sqrt(double(W) * double(H) / totalArea);
+    report.chartsShrunk = shrinkLongCharts(charts, ideal, double(std::min(W, H) - 2 * pad - 2));
     DensitySearch search(charts, totalArea, rounding, packer, ctx);
     search.fit(W, H, pad, options.maxPasses);
     report.passes = search.passes();

@@ -34,8 +34,10 @@ private:
 
 struct PackChartsOptions {
   static constexpr int kMinSide = 16, kMaxSide = 16384, kMaxGutter = 64;
-  int width = 2048;          ///< atlas width in texels (kMinSide .. kMaxSide)
-  int height = 2048;         ///< atlas height in texels (kMinSide .. kMaxSide)
+  /// Atlas size in texels (kMinSide .. kMaxSide). Both 0 with a texelsPerUnit: the smallest atlas
+  /// that holds the charts at that density (about square, multiples of 4, not powers of two).
+  int width = 2048;
+  int height = 2048;
   int gutter = 4;            ///< minimum empty texels between two charts (0 .. kMaxGutter)
   bool powerOfTwo = true;    ///< require power-of-two width and height
   double texelsPerUnit = 0;  ///< fixed density; 0 = the largest that fits
@@ -53,6 +55,9 @@ struct PackChartsReport {
   int usedHeight = 0;          ///< rows used by the packed charts (<= height)
   size_t maskTexels = 0;        ///< texels of the packed masks (charts + half gutters): the packer's fill
   size_t chartsBelowOneTexel = 0; ///< charts whose extent is under one texel at the chosen density
+  /// Charts longer than the atlas side at the density the others get (a sliver a cut left, a long
+  /// strip), laid out smaller to fit: coarser texels there instead of everywhere.
+  size_t chartsShrunk = 0;
 };
 
 /// Fills atlas.width/height/texelsPerUnit/texelUvs and each chart's placement. Throws

@@ -4,6 +4,7 @@
 #include "geometry/measure_solid.h"
 #include "render/image/error.h"
 
+#include <cmath>
 #include <cstdio>
 
 namespace texfab::render {
@@ -121,6 +122,11 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
   if (count) {
     if (!interior.color || !interior.analysis) throw Error("the cut faces need an interior exemplar (--interior or --exemplar)");
     CutFaceTextureOptions io = o.interior;
+    if (io.atlas.pack.width == 0 && io.atlas.pack.height == 0 && io.atlas.pack.texelsPerUnit == 0) {
+      // Auto: the outer surface's texel density (an atlas sized to fit), else a 2048^2 atlas.
+      if (r.outer) io.atlas.pack.texelsPerUnit = r.outer->atlas.atlas.texelsPerUnit;
+      else io.atlas.pack.width = io.atlas.pack.height = 2048;
+    }
     if (io.textureScale == 0 && r.outer) io.textureScale = r.outer->textureScale;
     if (r.outer && o.outer.mode == TextureMode::Solid) io.solid = o.outer.solid;  // continuous across the crack edges
     Stage stage(ctx, "interior");
@@ -128,6 +134,11 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
     for (const Piece& p : r.pieces) meshes.push_back(p.mesh);
     r.interior = textureCutFaces(meshes, faces, *interior.color, *interior.analysis, io, stage.inner(), cache);
     stage.finish(std::to_string(r.interior->sites.size()) + " texels");
+    const double inner = r.interior->atlas.atlas.texelsPerUnit;
+    if (r.outer && inner < 0.9 * r.outer->atlas.atlas.texelsPerUnit)
+      r.notes.push_back("the cut faces get " + std::to_string(int(std::lround(inner))) + " texels per unit, the outer "
+                        "surface " + std::to_string(int(std::lround(r.outer->atlas.atlas.texelsPerUnit))) +
+                        ": a larger interior atlas shows them as sharply");
     r.interiorScale = r.interior->textureScale;
     r.interiorSolid = io.solid;
     applyInterior(r.pieces, faces, *r.interior, interiorIndex);

@@ -88,6 +88,7 @@ void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const ren
     const render::CutFaceTexture& t = *model.interior;
     r["interior"] = {{"width", t.atlas.atlas.width}, {"height", t.atlas.atlas.height}, {"charts", t.atlas.report.charts},
                      {"utilization", t.atlas.report.utilization}, {"texels", t.sites.size()},
+                     {"texels_per_unit", t.atlas.atlas.texelsPerUnit},
                      {"voxels_requested", t.voxelsRequested}, {"voxels_synthesized", t.voxelsSynthesized}};
     const render::CrackMatch match = render::measureCrackMatch(model);
     const render::CrackSeams seams = render::measureCrackSeams(model);
@@ -113,7 +114,7 @@ void addBreakInput(Flags& f, BreakJob& job) {
 void addBreakOptions(Flags& f, BreakJob& job) {
   render::BreakModelOptions& o = job.options;
   o.outer.mode = render::TextureMode::Solid;
-  o.interior.atlas.pack.width = o.interior.atlas.pack.height = 2048;
+  o.interior.atlas.pack.width = o.interior.atlas.pack.height = 0;  // auto
   f.text("-e,--exemplar", job.exemplar,
          "Texture the outer faces from this exemplar (default: keep the model's own material and UVs)");
   f.choice("--mode", o.outer.mode, {{"solid", render::TextureMode::Solid}, {"surface", render::TextureMode::Surface}},
@@ -125,8 +126,9 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   f.size("--resolution", o.outer.atlas.pack.width, o.outer.atlas.pack.height, "Outer atlas size (with --exemplar)",
          {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true);
   f.size("--interior-resolution", o.interior.atlas.pack.width, o.interior.atlas.pack.height,
-         "Atlas size of the cut faces (one atlas for all pieces)",
-         {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true);
+         "Atlas size of the cut faces (one atlas for all pieces); auto: the size that gives them the outer "
+         "texture's texel density (with --exemplar; else 2048)",
+         {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true, true);
   f.option("--gutter", o.interior.atlas.pack.gutter, "Minimum empty texels between charts",
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", job.seed, "Random seed of the textures (and of the fracture's sites)");
@@ -169,6 +171,11 @@ void runBreak(const std::string& command, BreakJob& job) {
   render::TextureMeshOptions interiorCost;  // the cut faces' atlas costs as a solid texture job's
   interiorCost.mode = render::TextureMode::Solid;
   interiorCost.atlas = o.interior.atlas;
+  if (interiorCost.atlas.pack.width == 0) {  // auto: up to twice the outer atlas's texels, or 2048^2
+    const bool outer = !job.exemplar.empty();
+    interiorCost.atlas.pack.width = outer ? int(1.5 * o.outer.atlas.pack.width) : 2048;
+    interiorCost.atlas.pack.height = outer ? int(1.5 * o.outer.atlas.pack.height) : 2048;
+  }
   interiorCost.solid = o.interior.solid;
   checkMemory(render::textureMeshMemoryBytes(interiorCost) +
                   (job.exemplar.empty() ? 0.0 : render::textureMeshMemoryBytes(o.outer)),

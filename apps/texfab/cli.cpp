@@ -162,15 +162,19 @@ CLI::Option* Flags::option(const std::string& flags, std::vector<float>& field, 
 }
 
 CLI::Option* Flags::size(const std::string& flags, int& width, int& height, const std::string& help, const Range& range,
-                         bool powerOfTwo) {
+                         bool powerOfTwo, bool allowAuto) {
   CLI::Option* o = app_->add_option_function<std::string>(
       flags,
-      [&width, &height, range, powerOfTwo, f = longName(flags)](const std::string& text) {
-        std::tie(width, height) = parseSize(f, text, range, powerOfTwo);
+      [&width, &height, range, powerOfTwo, allowAuto, f = longName(flags)](const std::string& text) {
+        if (allowAuto && text == "auto") width = height = 0;
+        else std::tie(width, height) = parseSize(f, text, range, powerOfTwo);
       },
-      help + " (N for NxN, or WxH; " + range.text() + (powerOfTwo ? ", powers of two" : "") + " per side)");
-  o->type_name("N|WxH");
-  o->default_str(width == height ? std::to_string(width) : std::to_string(width) + "x" + std::to_string(height));
+      help + " (" + (allowAuto ? "auto, " : "") + "N for NxN, or WxH; " + range.text() +
+          (powerOfTwo ? ", powers of two" : "") + " per side)");
+  o->type_name(allowAuto ? "auto|N|WxH" : "N|WxH");
+  o->default_str(width == 0 && height == 0 ? "auto"
+                 : width == height        ? std::to_string(width)
+                                          : std::to_string(width) + "x" + std::to_string(height));
   return o;
 }
 

@@ -165,9 +165,9 @@ public:
     o->default_str(nameOf(names, field));
     return o;
   }
-  /// A width x height field pair, "N" or "WxH".
+  /// A width x height field pair, "N" or "WxH"; with `allowAuto`, also "auto" (0 x 0).
   CLI::Option* size(const std::string& flags, int& width, int& height, const std::string& help, const Range& range,
-                    bool powerOfTwo = false);
+                    bool powerOfTwo = false, bool allowAuto = false);
   /// --up, the model's up axis for previews.
   CLI::Option* up(UpAxis& axis);
   /// --azimuth and --elevation: where a preview's camera stands (render::RenderOptions).

@@ -154,6 +154,39 @@ TEST(AtlasOnCgalMeshes, PackingIsRerunnableWithOtherOptions) {
   checkAtlas(mesh, r, 8);
 }
 
+// A needle (a sliver that a cut leaves) longer than the atlas at the density the other charts get
+// is laid out smaller instead of holding every chart's density down to its own; an atlas sized to
+// fit a density (width and height 0) keeps it and fills at least 60 % of its texels.
+TEST(AtlasPacking, LongChartsShrinkAndAtlasesSizeToFit) {
+  geometry::Mesh mesh = geometry::readMesh(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/meshes/knot1.off");
+  const GenerateAtlasResult plain = generateAtlas(mesh, options(512));
+  EXPECT_EQ(plain.report.pack.chartsShrunk, 0u);
+
+  const geometry::BoundingBox box = geometry::boundingBox(mesh);
+  const float length = 3 * box.diagonal();
+  const uint32_t v = uint32_t(mesh.positions.size());
+  mesh.positions.push_back(box.max + Eigen::Vector3f(1, 0, 0));
+  mesh.positions.push_back(box.max + Eigen::Vector3f(1 + length, 0, 0));
+  mesh.positions.push_back(box.max + Eigen::Vector3f(1 + length / 2, length / 300, 0));
+  mesh.triangles.push_back({v, v + 1, v + 2});
+  const GenerateAtlasResult needle = generateAtlas(mesh, options(512));
+  EXPECT_EQ(needle.report.pack.chartsShrunk, 1u);
+  EXPECT_GT(needle.atlas.texelsPerUnit, 0.9 * plain.atlas.texelsPerUnit);
+  EXPECT_EQ(needle.report.overlappingTexels, 0u);
+
+  GenerateAtlasOptions fit;
+  fit.pack.width = fit.pack.height = 0;
+  fit.pack.texelsPerUnit = 1.5 * plain.atlas.texelsPerUnit;
+  const GenerateAtlasResult sized = generateAtlas(mesh, fit);
+  EXPECT_EQ(sized.atlas.texelsPerUnit, fit.pack.texelsPerUnit);
+  EXPECT_GT(sized.atlas.width, 512);
+  EXPECT_EQ(sized.atlas.width % 4, 0);
+  EXPECT_EQ(sized.atlas.height % 4, 0);
+  EXPECT_GE(sized.report.utilization, 0.6);
+  EXPECT_EQ(sized.report.overlappingTexels, 0u);
+  EXPECT_EQ(sized.report.pack.chartsShrunk, 1u);
+}
+
 Eigen::Vector3d surfacePoint(const geometry::Mesh& mesh, const Atlas& atlas, uint32_t t, double x, double y) {
   double b1, b2;
   atlasBarycentrics(atlas, t, {x, y}, b1, b2);

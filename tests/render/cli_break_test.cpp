@@ -99,6 +99,19 @@ TEST_F(CliBreak, FractureWritesValidPiecesAndAReport) {
   EXPECT_LT(parts, 2 * fs::file_size(dir / "pieces.glb")) << parts;
 }
 
+// By default the cut faces get the outer texture's texel density, in an atlas sized to fit (at 512^2
+// the gutters of the small charts leave 0.65 of it to them, like the outer atlas).
+TEST_F(CliBreak, CutFacesKeepTheOuterDensity) {
+  const auto run = texfab("fracture", quoted(kModel) + " -e " + quoted(exemplar) + " --resolution 512 --pieces 12 -q" +
+                                          " --cache-dir " + quoted(dir / "cache") + " -o " + quoted(dir / "d.glb") +
+                                          " --report " + quoted(dir / "d.json"));
+  ASSERT_EQ(0, run.status) << run.err;
+  const nlohmann::json r = nlohmann::json::parse(readText(dir / "d.json"));
+  EXPECT_DOUBLE_EQ(r["interior"]["texels_per_unit"].get<double>(), r["atlas"]["texels_per_unit"].get<double>());
+  EXPECT_GE(r["interior"]["utilization"].get<double>(), 0.6);
+  expectValid(dir / "d.glb");
+}
+
 TEST_F(CliBreak, SameBytesOnOneAndTwoThreads) {
   for (const auto& [output, threads] : {std::pair{"a.glb", "1"}, std::pair{"b.glb", "2"}}) {
     const auto run = texfab("fracture", common(output) + " --pieces 4 --threads " + threads);
