@@ -7,6 +7,7 @@
 #include "apps/texfab/command.h"
 #include "geometry/close_holes.h"
 #include "geometry/mesh_io.h"
+#include "geometry/orient_mesh.h"
 #include "geometry/print_grid.h"
 #include "geometry/voxelize_layers.h"
 #include "render/image/image_io.h"
@@ -147,6 +148,9 @@ void runSlice(SliceJob& job) {
 
   Stage load(run.ctx(), "load");
   geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
+  // Wound one way, outward, as texture and fracture do (a flipped triangle is no hole).
+  if (const std::string repair = geometry::describeRepair(geometry::orientMesh(mesh)); !repair.empty())
+    run.ctx().warn(repair);
   if (const geometry::CloseHolesReport holes = geometry::closeHoles(mesh); holes.holes > 0)
     run.ctx().warn("closed " + counted(int64_t(holes.holes), "hole") + " (" +
                    counted(int64_t(holes.boundaryEdges), "boundary edge") + ") with fans of triangles");

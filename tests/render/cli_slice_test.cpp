@@ -66,6 +66,41 @@ TEST(CliSlice, WritesLayersManifestPreviewAndReport) {
   EXPECT_LT(r["voxels"]["shell"].get<int64_t>(), r["voxels"]["inside"].get<int64_t>());
 }
 
+// A 2 x 6 x 1 box (x, y, z), wound outward, or with two triangles flipped.
+fs::path boxModel(const TempDir& dir, bool flipped) {
+  const fs::path p = dir / (flipped ? "flipped.obj" : "box.obj");
+  std::ofstream(p) << "v 0 0 0\nv 2 0 0\nv 2 6 0\nv 0 6 0\nv 0 0 1\nv 2 0 1\nv 2 6 1\nv 0 6 1\n"
+                   << (flipped ? "f 1 3 4\nf 1 2 3\n" : "f 1 4 3\nf 1 3 2\n")
+                   << "f 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+  return p;
+}
+
+// The print stands the model as the previews do (y up for OBJ; --up z lays it down), --height
+// measures it along that axis, and the manifest says the print's size. A model wound
+// inconsistently is re-oriented, as texture and fracture do, and prints the same layers.
+TEST(CliSlice, StandsTheModelUpAndRepairsItsWinding) {
+  TempDir dir;
+  const std::string common = " --height 6 --dpi 25.4 --layer 0.5 --shell 0.6";  // 1 mm pixels
+  const texfab::test::CliResult upright = slice(quoted(boxModel(dir, false)) + " -o " + quoted(dir / "y") + common + " -q");
+  ASSERT_EQ(upright.status, 0) << upright.err;
+  const nlohmann::json y = nlohmann::json::parse(readText(dir / "y" / "slices.json"));
+  EXPECT_EQ(y["layers"]["count"], 12);  // 6 mm at 0.5 mm
+  EXPECT_NEAR(y["print"]["size_mm"][0].get<double>(), 2.0, 1e-9);
+  EXPECT_NEAR(y["print"]["size_mm"][1].get<double>(), 1.0, 1e-9);
+  EXPECT_NEAR(y["print"]["size_mm"][2].get<double>(), 6.0, 1e-9);
+  ASSERT_EQ(slice(quoted(boxModel(dir, false)) + " -o " + quoted(dir / "z") + common + " -q --up z").status, 0);
+  const nlohmann::json z = nlohmann::json::parse(readText(dir / "z" / "slices.json"));
+  EXPECT_NEAR(z["print"]["size_mm"][0].get<double>(), 12.0, 1e-9);  // 6 mm per unit
+  EXPECT_NEAR(z["print"]["size_mm"][1].get<double>(), 36.0, 1e-9);
+
+  const texfab::test::CliResult flipped = slice(quoted(boxModel(dir, true)) + " -o " + quoted(dir / "f") + common);
+  ASSERT_EQ(flipped.status, 0) << flipped.err;
+  EXPECT_NE(flipped.err.find("re-oriented 2 triangles"), std::string::npos) << flipped.err;
+  const nlohmann::json f = nlohmann::json::parse(readText(dir / "f" / "slices.json"));
+  ASSERT_EQ(f["files"].size(), y["files"].size());
+  for (size_t i = 0; i < f["files"].size(); ++i) EXPECT_EQ(f["files"][i]["sha256"], y["files"][i]["sha256"]) << i;
+}
+
 TEST(CliSlice, ShardsMergeIntoTheFullRun) {
   TempDir dir;
   const fs::path model = sphereModel(dir);
