@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/print_materials.h"
 
+#include "render/color_difference.h"
 #include "render/image/error.h"
+#include "render/mip_pyramid.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <set>
@@ -39,15 +42,37 @@ Rgba8 parseColor(const nlohmann::json& value, const std::string& where) {
   throw Error(where + ": colour must be \"#RRGGBB\" or [r, g, b] with integers 0-255, got " + value.dump());
 }
 
+// A measured CIELAB colour (D50, as spectrophotometers and ICC profiles give print colours) as
+// 8-bit sRGB; refused outside sRGB, the space texfab mixes in.
+Rgba8 parseLab(const nlohmann::json& value, const std::string& where) {
+  if (!value.is_array() || value.size() != 3 ||
+      !std::all_of(value.begin(), value.end(), [](const nlohmann::json& v) { return v.is_number(); }))
+    throw Error(where + ": \"lab\" must be [L, a, b] (CIELAB, D50), got " + value.dump());
+  const Lab lab{value[0].get<double>(), value[1].get<double>(), value[2].get<double>()};
+  if (!(lab[0] >= 0 && lab[0] <= 100) || !std::isfinite(lab[1]) || !std::isfinite(lab[2]))
+    throw Error(where + ": \"lab\" " + value.dump() + " has L outside [0, 100]");
+  const std::array<double, 3> linear = linearSrgbFromLabD50(lab);
+  Rgba8 out{0, 0, 0, 255};
+  for (int c = 0; c < 3; ++c) {
+    if (!(linear[size_t(c)] >= -1.0 / 255 && linear[size_t(c)] <= 1 + 1.0 / 255))
+      throw Error(where + ": \"lab\" " + value.dump() + " lies outside sRGB, the colour space texfab mixes in");
+    out[size_t(c)] = uint8_t(std::lround(255.0 * linearToSrgb(float(std::clamp(linear[size_t(c)], 0.0, 1.0)))));
+  }
+  return out;
+}
+
 PrintMaterial parseMaterial(const nlohmann::json& entry, const std::string& where) {
-  if (!entry.is_object()) throw Error(where + ": expected an object with \"name\" and \"color\"");
+  if (!entry.is_object()) throw Error(where + ": expected an object with \"name\" and \"color\" or \"lab\"");
   for (const auto& [key, value] : entry.items())
-    if (key != "name" && key != "color" && key != "opacity") throw Error(where + ": unknown field \"" + key + "\"");
+    if (key != "name" && key != "color" && key != "lab" && key != "opacity")
+      throw Error(where + ": unknown field \"" + key + "\"");
   if (!entry.contains("name") || !entry["name"].is_string()) throw Error(where + ": \"name\" (a string) is missing");
-  if (!entry.contains("color")) throw Error(where + ": \"color\" is missing");
+  if (entry.contains("color") == entry.contains("lab"))
+    throw Error(where + ": give \"color\" (sRGB) or \"lab\" (measured CIELAB), one of the two");
   PrintMaterial m;
   m.name = entry["name"].get<std::string>();
-  m.color = parseColor(entry["color"], where + " (" + m.name + ")");
+  m.color = entry.contains("lab") ? parseLab(entry["lab"], where + " (" + m.name + ")")
+                                  : parseColor(entry["color"], where + " (" + m.name + ")");
   if (entry.contains("opacity")) {
     if (!entry["opacity"].is_number()) throw Error(where + " (" + m.name + "): \"opacity\" must be a number in [0, 1]");
     m.opacity = entry["opacity"].get<double>();

@@ -3,6 +3,7 @@
 //   for multi-material fabrication. SIGGRAPH 2013, §4 (streaming: only a few layers in memory).
 #include "render/slice_model.h"
 
+#include "render/color_difference.h"
 #include "render/image/error.h"
 #include "render/image/parallel.h"
 #include "render/mip_pyramid.h"
@@ -35,6 +36,67 @@ const char* ditherName(DitherMode d) {
   return d == DitherMode::BlueNoise ? "blue-noise" : d == DitherMode::FloydSteinberg ? "floyd-steinberg" : "none";
 }
 
+// Sums of one 16 x 16 column of a layer, or of a 16^3 block: the requested and the printed colour
+// (linear) of its opaque shell voxels.
+struct BlockSums {
+  static constexpr int kSide = 16;
+  double want[3] = {0, 0, 0}, got[3] = {0, 0, 0};
+  int64_t voxels = 0;
+  void add(const BlockSums& o) {
+    for (int c = 0; c < 3; ++c) want[c] += o.want[c], got[c] += o.got[c];
+    voxels += o.voxels;
+  }
+};
+
+// PrintColorError over 16-layer bands: each layer's column sums are added in layer order (the
+// figures do not depend on the thread count), and a band's blocks are measured once its last
+// layer is in.
+class PrintColorTally {
+public:
+  PrintColorTally(int width, int height)
+      : columns_((width + BlockSums::kSide - 1) / BlockSums::kSide), rows_((height + BlockSums::kSide - 1) / BlockSums::kSide) {}
+  std::vector<BlockSums> layerSums() const { return std::vector<BlockSums>(size_t(columns_) * size_t(rows_)); }
+  size_t index(int x, int y) const { return size_t(y / BlockSums::kSide) * size_t(columns_) + size_t(x / BlockSums::kSide); }
+
+  void add(int layer, const std::vector<BlockSums>& sums) {
+    if (layer / BlockSums::kSide != band_) flush();
+    band_ = layer / BlockSums::kSide;
+    if (bandSums_.empty()) bandSums_ = layerSums();
+    for (size_t i = 0; i < sums.size(); ++i) bandSums_[i].add(sums[i]);
+  }
+
+  PrintColorError finish() {
+    flush();
+    PrintColorError e;
+    e.blocks = deltas_.size();
+    if (deltas_.empty()) return e;
+    for (double d : deltas_) e.mean += d, e.max = std::max(e.max, d);
+    e.mean /= double(deltas_.size());
+    std::vector<double> sorted = deltas_;
+    const size_t k = std::min(sorted.size() - 1, size_t(std::ceil(0.95 * double(sorted.size()))) - 1);
+    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(k), sorted.end());
+    e.p95 = sorted[k];
+    return e;
+  }
+
+private:
+  void flush() {
+    constexpr int64_t kEnough = BlockSums::kSide * BlockSums::kSide * BlockSums::kSide / 2;
+    for (const BlockSums& b : bandSums_) {
+      if (b.voxels < kEnough) continue;
+      std::array<double, 3> want, got;
+      for (int c = 0; c < 3; ++c) want[size_t(c)] = b.want[c] / double(b.voxels), got[size_t(c)] = b.got[c] / double(b.voxels);
+      deltas_.push_back(deltaE2000(labFromLinearSrgb(want), labFromLinearSrgb(got)));
+    }
+    bandSums_.clear();
+  }
+
+  int columns_, rows_;
+  int band_ = -1;
+  std::vector<BlockSums> bandSums_;
+  std::vector<double> deltas_;
+};
+
 // What every layer of a run shares.
 struct LayerSetup {
   const geometry::PrintGrid& grid;
@@ -46,17 +108,36 @@ struct LayerSetup {
   uint8_t core = 0;                            // palette index of the core material
   int channels = 1;                            // 1 indexed, 4 RGBA
   SlicePreview* preview = nullptr;
+  const PrintColorTally* tally = nullptr;
 };
 
-// One row of a layer as material indices (dithered) or continuous RGBA (DitherMode::None).
+// Adds a dithered row's opaque shell voxels to the layer's column sums: requested colour and the
+// chosen material's.
+void tallyRow(const LayerSetup& s, const PrintColorTally& tally, int y, std::span<const geometry::VoxelSpan> spans,
+              const float* shell, const uint8_t* materials, std::vector<BlockSums>& sums) {
+  for (const geometry::VoxelSpan& span : spans) {
+    if (!span.shell) continue;
+    for (int x = span.begin; x < span.end; ++x, shell += 4) {
+      if (shell[3] < 1 || materials[x] == 0 || !s.options.materials[materials[x] - 1u].opaque()) continue;
+      BlockSums& b = sums[tally.index(x, y)];
+      const std::array<float, 3>& printed = s.mixer->linearColor(materials[x] - 1);
+      for (int c = 0; c < 3; ++c) b.want[c] += std::clamp(shell[c], 0.0f, 1.0f), b.got[c] += printed[size_t(c)];
+      ++b.voxels;
+    }
+  }
+}
+
+// One row of a layer as material indices (dithered) or continuous RGBA (DitherMode::None); a
+// dithered row is tallied into `sums`.
 void assembleRow(const LayerSetup& s, LayerDitherer* ditherer, int y, std::span<const geometry::VoxelSpan> spans,
-                 const float* shell, uint8_t* out) {
+                 const float* shell, uint8_t* out, std::vector<BlockSums>& sums) {
   const int w = s.grid.width;
   if (ditherer) {
     std::fill(out, out + w, uint8_t(0));
     for (const geometry::VoxelSpan& span : spans)
       if (!span.shell) std::fill(out + span.begin, out + span.end, s.core);
     ditherer->ditherRow(y, spans, shell, out);
+    tallyRow(s, *s.tally, y, spans, shell, out, sums);
     if (s.channels == 4)  // material colours, expanded in place from the back
       for (int x = w - 1; x >= 0; --x) std::copy(s.palette[out[x]].begin(), s.palette[out[x]].end(), out + 4 * x);
     return;
@@ -75,8 +156,9 @@ void assembleRow(const LayerSetup& s, LayerDitherer* ditherer, int y, std::span<
     }
 }
 
-// One layer, rendered row by row into a PNG.
-std::vector<uint8_t> renderLayer(const LayerSetup& s, const geometry::LayerSpans& layer, StageClock& clock) {
+// One layer, rendered row by row into a PNG; its colour sums (dithered modes) in `sums`.
+std::vector<uint8_t> renderLayer(const LayerSetup& s, const geometry::LayerSpans& layer, StageClock& clock,
+                                 std::vector<BlockSums>& sums) {
   const geometry::PrintGrid& g = s.grid;
   PngRowEncoder encoder(g.width, g.height, s.channels, s.palette,
                         {uint32_t(std::lround(1000.0 / g.pitchMm.x())), uint32_t(std::lround(1000.0 / g.pitchMm.y()))});
@@ -97,7 +179,7 @@ std::vector<uint8_t> renderLayer(const LayerSetup& s, const geometry::LayerSpans
         next += 4 * (span.end - span.begin);
       }
     colorNs += StageClock::since(t);
-    assembleRow(s, ditherer ? &*ditherer : nullptr, y, spans, shell.data(), row.data());
+    assembleRow(s, ditherer ? &*ditherer : nullptr, y, spans, shell.data(), row.data(), sums);
     if (s.preview) {
       for (int x = 0; x < g.width; ++x)
         if (s.channels == 1) std::copy(s.palette[row[size_t(x)]].begin(), s.palette[row[size_t(x)]].end(), &rgba[4 * size_t(x)]);
@@ -185,7 +267,8 @@ SliceResult sliceModel(const geometry::LayerVoxelizer& voxelizer, VoxelColorSour
   if (o.dither != DitherMode::None) mixer.emplace(o.materials);
   std::optional<SlicePreview> preview;
   if (o.preview) preview.emplace(g, o.firstLayer, count);
-  LayerSetup setup{g, o, colors, mixer ? &*mixer : nullptr, nullptr, {}, 0, 1, preview ? &*preview : nullptr};
+  PrintColorTally tally(g.width, g.height);
+  LayerSetup setup{g, o, colors, mixer ? &*mixer : nullptr, nullptr, {}, 0, 1, preview ? &*preview : nullptr, &tally};
   setup.palette.push_back({0, 0, 0, 0});
   for (const PrintMaterial& m : o.materials) setup.palette.push_back(m.color);
   setup.core = uint8_t(findPrintMaterial(o.materials, o.coreMaterial) + 1);
@@ -213,10 +296,12 @@ SliceResult sliceModel(const geometry::LayerVoxelizer& voxelizer, VoxelColorSour
     Clock::time_point t = Clock::now();
     colors.prepare(spans, stage.inner());
     result.report.prepareSeconds += double(StageClock::since(t)) * 1e-9;
+    std::vector<std::vector<BlockSums>> sums(static_cast<size_t>(n));
     parallelFor(0, n, ctx, [&](int b, int e) {
       for (int i = b; i < e; ++i) {
         const geometry::LayerSpans& layer = spans[size_t(i)];
-        const std::vector<uint8_t> png = renderLayer(setup, layer, clock);
+        if (mixer) sums[size_t(i)] = tally.layerSums();
+        const std::vector<uint8_t> png = renderLayer(setup, layer, clock, sums[size_t(i)]);
         Clock::time_point w = Clock::now();
         writer.writeLayer(layer.layer, g.layers, png);
         clock.write += StageClock::since(w);
@@ -226,10 +311,13 @@ SliceResult sliceModel(const geometry::LayerVoxelizer& voxelizer, VoxelColorSour
         stage.advance(int64_t(++done), int64_t(count));
       }
     });
+    if (mixer)
+      for (int i = 0; i < n; ++i) tally.add(batch + i, sums[size_t(i)]);
   }
   writer.commit(slicePrintInfo(g, o, voxelizer.options().shellMm, source), o.firstLayer, count, g.layers);
   SliceReport& r = result.report;
   r.layers = count;
+  r.colorError = tally.finish();
   r.insideVoxels = inside;
   r.shellVoxels = shellVoxels;
   r.bytes = bytes;

@@ -56,8 +56,18 @@ struct SliceOptions {
 };
 
 /// Where the time went, summed over threads (seconds of CPU), and what was written.
+/// The colour a print shows against the colour asked for, as a person sees it: over blocks of
+/// 16^3 voxels at least half of which are opaque shell voxels, the mean requested colour against
+/// the mean of the materials the dither chose (both in linear light, as the eye mixes them), as
+/// CIEDE2000. Measured in dithered modes only.
+struct PrintColorError {
+  size_t blocks = 0;
+  double mean = 0, p95 = 0, max = 0;  ///< ΔE2000 over the blocks
+};
+
 struct SliceReport {
   int layers = 0;             ///< layers written
+  PrintColorError colorError;
   int64_t insideVoxels = 0, shellVoxels = 0;
   uint64_t bytes = 0;         ///< PNG bytes written
   double voxelizeSeconds = 0; ///< inside and shell spans (and the blue-noise array, built beside them)

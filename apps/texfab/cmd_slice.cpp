@@ -191,6 +191,10 @@ void runSlice(SliceJob& job) {
   run.note(counted(int64_t(r.layers), "layer") + " in " + job.output + " (" + figure(r.layers / std::max(1e-9, r.seconds)) +
            " layers/s), " + std::to_string(r.shellVoxels) + " shell voxels of " + std::to_string(r.insideVoxels));
   if (result.preview) writeImage(*result.preview, preview);
+  const render::PrintColorError& ce = r.colorError;
+  if (ce.blocks > 0)
+    run.note("colour as printed: ΔE2000 " + figure(ce.mean) + " mean, " + figure(ce.p95) + " at the 95th percentile over " +
+             counted(int64_t(ce.blocks), "block") + " of 16³ voxels");
 
   nlohmann::json& report = run.report();
   report["print"] = nlohmann::json::parse(render::slicePrintInfo(grid, job.slice, job.voxelize.shellMm, source).dump());
@@ -198,6 +202,8 @@ void runSlice(SliceJob& job) {
   report["voxels"] = {{"inside", r.insideVoxels}, {"shell", r.shellVoxels}, {"per_layer", grid.voxelsPerLayer()}};
   if (auto* s = dynamic_cast<const render::SolidVoxelColors*>(colors.get()))
     report["solid"] = {{"voxels_requested", s->voxelsRequested()}, {"voxels_synthesized", s->voxelsSynthesized()}};
+  report["color_error"] = {{"blocks", ce.blocks}, {"delta_e2000_mean", ce.mean}, {"delta_e2000_p95", ce.p95},
+                           {"delta_e2000_max", ce.max}};
   report["bytes"] = r.bytes;
   report["seconds"] = {{"total", r.seconds}, {"voxelize_cpu", r.voxelizeSeconds}, {"prepare_colors", r.prepareSeconds},
                        {"colors_cpu", r.colorSeconds}, {"dither_cpu", r.ditherSeconds}, {"encode_cpu", r.encodeSeconds},

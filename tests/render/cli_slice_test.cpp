@@ -101,6 +101,29 @@ TEST(CliSlice, StandsTheModelUpAndRepairsItsWinding) {
   for (size_t i = 0; i < f["files"].size(); ++i) EXPECT_EQ(f["files"][i]["sha256"], y["files"][i]["sha256"]) << i;
 }
 
+// The report says how far the print's colour is from the colour asked for, as a person sees it
+// (CIEDE2000 over 16^3 blocks), the same on any thread count; below 1.5 on average (about what a
+// person notices side by side) for the blue-noise dither of a marble.
+TEST(CliSlice, ReportsTheColourAsPrinted) {
+  TempDir dir;
+  const fs::path elephant = fs::path(TEXFAB_SOURCE_DIR) / "models" / "meshes" / "elephant.off";
+  const fs::path marble = fs::path(TEXFAB_SOURCE_DIR) / "models" / "exemplars" / "marble.png";
+  nlohmann::json error[2];
+  for (int threads : {1, 2}) {
+    const std::string name = "t" + std::to_string(threads);
+    const texfab::test::CliResult run =
+        slice(quoted(elephant) + " -e " + quoted(marble) + " -o " + quoted(dir / name) + " --height 8 --dpi 300" +
+              " --layer 0.05 --shell 1.5 -q --threads " + std::to_string(threads) + " --cache-dir " +
+              quoted(dir / "cache") + " --report " + quoted(dir / (name + ".json")));
+    ASSERT_EQ(run.status, 0) << run.err;
+    error[threads - 1] = nlohmann::json::parse(readText(dir / (name + ".json")))["color_error"];
+  }
+  EXPECT_GT(error[0]["blocks"].get<int>(), 5);
+  EXPECT_LT(error[0]["delta_e2000_mean"].get<double>(), 1.5);
+  EXPECT_LE(error[0]["delta_e2000_p95"].get<double>(), error[0]["delta_e2000_max"].get<double>());
+  EXPECT_EQ(error[0], error[1]);
+}
+
 TEST(CliSlice, ShardsMergeIntoTheFullRun) {
   TempDir dir;
   const fs::path model = sphereModel(dir);

@@ -2,6 +2,7 @@
 // The parts of the slice job: the run-length PNG encoder read back by OpenImageIO and zlib, the
 // materials file, the material mixer reproducing colours, and the blue-noise array's spread.
 #include "render/blue_noise.h"
+#include "render/color_difference.h"
 #include "render/dither_measures.h"
 #include "render/image/error.h"
 #include "render/image/image_io.h"
@@ -131,6 +132,14 @@ TEST(PrintMaterials, FileFormsAndErrors) {
   EXPECT_NE(error(R"([{"name": "A", "color": "#000000", "opacity": 0}])").find("no opaque"), std::string::npos);
   EXPECT_NE(error(R"([{"name": "A", "colour": "#000000"}])").find("unknown field"), std::string::npos);
   EXPECT_NE(error("not json").find("not valid JSON"), std::string::npos);
+  // Measured CIELAB (D50): white is white, a mid grey is sRGB's mid grey; outside sRGB is refused.
+  const auto lab = readPrintMaterials(write(R"([{"name": "W", "lab": [100, 0, 0]}, {"name": "G", "lab": [50, 0, 0]}])"));
+  EXPECT_EQ(lab[0].color, (Rgba8{255, 255, 255, 255}));
+  EXPECT_EQ(lab[1].color, (Rgba8{119, 119, 119, 255}));
+  EXPECT_NE(error(R"([{"name": "A", "lab": [50, 0, 0], "color": "#000000"}])").find("one of the two"), std::string::npos);
+  EXPECT_NE(error(R"([{"name": "A", "lab": [60, 100, -120]}])").find("outside sRGB"), std::string::npos);
+  EXPECT_NE(error(R"([{"name": "A", "lab": [120, 0, 0]}])").find("L outside"), std::string::npos);
+  EXPECT_NE(error(R"([{"name": "A", "lab": [50, 0]}])").find("[L, a, b]"), std::string::npos);
   EXPECT_NE(errorOf([&] { readPrintMaterials(dir / "missing.json"); }).find("cannot open"), std::string::npos);
   EXPECT_EQ(findPrintMaterial(defaultPrintMaterials(), "white"), 4u);
   EXPECT_NE(errorOf([] { findPrintMaterial(defaultPrintMaterials(), "gold"); }).find("VeroCyan"), std::string::npos);
@@ -262,3 +271,34 @@ TEST(BlueNoise, IsAPermutationSpreadEvenlyAndRepeatable) {
 
 } // namespace
 } // namespace texfab::render
+
+namespace {
+
+// CIEDE2000 against Sharma, Wu and Dalal's test pairs (2005, table 1), and CIELAB's white points.
+TEST(ColorDifference, MatchesSharmasTestPairsAndWhite) {
+  using texfab::render::Lab;
+  const struct {
+    Lab a, b;
+    double expected;
+  } pairs[] = {
+      {{50.0000, 2.6772, -79.7751}, {50.0000, 0.0000, -82.7485}, 2.0425},
+      {{50.0000, 0.0000, 0.0000}, {50.0000, -1.0000, 2.0000}, 2.3669},
+      {{50.0000, 2.4900, -0.0010}, {50.0000, -2.4900, 0.0009}, 7.1792},
+      {{50.0000, 2.5000, 0.0000}, {73.0000, 25.0000, -18.0000}, 27.1492},
+      {{60.2574, -34.0099, 36.2677}, {60.4626, -34.1751, 39.4387}, 1.2644},
+  };
+  for (const auto& p : pairs) {
+    EXPECT_NEAR(texfab::render::deltaE2000(p.a, p.b), p.expected, 1e-4);
+    EXPECT_NEAR(texfab::render::deltaE2000(p.b, p.a), p.expected, 1e-4);
+  }
+  const Lab white = texfab::render::labFromLinearSrgb({1, 1, 1});
+  EXPECT_NEAR(white[0], 100, 1e-3);
+  EXPECT_NEAR(white[1], 0, 1e-2);
+  EXPECT_NEAR(white[2], 0, 1e-2);
+  for (double c : texfab::render::linearSrgbFromLabD50({100, 0, 0})) EXPECT_NEAR(c, 1.0, 2e-3);
+  // A measured mid grey stays grey and keeps its lightness.
+  const auto grey = texfab::render::linearSrgbFromLabD50({50, 0, 0});
+  EXPECT_NEAR(texfab::render::labFromLinearSrgb(grey)[0], 50, 0.05);
+}
+
+} // namespace
