@@ -95,9 +95,9 @@ GenerateAtlasResult generateAtlas(const geometry::Mesh& mesh, const GenerateAtla
   if (r.report.collapsedTriangles)
     r.report.repairs.push_back(std::to_string(r.report.collapsedTriangles) +
                                " triangles thinner than the precision of atlas coordinates mapped to a line");
-  if (r.report.pack.chartsShrunk)
-    r.report.repairs.push_back(std::to_string(r.report.pack.chartsShrunk) +
-                               " charts longer than the atlas side laid out at a lower density");
+  if (const size_t n = r.report.pack.chartsShrunk)
+    r.report.repairs.push_back(std::to_string(n) + (n == 1 ? " thin chart" : " thin charts") +
+                               " longer than the atlas side laid out at a lower density");
   if (r.report.pack.chartsBelowOneTexel)
     r.report.repairs.push_back(std::to_string(r.report.pack.chartsBelowOneTexel) +
                                " charts are smaller than one texel at this resolution");

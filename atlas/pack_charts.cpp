@@ -226,13 +226,14 @@ void placeDegenerateTriangles(const geometry::Mesh& mesh, Atlas& atlas) {
   }
 }
 
-// Lays out smaller the charts longer than `side` texels at `density`: each is scaled to that
-// length. Returns how many.
+// Lays out smaller the thin charts (at least 4 times as long as wide: slivers, strips) longer than
+// `side` texels at `density`: each is scaled to that length. Returns how many.
 size_t shrinkLongCharts(std::vector<OrientedChart>& charts, double density, double side) {
   size_t shrunk = 0;
   for (OrientedChart& c : charts) {
-    const double length = std::max(c.extent.x(), c.extent.y()) * density;
-    if (!(length > side)) continue;
+    const double longer = std::max(c.extent.x(), c.extent.y()), shorter = std::min(c.extent.x(), c.extent.y());
+    const double length = longer * density;
+    if (!(length > side) || !(longer >= 4 * shorter)) continue;
     const double s = side / length;
     for (Eigen::Vector2d& p : c.corners) p *= s;
     c.extent *= s;

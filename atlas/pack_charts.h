@@ -55,8 +55,9 @@ struct PackChartsReport {
   int usedHeight = 0;          ///< rows used by the packed charts (<= height)
   size_t maskTexels = 0;        ///< texels of the packed masks (charts + half gutters): the packer's fill
   size_t chartsBelowOneTexel = 0; ///< charts whose extent is under one texel at the chosen density
-  /// Charts longer than the atlas side at the density the others get (a sliver a cut left, a long
-  /// strip), laid out smaller to fit: coarser texels there instead of everywhere.
+  /// Thin charts (4:1 or more) longer than the atlas side at the density of a perfect packing (a
+  /// sliver a cut left, a long strip), laid out smaller to fit: coarser texels there instead of
+  /// everywhere.
   size_t chartsShrunk = 0;
 };
 
