@@ -42,9 +42,9 @@ void writeGltfScene(std::span<const SceneNode> nodes, const std::filesystem::pat
 /// A texture's image as the writers store it: its file's bytes when options.textures is Keep and
 /// it has them, else encoded in the requested format (Keep: PNG).
 EncodedImage storedImage(const Texture& texture, const MeshWriteOptions& options);
-/// 3MF in millimetres: each model unit is `millimetresPerUnit` mm.
+/// 3MF in millimetres, built along +z: each position p is written as `toBuild` p.
 void write3mf(const Mesh& mesh, const std::filesystem::path& path, const std::filesystem::path& tmp,
-              double millimetresPerUnit);
+              const Eigen::Matrix3d& toBuild);
 
 /// The whole file; throws texfab::Error naming it when it cannot be read or exceeds `maxBytes`.
 std::vector<uint8_t> readFileBytes(const std::filesystem::path& path, uint64_t maxBytes = uint64_t(4) << 30);

@@ -105,9 +105,17 @@ void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& o
     case MeshFormat::Stl: detail::writeStl(mesh, tmp, options.binary); break;
     case MeshFormat::Gltf: detail::writeGltf(mesh, path, tmp, false, options, sideFiles); break;
     case MeshFormat::Glb: detail::writeGltf(mesh, path, tmp, true, options, sideFiles); break;
-    case MeshFormat::ThreeMf: detail::write3mf(mesh, path, tmp, millimetresPerUnit(mesh, options)); break;
+    case MeshFormat::ThreeMf:
+      detail::write3mf(mesh, path, tmp, millimetresPerUnit(mesh, options) * upToZ(options.up));
+      break;
     }
   });
+}
+
+Eigen::Matrix3d upToZ(const Eigen::Vector3f& up) {
+  const Eigen::Vector3d u = up.cast<double>().normalized(), z = Eigen::Vector3d::UnitZ();
+  if (u.dot(z) < -1 + 1e-12) return Eigen::AngleAxisd(3.14159265358979323846, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return Eigen::Quaterniond::FromTwoVectors(u, z).toRotationMatrix();
 }
 
 double millimetresPerUnit(const Mesh& mesh, const MeshWriteOptions& options) {

@@ -69,8 +69,13 @@ struct MeshWriteOptions {
   double millimetresPerUnit = 0;
   /// 3MF, when millimetresPerUnit is 0: the model's extent along `up` in mm; 0 = one unit is 1 mm.
   double heightMm = 0;
-  Eigen::Vector3f up{0, 1, 0};
+  /// The model's up axis (non-zero). 3MF builds along +z: the model is turned so that `up` points
+  /// there, and stands in a slicer as it does in texfab's previews.
+  Eigen::Vector3f up{0, 0, 1};
 };
+
+/// The rotation that turns `up` to +z (the shortest; a half turn about x for -z).
+Eigen::Matrix3d upToZ(const Eigen::Vector3f& up);
 
 /// The length of one model unit in mm that a 3MF of `mesh` gets with `options` (see above). Throws
 /// texfab::Error when heightMm is asked of a model with no extent along `up`.

@@ -7,7 +7,8 @@
 // a texture2d (its image as a PNG attachment under /3D/Textures/, its colour factor multiplied in,
 // KHR_texture_transform applied to the UVs) and its triangles carry their corners' UVs; the other
 // materials become one basematerials group (name and display colour). Coordinates are millimetres
-// (the model unit times MeshWriteOptions::millimetresPerUnit). lib3mf 1.8 writes its archive with
+// (the model unit times MeshWriteOptions::millimetresPerUnit), the model turned so that its up axis
+// is 3MF's build direction (+z). lib3mf 1.8 writes its archive with
 // Zip64 fields on every entry and a date of 1980-00-00, which assimp (5.2) refuses: the archive is
 // re-packed with libzip (plain entries, deflated, dated 1980-01-01). Reading takes every mesh
 // object of every build item (with its transform), its texture coordinates and textures, and
@@ -144,15 +145,17 @@ void repackZip(const std::vector<BYTE>& archive, const fs::path& file, const std
 
 } // namespace
 
-void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp, double millimetresPerUnit) {
+void write3mf(const Mesh& mesh, const fs::path& path, const fs::path& tmp, const Eigen::Matrix3d& toBuild) {
   const std::string where = path.string();
   Handle model, object, properties, group, writer, item;
   check(lib3mf_createmodel(model.out()), nullptr, where);
   check(lib3mf_model_setunit(model.p, MODELUNIT_MILLIMETER), model.p, where);
   check(lib3mf_model_addmeshobject(model.p, object.out()), model.p, where);
   std::vector<MODELMESHVERTEX> vertices(mesh.positions.size());
-  for (size_t i = 0; i < vertices.size(); ++i)
-    for (int k = 0; k < 3; ++k) vertices[i].m_fPosition[k] = float(double(mesh.positions[i][k]) * millimetresPerUnit);
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const Eigen::Vector3d p = toBuild * mesh.positions[i].cast<double>();
+    for (int k = 0; k < 3; ++k) vertices[i].m_fPosition[k] = float(p[k]);
+  }
   std::vector<MODELMESHTRIANGLE> triangles(mesh.triangleCount());
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) triangles[t].m_nIndices[k] = mesh.triangles[t][size_t(k)];

@@ -15,7 +15,7 @@ packages=(
   zlib1g-dev libssl-dev
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
   # which Debian's blender package does not pull in)
-  libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy
+  libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy prusa-slicer
   # the goldens on emulated CPUs (qemu-x86_64 -cpu ...): values must not follow the CPU
   qemu-user
   # a real single-node Slurm for the distributed slicing test (started by the test, not as services)

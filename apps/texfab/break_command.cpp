@@ -120,9 +120,9 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   f.choice("--mode", o.outer.mode, {{"solid", render::TextureMode::Solid}, {"surface", render::TextureMode::Surface}},
            "Outer texture with --exemplar: solid (the material's interior, continuous into the cuts) or surface");
   f.text("--interior", job.interior, "Exemplar of the cut faces' solid texture (default: the --exemplar)");
-  f.option("--scale", o.interior.textureScale,
-           "Exemplar pixels (voxels) per model unit of both textures (default: the atlas density)", {0, 1e9})
-      ->default_str("auto");
+  f.option("--texture-scale,--scale", o.interior.textureScale,
+           "Exemplar pixels (voxels) per model unit of both textures (0 = auto: the atlas density)", {0, 1e9})
+      ->default_str("0 (auto)");
   f.size("--resolution", o.outer.atlas.pack.width, o.outer.atlas.pack.height, "Outer atlas size (with --exemplar)",
          {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true);
   f.size("--interior-resolution", o.interior.atlas.pack.width, o.interior.atlas.pack.height,

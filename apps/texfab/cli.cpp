@@ -105,9 +105,13 @@ uint64_t parseBytes(const std::string& flag, const std::string& text) {
 
 // Flags --------------------------------------------------------------------------------------
 
-std::string Flags::longName(const std::string& flags) {
-  const size_t comma = flags.rfind(',');
-  return comma == std::string::npos ? flags : flags.substr(comma + 1);
+std::string Flags::longName(const std::string& flags) {  // the first "--name" ("-o,--output": --output)
+  for (size_t begin = 0; begin < flags.size();) {
+    const size_t end = std::min(flags.find(',', begin), flags.size());
+    if (flags.compare(begin, 2, "--") == 0) return flags.substr(begin, end - begin);
+    begin = end + 1;
+  }
+  return flags;
 }
 
 std::string Flags::show(double v) { return formatNumber(v); }
@@ -261,22 +265,35 @@ void checkPrintSize(const geometry::MeshWriteOptions& o, const std::string& outp
     throw UsageError(std::string(o.heightMm > 0 ? "--height" : "--unit") + " sizes a 3MF output, not " + output);
 }
 
-void Flags::printSize(geometry::MeshWriteOptions& o) {
+CLI::Option* Flags::unit(double& millimetresPerUnit) {
   static const std::pair<const char*, double> units[] = {{"mm", 1.0},  {"cm", 10.0},   {"m", 1000.0},
                                                          {"in", 25.4}, {"ft", 304.8}, {"um", 0.001}};
-  CLI::Option* unit = app_->add_option_function<std::string>(
+  CLI::Option* o = app_->add_option_function<std::string>(
       "--unit",
-      [&o](const std::string& text) {
+      [&millimetresPerUnit](const std::string& text) {
         for (const auto& [name, mm] : units)
-          if (name == text) return void(o.millimetresPerUnit = mm);
-        throw CLI::ValidationError("--unit", "expected mm, cm, m, in, ft or um, got '" + text + "'");
+          if (name == text) return void(millimetresPerUnit = mm);
+        double mm = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), mm);
+        if (ec != std::errc() || end != text.data() + text.size() || !(mm > 0) || !(mm <= 1e6))
+          throw CLI::ValidationError("--unit", "expected mm, cm, m, in, ft, um or millimetres per unit in (0, 1e6], got '" +
+                                                   text + "'");
+        millimetresPerUnit = mm;
       },
-      "3MF output: the model's length unit (mm, cm, m, in, ft, um); 3MF is written in millimetres");
-  unit->type_name("mm|cm|m|in|ft|um");
+      "The model's length unit: mm, cm, m, in, ft, um, or millimetres per unit (instead of --height)");
+  o->type_name("UNIT|MM");
+  o->default_str("mm");
+  return o;
+}
+
+void Flags::printSize(geometry::MeshWriteOptions& o) {
+  CLI::Option* units = unit(o.millimetresPerUnit);
+  units->description("3MF output: the model's length unit (mm, cm, m, in, ft, um, or millimetres per unit); 3MF is "
+                     "written in millimetres");
   CLI::Option* height =
       option("--height", o.heightMm, "3MF output: scale the model to this height in mm along its up axis (--up)",
              positive(1e5));
-  height->excludes(unit);
+  height->excludes(units);
   height->default_str("one model unit = 1 mm");
 }
 

@@ -179,6 +179,8 @@ public:
   void modelOutput(geometry::MeshWriteOptions& options);
   /// --unit and --height: the size of a 3MF output (3MF's coordinates are millimetres).
   void printSize(geometry::MeshWriteOptions& options);
+  /// --unit: millimetres per model unit, by name (mm, cm, m, in, ft, um) or as a number.
+  CLI::Option* unit(double& millimetresPerUnit);
 
 private:
   CLI::Option* number(const std::string& flags, const std::string& help, const Range& range, bool integer,

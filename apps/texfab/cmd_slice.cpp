@@ -230,7 +230,7 @@ Command addSliceCommand(CLI::App& root) {
   f.up(job->up)->description("The model's up axis, along which layers stack (auto: z for STL, else y, as the "
                               "previews stand the model); the model rests on the bed with its lowest point in layer 0");
   f.option("--height", g.heightMm, "Print height in mm (the model's extent along --up)", positive(10000));
-  f.option("--scale", g.mmPerUnit, "Millimetres per model unit (instead of --height; 0: use --height)", {0, 1e6});
+  f.unit(g.mmPerUnit)->excludes("--height")->default_str("from --height");
   f.numbers("--dpi", 0, "X[,Y]", "Printer resolution in dots per inch (default 600,300)", positive(100000), false,
             [job](const std::vector<double>& v) {
               if (v.size() > 2) throw CLI::ValidationError("--dpi", "expected X or X,Y");
@@ -258,7 +258,7 @@ Command addSliceCommand(CLI::App& root) {
            "With --exemplar: solid (the solid texture of texfab texture --mode solid) or surface (synthesize over the "
            "surface first)");
   f.option("--texture-scale", job->textureScale,
-           "Exemplar pixels per model unit, as texfab texture's --scale (0: an exemplar spans a quarter of the model's "
+           "Exemplar pixels per model unit, as texfab texture's (0 = auto: an exemplar spans a quarter of the model's "
            "height)", {0, 1e9});
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", {0, 1e9});
   f.option("--seed", job->seed, "Random seed of the synthesis");

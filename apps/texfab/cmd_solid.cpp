@@ -350,7 +350,7 @@ Command addSolidCommand(CLI::App& root) {
   f.size("--size", job->width, job->height, "With --plane: image size", {1, kMaxImageSide})->default_str("");
   f.text("--points", job->points, "Text file of positions, 'x y z' per line (# comments)");
   f.option("--seed", o.seed, "Random seed: the only source of variation");
-  f.option("--scale", job->scale, "Output units per synthesized voxel (2 = texture twice as large)", positive(1e6));
+  f.option("--voxel-size", job->scale, "Output units per synthesized voxel (2 = texture twice as large)", positive(1e6));
   f.option("--jitter", o.jitter, "Strength of the random warp applied once after initialization", {0, 4});
   f.option("--offset-cells", o.offsetCells,
            "Side, in voxels of the coarsest level, of the cells that each start from the exemplar at their own random "

@@ -131,7 +131,7 @@ void runTexture(TextureJob& job) {
   checkPrintSize(job.write, job.output);
   render::TextureMeshOptions& o = job.options;
   // Everything checkable is checked, and every output reserved, before any work.
-  if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --scale or --feature-size, not both");
+  if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --texture-scale or --feature-size, not both");
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
                      " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
@@ -214,11 +214,11 @@ Command addTextureCommand(CLI::App& root) {
   f.text("-o,--output", job->output, "Textured model (.glb .gltf .obj .3mf)")->required();
   f.choice("--mode", o.mode, {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}},
            "surface (synthesis over the surface) or solid (a 3-D material, seamless)");
-  f.option("--scale", o.textureScale,
-           "Exemplar pixels per model unit (default: the atlas density, one per texel); a scale that puts 2 or more "
+  f.option("--texture-scale,--scale", o.textureScale,
+           "Exemplar pixels per model unit (0 = auto: the atlas density, one per texel); a scale that puts 2 or more "
            "exemplar pixels in every texel synthesizes from a copy of the exemplar 2, 4, ... times smaller",
-           positive())->default_str("auto");
-  f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --scale)", positive())
+           {0, kUnbounded})->default_str("0 (auto)");
+  f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", positive())
       ->default_str("");
   f.option("--direction", o.field.direction, "Texture 'up' direction, projected to the surface (surface mode)");
   f.choice("--field", o.field.kind,

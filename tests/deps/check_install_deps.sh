@@ -59,7 +59,7 @@ awk -F'\t' -v listed="$work/listed" -v installed="$work/installed" '
   find "$build" -type f -perm -u+x -newer "$build/CMakeCache.txt" -exec sh -c 'head -c 4 "$1" | grep -q ELF' _ {} \; -print |
     while read -r program; do ldd "$program" 2>/dev/null | awk '/=> \// {print $3} /^\t\// {print $1}'; done
   # Programs the build and the tests run.
-  for tool in cmake make g++ pkg-config node npm assimp blender qemu-x86_64; do
+  for tool in cmake make g++ pkg-config node npm assimp blender qemu-x86_64 prusa-slicer; do
     if path="$(command -v "$tool")"; then echo "$path"; fi
   done
 } | sort -u >"$work/files"

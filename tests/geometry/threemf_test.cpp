@@ -167,10 +167,14 @@ TEST(ThreeMf, ConvertAndTextureWriteIt) {
   const geometry::Mesh converted = geometry::readMesh(dir / "c.3mf");
   EXPECT_EQ(converted.triangleCount(), geometry::readMesh(obj).triangleCount());
   EXPECT_TRUE(converted.hasUvs());
-  // --height: the model's extent along its up axis (y for OBJ) in mm; only for 3MF.
+  // --height: the model's extent along its up axis (y for OBJ) in mm, turned to 3MF's build
+  // direction (+z) so that it stands in a slicer; only for 3MF.
   ASSERT_EQ(test::runCli("convert '" + obj.string() + "' '" + (dir / "h.3mf").string() + "' -q --height 80").status, 0);
   const geometry::BoundingBox sized = geometry::boundingBox(geometry::readMesh(dir / "h.3mf"));
-  EXPECT_NEAR(sized.max.y() - sized.min.y(), 80.0f, 1e-3f);
+  const geometry::BoundingBox source = geometry::boundingBox(geometry::readMesh(obj));
+  EXPECT_NEAR(sized.max.z() - sized.min.z(), 80.0f, 1e-3f);
+  EXPECT_NEAR((sized.max.y() - sized.min.y()) / 80.0f, (source.max.z() - source.min.z()) / (source.max.y() - source.min.y()),
+              1e-4f);
   const test::CliResult notThreeMf =
       test::runCli("convert '" + obj.string() + "' '" + (dir / "h.glb").string() + "' -q --height 80");
   EXPECT_EQ(notThreeMf.status, 1) << notThreeMf.err;
@@ -186,6 +190,27 @@ TEST(ThreeMf, ConvertAndTextureWriteIt) {
   const geometry::Mesh textured = geometry::readMesh(dir / "t.3mf");
   ASSERT_EQ(textured.materials.size(), 1u);
   EXPECT_EQ(textured.materials[0].baseColorTexture.image->width, 256);
+}
+
+// PrusaSlicer (Debian's, its command line without a display) reads texfab's 3MF: at the size asked
+// for, standing along +z, closed; and a textured one.
+TEST(ThreeMf, PrusaSlicerOpensItAtItsSize) {
+  if (test::run("command -v prusa-slicer >/dev/null 2>&1") != 0) GTEST_SKIP() << "prusa-slicer not installed";
+  TempDir dir;
+  const fs::path elephant = fs::path(TEXFAB_SOURCE_DIR) / "models/meshes/elephant.off";
+  ASSERT_EQ(test::runCli("convert '" + elephant.string() + "' '" + (dir / "e.3mf").string() + "' -q --height 80").status, 0);
+  geometry::Mesh textured = texturedCube();
+  geometry::writeMesh(textured, dir / "cube.3mf");
+  for (const char* name : {"e.3mf", "cube.3mf"}) {
+    const fs::path info = dir / (std::string(name) + ".txt");
+    ASSERT_EQ(test::run("prusa-slicer --info '" + (dir / name).string() + "' > '" + info.string() + "' 2>&1"), 0) << name;
+    std::ifstream in(info);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("manifold = yes"), std::string::npos) << text;
+    if (std::string(name) == "e.3mf") {
+      EXPECT_NE(text.find("size_z = 80.0000"), std::string::npos) << text;
+    }
+  }
 }
 
 } // namespace
