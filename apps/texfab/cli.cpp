@@ -225,8 +225,8 @@ CLI::Option* Flags::up(UpAxis& axis) {
   return choice("--up", axis,
                 Names<UpAxis>{{"auto", UpAxis::Auto}, {"x", UpAxis::PosX}, {"-x", UpAxis::NegX}, {"y", UpAxis::PosY},
                               {"-y", UpAxis::NegY}, {"z", UpAxis::PosZ}, {"-z", UpAxis::NegZ}},
-                "The model's up axis in the preview (auto: z for STL, as 3-D printing uses, else y as glTF and OBJ "
-                "do); the view looks at its front");
+                "The model's up axis (auto: z for STL, as 3-D printing uses, else y as glTF and OBJ do): previews "
+                "stand the model on it and look at its front; a 3MF output builds along it");
 }
 
 void Flags::camera(float& azimuthDegrees, float& elevationDegrees) {
