@@ -580,8 +580,14 @@ WrapDiscontinuity wrapDiscontinuity(const Image& exemplar) {
           }
         return sum / (double(rows) * c * s * s);
       };
-      double inside = 0;
-      for (int b = s; b <= w - s; ++b) inside = std::max(inside, boundary(b));
+      // The 90th percentile of the boundaries inside (linear between order statistics).
+      std::vector<double> inner;
+      for (int b = s; b <= w - s; ++b) inner.push_back(boundary(b));
+      std::sort(inner.begin(), inner.end());
+      const double rank = 0.9 * double(inner.size() - 1);
+      const size_t k = size_t(rank);
+      const double inside =
+          k + 1 < inner.size() ? inner[k] + (rank - double(k)) * (inner[k + 1] - inner[k]) : inner[k];
       const double across = boundary(0);
       worst = std::max(worst, inside > 1e-9 ? across / inside : (across > 1e-9 ? 1e9 : 1.0));
     }

@@ -72,9 +72,10 @@ const char* toString(ExemplarWrap wrap);
 /// The discontinuity of an exemplar across its wrap compared with inside it, per axis: for block
 /// sizes s = 1, 2, 4, 8 (while 16 s fits in the exemplar), the mean over rows of s x s blocks of
 /// the colour difference between the blocks on either side of a column boundary (L1, values in
-/// [0, 1]); the measure is the largest ratio, over s, of that mean at the wrap to its largest value
-/// at any boundary inside. At most about 1 for a toroidal exemplar (its wrap is one boundary among
-/// many); a photograph's wrap joins unrelated content, larger at coarse s than any edge inside.
+/// [0, 1]); the measure is the largest ratio, over s, of that mean at the wrap to the 90th
+/// percentile of its values at the boundaries inside. About 1 for a toroidal exemplar (its wrap is
+/// one boundary among many); a photograph's wrap joins unrelated content and stands out from the
+/// boundaries inside, even where one strong edge (a crack) inside is as sharp as the wrap.
 struct WrapDiscontinuity {
   double x = 0;  ///< across the left/right wrap
   double y = 0;  ///< across the top/bottom wrap
@@ -83,8 +84,9 @@ struct WrapDiscontinuity {
 WrapDiscontinuity wrapDiscontinuity(const Image& exemplar);
 
 /// The discontinuity above which `auto` treats an exemplar as non-toroidal. Measured
-/// (docs/exemplars.md): GIMP's patterns 0.42 to 1.77, photograph crops 2.0 to 18.
-inline constexpr double kWrapDiscontinuityThreshold = 1.9;
+/// (docs/exemplars.md#wrap-detection): GIMP's patterns whose tiles show no seam up to 1.67,
+/// photograph crops whose wrap shows 1.90 and up.
+inline constexpr double kWrapDiscontinuityThreshold = 1.8;
 /// Exemplars with a side below this are too small to tell (a single motif whose one strong edge
 /// may lie on the wrap, as GIMP's 26-pixel bluegrid): auto keeps them toroidal.
 inline constexpr int kWrapDetectionMinSide = 32;

@@ -25,7 +25,7 @@ CLI::Option* wrapFlag(Flags& f, WrapChoice& choice) {
            std::string("How the exemplar's borders are treated: tile (it is toroidal: coordinates wrap), clamp (a "
                        "photograph that does not tile: synthesis never reads across its border), or auto: clamp when "
                        "the color jump across its wrap is more than ") +
-               threshold + " times the largest jump between columns (rows) inside");
+               threshold + " times the jumps between columns (rows) inside (their 90th percentile)");
 }
 
 void solidFidelityFlags(Flags& f, float& gain, int& refinePasses, const std::string& what) {
@@ -52,7 +52,7 @@ synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, con
   const ExemplarWrap wrap = synthesis::detectExemplarWrap(exemplar);
   char note[240];
   std::snprintf(note, sizeof note,
-                "exemplar wrap: %s (auto: the color jump across its wrap is %.2fx (x), %.2fx (y) the largest "
+                "exemplar wrap: %s (auto: the color jump across its wrap is %.2fx (x), %.2fx (y) the jumps "
                 "inside; above %.1fx it does not tile%s)",
                 synthesis::toString(wrap), d.x, d.y, synthesis::kWrapDiscontinuityThreshold,
                 std::min(exemplar.width, exemplar.height) < synthesis::kWrapDetectionMinSide ? "; too small to tell" : "");
