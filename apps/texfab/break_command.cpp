@@ -171,7 +171,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   render::TextureMeshOptions interiorCost;  // the cut faces' atlas costs as a solid texture job's
   interiorCost.mode = render::TextureMode::Solid;
   interiorCost.atlas = o.interior.atlas;
-  if (interiorCost.atlas.pack.width == 0) {  // auto: up to twice the outer atlas's texels, or 2048^2
+  if (interiorCost.atlas.pack.width == 0) {  // auto: 1.5 times the outer atlas per side (2.25 its texels), or 2048^2
     const bool outer = !job.exemplar.empty();
     interiorCost.atlas.pack.width = outer ? int(1.5 * o.outer.atlas.pack.width) : 2048;
     interiorCost.atlas.pack.height = outer ? int(1.5 * o.outer.atlas.pack.height) : 2048;
