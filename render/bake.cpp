@@ -2,6 +2,7 @@
 #include "render/bake.h"
 
 #include "render/image/error.h"
+#include "synthesis/solid_tiles.h"
 
 #include <atomic>
 #include <cmath>
@@ -70,18 +71,37 @@ void rotateNormal(const std::array<float, 4>& j, const float* in, float* out) {
   out[2] = float(0.5 * vz + 0.5);
 }
 
+std::string SolidSites::summary(synthesis::SolidMethod method) const {
+  if (method == synthesis::SolidMethod::Tiles) return std::to_string(voxelsRequested) + " voxels read from the tiles";
+  return std::to_string(voxelsRequested) + " voxels requested, " + std::to_string(voxelsSynthesized) + " synthesized";
+}
+
 SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
                                const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
                                double scale, const Context& ctx, synthesis::SolidLevelCache* cache) {
-  std::vector<synthesis::Voxel> voxels(sites.size());
-  for (size_t s = 0; s < sites.size(); ++s) {
+  auto voxelAt = [&](size_t s) {
     const atlas::Float3& p = fields.position.at(sites.x[s], sites.y[s]);
-    voxels[s] = {int64_t(std::floor(double(p.x) * scale)), int64_t(std::floor(double(p.y) * scale)),
-                 int64_t(std::floor(double(p.z) * scale))};
-    for (int64_t c : {voxels[s].x, voxels[s].y, voxels[s].z})
+    const synthesis::Voxel v{int64_t(std::floor(double(p.x) * scale)), int64_t(std::floor(double(p.y) * scale)),
+                             int64_t(std::floor(double(p.z) * scale))};
+    for (int64_t c : {v.x, v.y, v.z})
       if (std::abs(c) > synthesis::kMaxSolidPosition)
         throw Error("the scale puts the model outside the solid texture's range (|position × scale| <= 2^30)");
+    return v;
+  };
+  if (options.method == synthesis::SolidMethod::Tiles) {  // one read per site, no request to build
+    if (!analysis.tiles) throw Error("the solid tiles method needs the analysis' tile set");
+    SolidSites out{std::vector<synthesis::Triple>(sites.size()), int64_t(sites.size()), 0};
+    parallelFor(0, int(sites.size()), ctx, [&](int begin, int end) {
+      synthesis::SolidTileReader read(*analysis.tiles, options.seed);
+      for (int s = begin; s < end; ++s) {
+        const synthesis::Voxel v = voxelAt(size_t(s));
+        out.triples[size_t(s)] = read(v.x, v.y, v.z);
+      }
+    }, 4096);
+    return out;
   }
+  std::vector<synthesis::Voxel> voxels(sites.size());
+  for (size_t s = 0; s < sites.size(); ++s) voxels[s] = voxelAt(s);
   synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, voxels, options, cache, ctx);
   return {std::move(result.triples), result.distinctVoxels, result.voxelsSynthesized()};
 }

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace texfab::render {
@@ -48,8 +49,10 @@ void rotateNormal(const std::array<float, 4>& j, const float* in, float* out);
 /// The solid texture at the sites' 3-D positions.
 struct SolidSites {
   std::vector<synthesis::Triple> triples;  ///< one per site
-  int64_t voxelsRequested = 0;             ///< distinct voxels among the sites'
+  int64_t voxelsRequested = 0;             ///< distinct voxels among the sites' (tiles: the sites)
   int64_t voxelsSynthesized = 0;           ///< over all levels (the dependency chains)
+  /// "N voxels requested, M synthesized" (lazy), "N voxels read from the tiles" (tiles).
+  std::string summary(synthesis::SolidMethod method) const;
 };
 
 /// The voxel of each site (its surface position times `scale` voxels per model unit, floored),

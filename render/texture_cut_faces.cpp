@@ -86,8 +86,7 @@ CutFaceTexture textureCutFaces(std::span<const geometry::Mesh> pieces, std::span
   SolidSites solid = solidTriplesAtSites(r.sites, r.atlas.fields, analysis, o.solid, r.textureScale, ctx, cache);
   r.voxelsRequested = solid.voxelsRequested;
   r.voxelsSynthesized = solid.voxelsSynthesized;
-  synthesisStage.finish(std::to_string(r.voxelsRequested) + " voxels requested, " + std::to_string(r.voxelsSynthesized) +
-                        " synthesized");
+  synthesisStage.finish(solid.summary(o.solid.method));
 
   Stage resolveStage(ctx, "resolve");
   const int channels = synthesis::solidColorChannels(exemplar, exemplar, exemplar);

@@ -197,8 +197,7 @@ void TextureJob::synthesize() {
     r_.triples = std::move(solid.triples);
     r_.voxelsRequested = solid.voxelsRequested;
     r_.voxelsSynthesized = solid.voxelsSynthesized;
-    stage.finish(std::to_string(r_.voxelsRequested) + " voxels requested, " + std::to_string(r_.voxelsSynthesized) +
-                 " synthesized");
+    stage.finish(solid.summary(o_.solid.method));
   }
 }
 

@@ -8,6 +8,7 @@
 #include "render/image/image_io.h"
 #include "render/image/parallel.h"
 #include "synthesis/analysis_cache.h"
+#include "synthesis/binary_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/exemplar_analysis.h"
@@ -703,32 +704,8 @@ SolidAnalysis analyzeSolid(const Image& exIn, const Image& eyIn, const Image& ez
 
 namespace {
 
-struct Writer {
-  std::ostream& out;
-  void raw(const void* d, size_t n) { out.write(static_cast<const char*>(d), std::streamsize(n)); }
-  template <class T> void value(const T& v) { raw(&v, sizeof v); }
-  template <class T> void vec(const std::vector<T>& v) {
-    value(uint64_t(v.size()));
-    raw(v.data(), v.size() * sizeof(T));
-  }
-};
-
-struct Reader {
-  std::ifstream& in;
-  bool ok = true;
-  void raw(void* d, size_t n) { ok = ok && bool(in.read(static_cast<char*>(d), std::streamsize(n))); }
-  template <class T> void value(T& v) { raw(&v, sizeof v); }
-  template <class T> void vec(std::vector<T>& v, size_t expected) {
-    uint64_t n = 0;
-    value(n);
-    if (!ok || n != expected) {
-      ok = false;
-      return;
-    }
-    v.resize(n);
-    raw(v.data(), n * sizeof(T));
-  }
-};
+using Writer = BinaryWriter;
+using Reader = BinaryReader;
 
 void writeProjection(Writer& w, const SolidProjection& p) {
   w.value(p.inputs);

@@ -49,6 +49,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -133,6 +134,8 @@ struct SolidAnalysisStats {
   double seconds = 0;
 };
 
+struct SolidTileSet;
+
 struct SolidAnalysis {
   int width = 0;    ///< all three exemplars share this size
   int height = 0;
@@ -142,6 +145,9 @@ struct SolidAnalysis {
   std::vector<SolidLevel> levels;  ///< synthesized levels, coarsest (l_start) first
   SolidAnalysisStats stats;
   uint64_t key = 0;
+  /// The tile set optimized from this analysis (solid_tiles.h), for SolidMethod::Tiles; computed
+  /// and cached on its own (buildSolidTilesCached), null until then.
+  std::shared_ptr<const SolidTileSet> tiles;
 
   int startStackLevel() const { return finestStackLevel - int(levels.size()) + 1; }
 };

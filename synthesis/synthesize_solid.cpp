@@ -12,6 +12,7 @@
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/hash.h"
 #include "synthesis/refine_solid.h"
+#include "synthesis/solid_tiles.h"
 #if TEXFAB_HAS_VULKAN
 #include "synthesis/vulkan/solid_level.h"
 #endif
@@ -819,10 +820,28 @@ void SolidLevelCache::insert(const Key& key, std::shared_ptr<const Brick> brick)
   }
 }
 
+const char* toString(SolidMethod method) { return method == SolidMethod::Tiles ? "tiles" : "lazy"; }
+
+namespace {
+
+const SolidTileSet& tilesOf(const SolidAnalysis& a) {
+  if (!a.tiles) throw Error("the solid tiles method needs the analysis' tile set (buildSolidTilesCached)");
+  return *a.tiles;
+}
+
+} // namespace
+
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
                                      const SolidSynthesisOptions& o, SolidLevelCache* cache, const Context& ctx) {
-  prepare(a, o, cache);
   for (const Voxel& v : voxels) validatePosition(v.x, v.y, v.z);
+  if (o.method == SolidMethod::Tiles) {
+    SolidSynthesisResult result;
+    result.triples.resize(voxels.size());
+    evaluateSolidTiles(tilesOf(a), o.seed, voxels, result.triples, ctx);
+    result.distinctVoxels = int64_t(voxels.size());
+    return result;
+  }
+  prepare(a, o, cache);
   SolidSynthesisResult result;
   result.levels = emptyStats(a);
   result.triples.resize(voxels.size());
@@ -868,12 +887,19 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
 
 SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& box, const SolidSynthesisOptions& o,
                                         SolidLevelCache* cache, const Context& ctx) {
-  prepare(a, o, cache);
   if (box.nx < 1 || box.ny < 1 || box.nz < 1)
     throw Error("voxel box " + std::to_string(box.nx) + "x" + std::to_string(box.ny) + "x" + std::to_string(box.nz) +
                 " is empty");
   validatePosition(box.x, box.y, box.z);
   validatePosition(box.x + box.nx - 1, box.y + box.ny - 1, box.z + box.nz - 1);
+  if (o.method == SolidMethod::Tiles) {
+    SolidSynthesisResult result;
+    result.triples.resize(size_t(box.count()));
+    evaluateSolidTilesBox(tilesOf(a), o.seed, box, result.triples, ctx);
+    result.distinctVoxels = box.count();
+    return result;
+  }
+  prepare(a, o, cache);
   if (o.refinePasses > 0) return refineSolidBox(a, box, o, cache, ctx);
   SolidSynthesisResult result;
   result.levels = emptyStats(a);

@@ -73,8 +73,16 @@ struct VoxelBox {
   int64_t count() const { return int64_t(nx) * ny * nz; }
 };
 
+/// How voxels are made: lazy synthesis (Dong et al. 2008, this file), or read from the analysis'
+/// precomputed tile set (solid_tiles.h: constant time per voxel; SolidAnalysis::tiles).
+enum class SolidMethod : uint8_t { Lazy, Tiles };
+const char* toString(SolidMethod method);
+
 struct SolidSynthesisOptions {
   uint32_t seed = 1;     ///< the only source of variation
+  /// Lazy (default) or Tiles. With Tiles, the analysis must carry its tile set, the seed picks the
+  /// arrangement of tiles, and every option below is the tile set's business, not read.
+  SolidMethod method = SolidMethod::Lazy;
   /// Strength of the random warp applied once after initialization, in voxels of the start level
   /// (amplitudes 1.5 and 1 voxel on 4- and 8-voxel grids at 1); 0 = no warp. [0, 4]
   float jitter = 1.0f;
@@ -141,8 +149,8 @@ struct SolidLevelStats {
 
 struct SolidSynthesisResult {
   std::vector<Triple> triples;           ///< one per requested voxel, in request order
-  int64_t distinctVoxels = 0;            ///< distinct voxels among those requested
-  std::vector<SolidLevelStats> levels;   ///< coarsest first
+  int64_t distinctVoxels = 0;            ///< distinct voxels among those requested (Tiles: all requested)
+  std::vector<SolidLevelStats> levels;   ///< coarsest first (Tiles: none, nothing is synthesized)
   int64_t voxelsSynthesized() const;     ///< sum over levels
 };
 

@@ -7,6 +7,8 @@
 #include "apps/texfab/cli.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
+#include "synthesis/solid_tiles.h"
+#include "synthesis/synthesize_solid.h"
 
 namespace texfab::cli {
 
@@ -16,9 +18,15 @@ enum class WrapChoice { Auto, Tile, Clamp };
 /// Adds --exemplar-wrap to a command.
 CLI::Option* wrapFlag(Flags& f, WrapChoice& choice);
 
-/// Adds --contrast-gain and --refine (synthesis::SolidSynthesisOptions::contrastGain and
-/// refinePasses) to a command with solid texture; `what` says where they apply.
-void solidFidelityFlags(Flags& f, float& gain, int& refinePasses, const std::string& what);
+/// How a command's solid texture is made: --solid-method and --tile-size.
+struct SolidMethodChoice {
+  synthesis::SolidMethod method = synthesis::SolidMethod::Lazy;
+  synthesis::SolidTileOptions tiles;  ///< with Tiles
+};
+
+/// Adds --solid-method, --tile-size, --contrast-gain and --refine (synthesis::SolidSynthesisOptions::
+/// contrastGain and refinePasses) to a command with solid texture; `what` says where they apply.
+void solidFidelityFlags(Flags& f, SolidMethodChoice& method, float& gain, int& refinePasses, const std::string& what);
 
 /// The wrap mode the choice asks for; auto measures the exemplar and notes what it chose.
 synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run);
@@ -29,7 +37,9 @@ synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, con
 /// `options.wrap` is the choice's; auto: clamp when any of the exemplars does not tile. Warns when
 /// the exemplars' colours differ (a voxel shows the mean of its three colours, so every slice
 /// blends them).
+/// With the tiles method, the analysis carries its tile set (a "tiles" stage, cached like the analysis).
 synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
-                                      synthesis::SolidAnalysisOptions options, WrapChoice wrap, bool& cached);
+                                      synthesis::SolidAnalysisOptions options, WrapChoice wrap, bool& cached,
+                                      const SolidMethodChoice& method = {});
 
 } // namespace texfab::cli

@@ -27,10 +27,10 @@ struct Exemplars {
   render::InteriorExemplar interiorView;
 };
 
-synthesis::SolidAnalysis solidAnalysis(Run& run, const Image& image, WrapChoice wrap) {
+synthesis::SolidAnalysis solidAnalysis(Run& run, const Image& image, WrapChoice wrap, const SolidMethodChoice& method) {
   bool cached = false;
   synthesis::validateSolidExemplars(image, image, image);
-  return analyzeSolid(run, image, image, image, {}, wrap, cached);
+  return analyzeSolid(run, image, image, image, {}, wrap, cached, method);
 }
 
 void analyze(Run& run, const BreakJob& job, Exemplars& e) {
@@ -43,15 +43,15 @@ void analyze(Run& run, const BreakJob& job, Exemplars& e) {
       e.surface = analyzeExemplar(run, *e.outer, options, cached);
       e.outerView.analysis = &*e.surface;
     } else {
-      e.outerSolid = solidAnalysis(run, *e.outer, job.wrap);
+      e.outerSolid = solidAnalysis(run, *e.outer, job.wrap, job.solid);
       e.outerView.solidAnalysis = &*e.outerSolid;
     }
   }
   if (e.interior) {
-    e.interiorSolid = solidAnalysis(run, *e.interior, job.wrap);
+    e.interiorSolid = solidAnalysis(run, *e.interior, job.wrap, job.solid);
     e.interiorView = {&*e.interior, &*e.interiorSolid};
   } else {
-    if (!e.outerSolid) e.outerSolid = solidAnalysis(run, *e.outer, job.wrap);
+    if (!e.outerSolid) e.outerSolid = solidAnalysis(run, *e.outer, job.wrap, job.solid);
     e.interiorView = {&*e.outer, &*e.outerSolid};
   }
 }
@@ -78,6 +78,7 @@ void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const ren
   r["cut_area"] = cutArea;
   r["notes"] = model.notes;
   r["parameters"] = {{"seed", job.seed},
+                     {"solid_method", synthesis::toString(job.solid.method)},
                      {"contrast_gain", job.contrastGain},
                      {"refine_passes", job.refinePasses},
                      {"mode", job.exemplar.empty() ? "own"
@@ -133,7 +134,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", job.seed, "Random seed of the textures (and of the fracture's sites)");
   wrapFlag(f, job.wrap);
-  solidFidelityFlags(f, job.contrastGain, job.refinePasses, " on the cut faces (and outside with --mode solid)");
+  solidFidelityFlags(f, job.solid, job.contrastGain, job.refinePasses, " on the cut faces (and outside with --mode solid)");
   f.option("--explode", job.explode, "Move the pieces apart by this factor of their offset from the centre", {0, 100});
   f.text("--separate", job.separate,
          "Also write each piece to its own file in this new (or empty) folder, with only its own part of the textures");
@@ -165,6 +166,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   o.outer.atlas.pack.gutter = o.interior.atlas.pack.gutter;
   o.outer.textureScale = o.interior.textureScale;
   o.outer.surface.seed = o.outer.solid.seed = o.interior.solid.seed = job.seed;
+  o.outer.solid.method = o.interior.solid.method = job.solid.method;
   o.outer.solid.contrastGain = o.interior.solid.contrastGain = job.contrastGain;
   o.outer.solid.refinePasses = o.interior.solid.refinePasses = job.refinePasses;
   o.outer.measure = false;

@@ -19,6 +19,7 @@ struct BreakJob {
   render::BreakModelOptions options;
   uint32_t seed = 1;
   /// The solid textures' (outside in --mode solid, and the cut faces).
+  SolidMethodChoice solid;
   float contrastGain = synthesis::SolidSynthesisOptions{}.contrastGain;
   int refinePasses = synthesis::SolidSynthesisOptions{}.refinePasses;
   double explode = 0;

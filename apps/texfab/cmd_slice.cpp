@@ -40,6 +40,7 @@ struct SliceJob {
   ColorMode mode = ColorMode::Solid;
   double textureScale = 0, featureSize = 0;
   uint32_t seed = 1;
+  SolidMethodChoice solid;
   float contrastGain = synthesis::SolidSynthesisOptions{}.contrastGain;
   int refinePasses = synthesis::SolidSynthesisOptions{}.refinePasses;
   int resolution = 2048;
@@ -112,9 +113,10 @@ std::unique_ptr<render::VoxelColorSource> colorSource(const SliceJob& job, Run& 
   if (exemplar && job.mode == ColorMode::Solid) {
     synthesis::validateSolidExemplars(*exemplar, *exemplar, *exemplar);
     bool cached = false;
-    solid = analyzeSolid(run, *exemplar, *exemplar, *exemplar, {}, job.wrap, cached);
+    solid = analyzeSolid(run, *exemplar, *exemplar, *exemplar, {}, job.wrap, cached, job.solid);
     synthesis::SolidSynthesisOptions so;
     so.seed = job.seed;
+    so.method = job.solid.method;
     so.contrastGain = job.contrastGain;
     so.refinePasses = job.refinePasses;
     // Default: one exemplar spans a quarter of the print's height (model units along the up axis).
@@ -122,7 +124,7 @@ std::unique_ptr<render::VoxelColorSource> colorSource(const SliceJob& job, Run& 
     const double height = std::abs((grid.rotation * (box.max - box.min).cast<double>()).z());
     const double span = job.featureSize > 0 ? job.featureSize : height / 4;
     const double scale = job.textureScale > 0 ? job.textureScale : std::max(exemplar->width, exemplar->height) / span;
-    source["colors"] = {{"mode", "solid"}, {"exemplar", name}, {"seed", job.seed},
+    source["colors"] = {{"mode", "solid"}, {"method", synthesis::toString(job.solid.method)}, {"exemplar", name}, {"seed", job.seed},
                          {"contrast_gain", job.contrastGain}, {"refine_passes", job.refinePasses},
                          {"texture_scale", scale}};
     return std::make_unique<render::SolidVoxelColors>(*solid, *exemplar, *exemplar, *exemplar, so, scale, grid);
@@ -263,7 +265,7 @@ Command addSliceCommand(CLI::App& root) {
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", {0, 1e9});
   f.option("--seed", job->seed, "Random seed of the synthesis");
   wrapFlag(f, job->wrap);
-  solidFidelityFlags(f, job->contrastGain, job->refinePasses, " (--mode solid)");
+  solidFidelityFlags(f, job->solid, job->contrastGain, job->refinePasses, " (--mode solid)");
   f.option("--resolution", job->resolution, "Atlas size for --mode surface", {64, 16384});
   f.text("--preview", job->preview, "Also write a picture of the print (front, side, four layers) to this PNG");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");

@@ -40,6 +40,7 @@ struct SolidJob {
   int width = 0, height = 0;
   double scale = 1.0;
   synthesis::SolidSynthesisOptions options;
+  SolidMethodChoice method;
   WrapChoice wrap = WrapChoice::Auto;
   CommonFlags common;
 };
@@ -271,6 +272,7 @@ nlohmann::json measureSlices(Run& run, std::span<const MeasuredSlice> slices, co
 
 void runSolid(SolidJob& job) {
   Run run("solid", job.common);
+  job.options.method = job.method.method;
   // One mode, checked with its outputs before any work.
   if ((job.volume != 0) + job.planeGiven + !job.points.empty() != 1)
     throw UsageError("choose exactly one of --volume N, --plane ORIGIN,U,V or --points FILE");
@@ -287,7 +289,7 @@ void runSolid(SolidJob& job) {
   synthesis::validateSolidExemplars(ex, ey, ez, {job.exemplar, pathY, pathZ});
   load.finish(job.exemplar + " " + std::to_string(ex.width) + "x" + std::to_string(ex.height));
   bool cached = false;
-  const synthesis::SolidAnalysis analysis = analyzeSolid(run, ex, ey, ez, {}, job.wrap, cached);
+  const synthesis::SolidAnalysis analysis = analyzeSolid(run, ex, ey, ez, {}, job.wrap, cached, job.method);
   const Synthesized s = synthesize(analysis, {ex, ey, ez});
   if (!s.slices.empty()) run.report()["measures"] = measureSlices(run, s.slices, {ex, ey, ez});
 
@@ -300,7 +302,8 @@ void runSolid(SolidJob& job) {
   const synthesis::SolidSynthesisOptions& o = job.options;
   r["parameters"] = {{"seed", o.seed}, {"jitter", o.jitter}, {"offset_cells", o.offsetCells},
                      {"passes", o.passes}, {"finest_passes", o.finestPasses}, {"subpasses", o.subpasses()},
-                     {"contrast_gain", o.contrastGain}, {"refine_passes", o.refinePasses},
+                     {"method", synthesis::toString(o.method)}, {"contrast_gain", o.contrastGain},
+                     {"refine_passes", o.refinePasses},
                      {"scale", job.scale}, {"exemplar_wrap", toString(analysis.wrap)}};
   int64_t synthesized = 0;
   for (const synthesis::SolidLevelStats& l : s.levels) synthesized += l.voxels;
@@ -318,9 +321,10 @@ Command addSolidCommand(CLI::App& root) {
   auto job = std::make_shared<SolidJob>();
   synthesis::SolidSynthesisOptions& o = job->options;
   Flags f(root.add_subcommand(
-      "solid", "Solid texture from 2-D exemplars, voxels on demand (lazy solid synthesis, Dong et al. 2008): "
-               "a volume as slices, any plane as an image, or colours at listed points. The volume is "
-               "infinite and deterministic: the same voxel always gets the same colour."));
+      "solid", "Solid texture from 2-D exemplars, voxels on demand (lazy solid synthesis, Dong et al. 2008, or "
+               "a set of matching solid tiles with --solid-method tiles): a volume as slices, any plane as an "
+               "image, or colours at listed points. The volume is infinite and deterministic: the same voxel "
+               "always gets the same colour."));
   f.input("exemplar", job->exemplar,
           "Exemplar image, used for all three axes unless --exemplar-y/--exemplar-z are given "
           "(E_x lies in the y-z plane, E_y in z-x, E_z in x-y); 8x8 to 512x512. The precomputation, cached, "
@@ -357,7 +361,7 @@ Command addSolidCommand(CLI::App& root) {
            "offset (0 = one tiling, as in the paper, which repeats with the exemplar's period)",
            {0, 1024});
   wrapFlag(f, job->wrap);
-  solidFidelityFlags(f, o.contrastGain, o.refinePasses, "");
+  solidFidelityFlags(f, job->method, o.contrastGain, o.refinePasses, "");
   f.option("--passes", o.passes, "Correction passes per level above the finest", {0, 4});
   f.option("--finest-passes", o.finestPasses,
            "Correction passes at the finest level (the paper: 2, about 3x the finest level's work)", {0, 4});

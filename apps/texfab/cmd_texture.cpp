@@ -30,6 +30,7 @@ struct TextureJob {
   render::RenderOptions previewOptions;
   UpAxis up = UpAxis::Auto;
   WrapChoice wrap = WrapChoice::Auto;
+  SolidMethodChoice method;
   CommonFlags common;
 };
 
@@ -130,6 +131,7 @@ void runTexture(TextureJob& job) {
   Run run("texture", job.common);
   checkPrintSize(job.write, job.output);
   render::TextureMeshOptions& o = job.options;
+  o.solid.method = job.method.method;
   // Everything checkable is checked, and every output reserved, before any work.
   if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --texture-scale or --feature-size, not both");
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
@@ -162,7 +164,7 @@ void runTexture(TextureJob& job) {
     options.wrap = chooseWrap(wrap, in.exemplar, run);
     analysis = analyzeExemplar(run, in.exemplar, options, cached);
   } else {
-    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, wrap, cached);
+    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, wrap, cached, job.method);
   }
   render::TextureExemplar ex = in.view();
   ex.analysis = analysis ? &*analysis : nullptr;
@@ -188,7 +190,8 @@ void runTexture(TextureJob& job) {
   r["exemplar"]["analysis_cached"] = cached;
   r["exemplar"]["downsampled"] = downsampling;  // 1: synthesized from the exemplar as given
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},
-                     {"contrast_gain", o.solid.contrastGain}, {"refine_passes", o.solid.refinePasses},
+                     {"solid_method", synthesis::toString(o.solid.method)}, {"contrast_gain", o.solid.contrastGain},
+                     {"refine_passes", o.solid.refinePasses},
                      {"exemplar_wrap", toString(analysis ? analysis->wrap : solidAnalysis->wrap)},
                      {"texture_scale", result.textureScale * downsampling},
                      {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel * downsampling}};
@@ -230,7 +233,7 @@ Command addTextureCommand(CLI::App& root) {
            {2, atlas::PackChartsOptions::kMaxGutter});
   f.option("--seed", o.surface.seed, "Random seed: the only source of variation");
   wrapFlag(f, job->wrap);
-  solidFidelityFlags(f, o.solid.contrastGain, o.solid.refinePasses, " (--mode solid)");
+  solidFidelityFlags(f, job->method, o.solid.contrastGain, o.solid.refinePasses, " (--mode solid)");
   f.text("--maps", job->maps,
          "Companion maps of the exemplar's size, synthesized with the same coordinates: "
          "normal=N.png,roughness=R.png,height=H.png (height is written as OUTPUT_height.png)");

@@ -10,6 +10,7 @@
 #include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
+#include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_2d.h"
 #include "synthesis/synthesize_solid.h"
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
@@ -46,6 +47,10 @@ inline constexpr Stage kSolidVolume[] = {
     {"analysis", "39c22a9410faab61"}, {"synthesis", "3e8d8d343adfd9c7"}, {"colour", "9d43c1e1bbb36ea4"}};
 inline constexpr Stage kSolidObliquePlane[] = {{"analysis", "39c22a9410faab61"}, {"synthesis", "1024f66e6d415b7d"}};
 inline constexpr Stage kSolidClampVolume[] = {{"analysis", "376954e8afa4e8c9"}, {"synthesis", "b014e0dd69a65782"}};
+inline constexpr Stage kSolidTiles[] = {
+    {"analysis", "39c22a9410faab61"}, {"tiles", "7337d839b4718cad"}, {"evaluation", "2f72b1d90329728e"}};
+inline constexpr Stage kSolidClampTiles[] = {
+    {"analysis", "376954e8afa4e8c9"}, {"tiles", "a8c43503106029d9"}, {"evaluation", "037924fbbd000eb6"}};
 inline constexpr Stage kAtlasTexelUvs[] = {{"atlas", "66752b2be1750fd4"}};
 inline constexpr Stage kSurfaceTexture[] = {{"analysis", "ec0cf9cad759bed8"},
                                             {"atlas", "427d4aeff5f1272e"},
@@ -242,16 +247,37 @@ inline Stages solidClampVolume(Backend backend = Backend::Cpu) {
 }
 
 /// The voxels of an oblique 40x40 plane through the solid texture of marble32.
-inline Stages solidPlane(Backend backend = Backend::Cpu) {
+/// The voxels of a 40x40 oblique plane.
+inline std::vector<synthesis::Voxel> obliquePlane() {
   std::vector<synthesis::Voxel> voxels;
   for (int j = 0; j < 40; ++j)
     for (int i = 0; i < 40; ++i) {
       const double x = 3 + 0.8 * i - 0.3 * j, y = -5 + 0.5 * i + 0.7 * j, z = 11 + 0.3 * i + 0.6 * j;
       voxels.push_back({int64_t(std::floor(x)), int64_t(std::floor(y)), int64_t(std::floor(z))});
     }
+  return voxels;
+}
+
+inline Stages solidPlane(Backend backend = Backend::Cpu) {
+  const std::vector<synthesis::Voxel> voxels = obliquePlane();
   const synthesis::SolidSynthesisResult r =
       synthesis::synthesizeSolid(solidAnalysis32(), voxels, {}, nullptr, synthesisContext(backend));
   return Stages().add("analysis", hashOf(solidAnalysis32())).add("synthesis", hashOf(r.triples));
+}
+
+/// A tile set (8-voxel tiles: one level, 32^3 arrangements) of a solid analysis, and the oblique
+/// plane read from it with seed 5.
+inline Stages solidTiles(const synthesis::SolidAnalysis& analysis) {
+  synthesis::SolidTileOptions options;
+  options.tileSide = 8;
+  const synthesis::SolidTileSet tiles = synthesis::buildSolidTiles(analysis, options, Context{.threads = 2});
+  const std::vector<synthesis::Voxel> voxels = obliquePlane();
+  std::vector<synthesis::Triple> triples(voxels.size());
+  synthesis::evaluateSolidTiles(tiles, 5, voxels, triples);
+  return Stages()
+      .add("analysis", hashOf(analysis))
+      .add("tiles", hashOf(tiles.elements))
+      .add("evaluation", hashOf(triples));
 }
 
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY

@@ -18,6 +18,8 @@ TEST(Golden, Window2dClamp) { expectStages(window2dClamp(), kWindow2dClamp); }
 TEST(Golden, SolidVolume) { expectStages(solidVolume(), kSolidVolume); }
 TEST(Golden, SolidObliquePlane) { expectStages(solidPlane(), kSolidObliquePlane); }
 TEST(Golden, SolidClampVolume) { expectStages(solidClampVolume(), kSolidClampVolume); }
+TEST(Golden, SolidTiles) { expectStages(solidTiles(solidAnalysis32()), kSolidTiles); }
+TEST(Golden, SolidClampTiles) { expectStages(solidTiles(solidClampAnalysis40()), kSolidClampTiles); }
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 TEST(Golden, AtlasTexelUvs) { expectStages(atlasTexelUvs(), kAtlasTexelUvs); }
 TEST(Golden, SurfaceTexture) { expectStages(surfaceTexture(), kSurfaceTexture); }

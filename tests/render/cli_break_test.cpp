@@ -130,6 +130,20 @@ TEST_F(CliBreak, VulkanBackendWritesTheCpusBytes) {
   EXPECT_EQ(readText(dir / "cpu.glb"), readText(dir / "vulkan.glb"));
 }
 
+// The tiles method on the cut faces and outside (solid mode): a valid file, the same bytes on one
+// and two threads, and the method in the report.
+TEST_F(CliBreak, TilesMethodOnCutFacesAndOutside) {
+  for (const auto& [output, threads] : {std::pair{"t1.glb", "1"}, std::pair{"t2.glb", "2"}}) {
+    const auto run = texfab("cut", common(output) + " --mode solid --solid-method tiles --tile-size 16 --plane 0,0,0,1,0.3,0.2" +
+                                       " --threads " + threads + " --report " + quoted(dir / "t.json"));
+    ASSERT_EQ(0, run.status) << run.err;
+  }
+  expectValid(dir / "t1.glb");
+  EXPECT_EQ(readText(dir / "t1.glb"), readText(dir / "t2.glb"));
+  const nlohmann::json r = nlohmann::json::parse(readText(dir / "t.json"));
+  EXPECT_EQ(r["parameters"]["solid_method"], "tiles") << r["parameters"].dump();
+}
+
 TEST_F(CliBreak, CutByTwoPlanesAndAPlaneThatMisses) {
   const auto run = texfab("cut", common("cut.glb") + " --plane 0,0,0,1,0,0 --plane 0,0,0,0,1,0.2 --report " +
                                       quoted(dir / "r.json"));

@@ -151,6 +151,44 @@ TEST(CliSolid, ContrastGainAndRefinement) {
 // A voxel shows the mean of its three exemplar colours: exemplars of different colours (grey marble
 // and red brick) get a warning, one material along two axes (marble and its transpose) does not.
 // The report measures each axis against its own exemplar, grey or RGB.
+TEST(CliSolid, TilesMethodIsCachedAndAgreesAcrossModes) {
+  // The tile set is optimized once (the "tiles" stage), then read from the cache; the volume's
+  // slice and the plane through it are the same voxels; another seed arranges the tiles anew.
+  TempDir dir;
+  const std::string ex = smallExemplar(dir);
+  const std::string common = ex + " --solid-method tiles --tile-size 16 -q --cache-dir " + (dir / "cache").string();
+  ASSERT_EQ(texfab("solid " + common + " --volume 20 -o " + (dir / "vol").string() + " --report " +
+                   (dir / "r.json").string())
+                .status,
+            0);
+  std::ifstream in(dir / "r.json");
+  const auto report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["parameters"]["method"], "tiles");
+  EXPECT_EQ(report["synthesized_voxels"], 0);
+  EXPECT_GT(report["measures"]["slices"]["z"]["contrast_ratio"].get<double>(), 0.5);
+  EXPECT_EQ(report["timings"]["tiles"].is_number(), true) << report["timings"].dump();
+  size_t tileFiles = 0;
+  for (const auto& e : fs::directory_iterator(dir / "cache")) tileFiles += e.path().extension() == ".tiles";
+  EXPECT_EQ(tileFiles, 1u);
+
+  const test::CliResult second = texfab("solid " + common + " --plane 0,0,13,1,0,0,0,1,0 --size 20 -o " +
+                                        (dir / "p.png").string() + " --report " + (dir / "r2.json").string());
+  ASSERT_EQ(second.status, 0) << second.err;
+  std::ifstream in2(dir / "r2.json");
+  EXPECT_LT(nlohmann::json::parse(in2)["timings"]["tiles"].get<double>(), 5.0);  // read, not optimized
+  EXPECT_EQ(readImage(dir / "p.png").pixels, readImage(dir / "vol" / "slice_00013.png").pixels);
+  ASSERT_EQ(texfab("solid " + common + " --seed 2 --plane 0,0,13,1,0,0,0,1,0 --size 20 -o " +
+                   (dir / "p2.png").string())
+                .status,
+            0);
+  EXPECT_NE(readImage(dir / "p2.png").pixels, readImage(dir / "p.png").pixels);
+  const test::CliResult bad = texfab("solid " + ex + " --solid-method tiles --tile-size 12 --volume 4 -o " +
+                                     (dir / "bad").string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.err.find("--tile-size"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
 TEST(CliSolid, WarnsWhenTheExemplarsDifferInColour) {
   TempDir dir;
   const std::string marble = smallExemplar(dir), brick = smallExemplar(dir, 32, "brick.png", "brick.png");

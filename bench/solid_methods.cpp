@@ -1,0 +1,207 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The two solid texture methods side by side (issue 33): lazy synthesis (Dong et al. 2008) and the
+// tile set (solid_tiles.h). For each exemplar (cropped to SIDE^2, default 128), prints per method
+// the slices' 7x7 fidelity and completeness relative to the 2-D synthesis of the same exemplar,
+// each measured as a ratio to a shuffled-pixel image's, contrast, histogram distance over the 2-D
+// synthesis', the shifted-self correlation at the tile period, and timings: the tile set's
+// precomputation, a 256^2 cut and a 128^3 box (2 threads, best of REPEAT).
+//   build/bench/solid_methods /usr/share/gimp/2.0/patterns/Stone/terra.pat ...
+// Environment: SIDE, N (plane side, 256), TILE, CELLS, ITER, FITER, HIST (SolidTileOptions), LAZY=0
+// (tiles only), SAVE=dir (writes each method's slices as PNG), THREADS.
+#include "render/image/image_io.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/quality_measures.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/solid_tiles.h"
+#include "synthesis/synthesize_solid.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+using namespace texfab;
+using namespace texfab::synthesis;
+
+namespace {
+
+double env(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atof(v) : fallback;
+}
+
+double seconds(const std::function<void()>& f, int repeat) {
+  double best = 1e30;
+  for (int i = 0; i < repeat; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return best;
+}
+
+Image crop(const Image& full, int side) {
+  const int w = std::min(side, full.width), h = std::min(side, full.height);
+  Image out(w, h, full.channels >= 3 ? 3 : 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < out.channels; ++c) out.at(x, y, c) = full.at(x, y, c);
+  return out;
+}
+
+Image shuffled(const Image& ex, int n) {
+  Image out(n, n, ex.channels);
+  uint32_t s = 12345;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      s = s * 1664525u + 1013904223u;
+      const uint32_t p = (s >> 8) % uint32_t(ex.width * ex.height);
+      for (int c = 0; c < ex.channels; ++c) out.at(x, y, c) = ex.pixels[size_t(p) * size_t(ex.channels) + size_t(c)];
+    }
+  return out;
+}
+
+struct Plane {
+  std::string name;
+  std::vector<Voxel> voxels;
+};
+
+Plane axisPlane(int axis, int64_t k, int n) {
+  Plane p{std::string(1, "xyz"[axis]) + std::to_string(k), {}};
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int64_t a = 1000 + i, b = 2000 + j;
+      p.voxels.push_back(axis == 0 ? Voxel{k, a, b} : axis == 1 ? Voxel{b, k, a} : Voxel{a, b, k});
+    }
+  return p;
+}
+
+Plane obliquePlane(int n) {  // normal (1, 2, 3), unit steps
+  const double l = std::sqrt(14.0), N[3] = {1 / l, 2 / l, 3 / l};
+  const double lu = std::hypot(N[1], N[0]), U[3] = {N[1] / lu, -N[0] / lu, 0};
+  const double V[3] = {N[1] * U[2] - N[2] * U[1], N[2] * U[0] - N[0] * U[2], N[0] * U[1] - N[1] * U[0]};
+  Plane p{"oblique", {}};
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      int64_t q[3];
+      for (int a = 0; a < 3; ++a) q[a] = int64_t(std::floor(537 + (i + 0.5) * U[a] + (j + 0.5) * V[a]));
+      p.voxels.push_back({q[0], q[1], q[2]});
+    }
+  return p;
+}
+
+Image image(const std::vector<Triple>& triples, const Image& ex, int n) {
+  const int ch = solidColorChannels(ex, ex, ex);
+  std::vector<float> colors;
+  solidColors(triples, ex, ex, ex, colors);
+  Image out(n, n, ch);
+  out.pixels = std::move(colors);
+  return out;
+}
+
+struct Measures {
+  double fidelity = 0, completeness = 0, contrast = 0, histogram = 0, lattice = 0;
+};
+
+} // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: solid_methods EXEMPLAR...\n");
+    return 2;
+  }
+  const int side = int(env("SIDE", 128)), n = int(env("N", 256)), repeat = int(env("REPEAT", 3));
+  const Context ctx{.threads = int(env("THREADS", 2))};
+  SolidTileOptions to;
+  to.tileSide = int(env("TILE", to.tileSide));
+  to.arrangementCells = int(env("CELLS", to.arrangementCells));
+  to.iterations = int(env("ITER", to.iterations));
+  to.finestIterations = int(env("FITER", to.finestIterations));
+  to.histogramWeight = float(env("HIST", to.histogramWeight));
+  const bool lazy = env("LAZY", 1) != 0, tilesToo = env("TILES", 1) != 0;
+  const char* save = std::getenv("SAVE");
+  const FidelityOptions fo{};
+
+  std::printf("%-14s %-6s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "exemplar", "method", "fid/2d", "comp/2d", "contrast",
+              "hist/2d", "lattice", "faceLat", "precomp_s", "cut256_ms", "box128_ms");
+  for (int i = 1; i < argc; ++i) {
+    const std::string name = std::filesystem::path(argv[i]).stem().string();
+    const Image ex = crop(readImage(argv[i]), side);
+    SolidAnalysisOptions ao;
+    ao.wrap = detectExemplarWrap(ex);
+    const SolidAnalysis a = analyzeSolid(ex, ex, ex, ao, ctx);
+    AnalysisOptions o2;
+    o2.wrap = ao.wrap;
+    const ExemplarAnalysis a2 = analyzeExemplar(ex, o2, ctx);
+    const QualityReport base = measureSynthesisBaseline(a2, ex, n, n, fo, ctx);
+    const Image shuf = shuffled(ex, n);
+    const double shufFid = neighborhoodFidelity(shuf, ex, fo, ctx);
+    const double shufComp = neighborhoodCompleteness(shuf, ex, fo, ctx);
+    const double baseFid = base.fidelity / shufFid, baseComp = base.completeness / shufComp;
+    std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.4f\n", name.c_str(), "2d", baseFid, baseComp, base.contrast,
+                base.histogramDistance);
+
+    const std::vector<Plane> planes{axisPlane(2, 40 + 5, n), axisPlane(0, 77, n), axisPlane(1, 301, n), obliquePlane(n)};
+    auto measure = [&](const std::function<std::vector<Triple>(const Plane&)>& slice, const std::string& method,
+                       int period) {
+      Measures m;
+      for (const Plane& p : planes) {
+        const Image im = image(slice(p), ex, n);
+        if (save) {
+          std::string file = name;
+          file += "-" + method + "-" + p.name + ".png";
+          writeImage(im, std::filesystem::path(save) / file);
+        }
+        m.fidelity += neighborhoodFidelity(im, ex, fo, ctx) / shufFid / baseFid / double(planes.size());
+        m.completeness += neighborhoodCompleteness(im, ex, fo, ctx) / shufComp / baseComp / double(planes.size());
+        m.contrast += contrastRatio(im, ex) / double(planes.size());
+        m.histogram += histogramDistance(im, ex) / base.histogramDistance / double(planes.size());
+        for (int k = period; k < n / 2; k += period)
+          m.lattice = std::max(m.lattice, shiftedSelfCorrelation(im, k, k));
+      }
+      return m;
+    };
+    auto row = [&](const char* method, const Measures& m, double face, double pre, double cut, double box) {
+      std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %9.2f %9.3f %9.2f\n", name.c_str(), method,
+                  m.fidelity, m.completeness, m.contrast, m.histogram, m.lattice, face, pre, cut * 1e3, box * 1e3);
+      std::fflush(stdout);
+    };
+
+    const int period = to.tileSide;
+    const Plane cut = axisPlane(2, 40, n);
+    const VoxelBox box{0, 0, 0, 128, 128, 128};
+    if (lazy) {
+      const SolidSynthesisOptions so;
+      auto slice = [&](const Plane& p) { return synthesizeSolid(a, p.voxels, so, nullptr, ctx).triples; };
+      const Measures m = measure(slice, "lazy", period);
+      const double tCut = seconds([&] { synthesizeSolid(a, cut.voxels, so, nullptr, ctx); }, repeat);
+      const double tBox = seconds([&] { synthesizeSolidBox(a, box, so, nullptr, ctx); }, 1);
+      row("lazy", m, 0, a.stats.seconds, tCut, tBox);
+    }
+    if (!tilesToo) continue;
+    SolidTileSet tiles;
+    const double pre = seconds([&] { tiles = buildSolidTiles(a, to, ctx); }, 1);
+    auto slice = [&](const Plane& p) {
+      std::vector<Triple> out(p.voxels.size());
+      evaluateSolidTiles(tiles, 1, p.voxels, out, ctx);
+      return out;
+    };
+    const Measures m = measure(slice, "tiles", period);
+    double face = 0;  // a slice on a face plane of the lattice
+    {
+      const Plane p = axisPlane(2, 4 * period, n);
+      const Image im = image(slice(p), ex, n);
+      for (int k = period; k < n / 2; k += period) face = std::max(face, shiftedSelfCorrelation(im, k, k));
+    }
+    std::vector<Triple> out(size_t(box.count()));
+    const double tCut = seconds([&] { slice(cut); }, repeat * 10);
+    const double tBox = seconds([&] { evaluateSolidTilesBox(tiles, 1, box, out, ctx); }, repeat);
+    row("tiles", m, face, pre, tCut, tBox);
+  }
+  return 0;
+}
