@@ -7,15 +7,18 @@
 // precomputation, a 256^2 cut and a 128^3 box (2 threads, best of REPEAT).
 //   build/bench/solid_methods /usr/share/gimp/2.0/patterns/Stone/terra.pat ...
 // Environment: SIDE, N (plane side, 256), TILE, CELLS, ITER, FITER, HIST (SolidTileOptions), LAZY=0
-// (tiles only), SAVE=dir (writes each method's slices as PNG), THREADS.
+// (tiles only), TILES=0 (lazy only), TRIPLANAR=k (colours weighted by the plane's normal, an
+// experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT.
 #include "render/image/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
+#include "synthesis/coord_map.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -69,10 +72,12 @@ Image shuffled(const Image& ex, int n) {
 struct Plane {
   std::string name;
   std::vector<Voxel> voxels;
+  std::array<double, 3> normal{0, 0, 1};
 };
 
 Plane axisPlane(int axis, int64_t k, int n) {
-  Plane p{std::string(1, "xyz"[axis]) + std::to_string(k), {}};
+  Plane p{std::string(1, "xyz"[axis]) + std::to_string(k), {}, {}};
+  p.normal[size_t(axis)] = 1;
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const int64_t a = 1000 + i, b = 2000 + j;
@@ -85,7 +90,7 @@ Plane obliquePlane(int n) {  // normal (1, 2, 3), unit steps
   const double l = std::sqrt(14.0), N[3] = {1 / l, 2 / l, 3 / l};
   const double lu = std::hypot(N[1], N[0]), U[3] = {N[1] / lu, -N[0] / lu, 0};
   const double V[3] = {N[1] * U[2] - N[2] * U[1], N[2] * U[0] - N[0] * U[2], N[0] * U[1] - N[1] * U[0]};
-  Plane p{"oblique", {}};
+  Plane p{"oblique", {}, {N[0], N[1], N[2]}};
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       int64_t q[3];
@@ -95,12 +100,28 @@ Plane obliquePlane(int n) {  // normal (1, 2, 3), unit steps
   return p;
 }
 
-Image image(const std::vector<Triple>& triples, const Image& ex, int n) {
+// The slice's colours: the mean of the three exemplar colours (solidColors), or with TRIPLANAR=k
+// (an experiment) E_e's colour weighted by |n_e|^k for the plane's normal n.
+Image image(const std::vector<Triple>& triples, const Image& ex, int n, const std::array<double, 3>& normal) {
   const int ch = solidColorChannels(ex, ex, ex);
-  std::vector<float> colors;
-  solidColors(triples, ex, ex, ex, colors);
   Image out(n, n, ch);
-  out.pixels = std::move(colors);
+  const double k = env("TRIPLANAR", 0);
+  if (k <= 0) {
+    std::vector<float> colors;
+    solidColors(triples, ex, ex, ex, colors);
+    out.pixels = std::move(colors);
+    return out;
+  }
+  double w[3], sum = 0;
+  for (int e = 0; e < 3; ++e) sum += w[e] = std::pow(std::fabs(normal[size_t(e)]), k);
+  const Image view = solidColorView(ex, ch);
+  for (size_t i = 0; i < triples.size(); ++i)
+    for (int c = 0; c < ch; ++c) {
+      double v = 0;
+      for (int e = 0; e < 3; ++e)
+        v += w[e] / sum * view.at(int(coordU(triples[i][size_t(e)])), int(coordV(triples[i][size_t(e)])), c);
+      out.pixels[i * size_t(ch) + size_t(c)] = float(v);
+    }
   return out;
 }
 
@@ -151,7 +172,7 @@ int main(int argc, char** argv) {
                        int period) {
       Measures m;
       for (const Plane& p : planes) {
-        const Image im = image(slice(p), ex, n);
+        const Image im = image(slice(p), ex, n, p.normal);
         if (save) {
           std::string file = name;
           file += "-" + method + "-" + p.name + ".png";
@@ -195,7 +216,7 @@ int main(int argc, char** argv) {
     double face = 0;  // a slice on a face plane of the lattice
     {
       const Plane p = axisPlane(2, 4 * period, n);
-      const Image im = image(slice(p), ex, n);
+      const Image im = image(slice(p), ex, n, p.normal);
       for (int k = period; k < n / 2; k += period) face = std::max(face, shiftedSelfCorrelation(im, k, k));
     }
     std::vector<Triple> out(size_t(box.count()));
