@@ -6,7 +6,7 @@
 // synthesis', the shifted-self correlation at the tile period, and timings: the tile set's
 // precomputation, a 256^2 cut and a 128^3 box (2 threads, best of REPEAT).
 //   build/bench/solid_methods /usr/share/gimp/2.0/patterns/Stone/terra.pat ...
-// Environment: SIDE, N (plane side, 256), TILE, CELLS, ITER, FITER, HIST (SolidTileOptions), LAZY=0
+// Environment: SIDE, N (plane side, 256), TILE, VARIANTS, COPIES, ITER, FITER, HIST (SolidTileOptions), LAZY=0
 // (tiles only), TILES=0 (lazy only), TRIPLANAR=k (colours weighted by the plane's normal, an
 // experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT.
 #include "render/image/image_io.h"
@@ -140,7 +140,8 @@ int main(int argc, char** argv) {
   const Context ctx{.threads = int(env("THREADS", 2))};
   SolidTileOptions to;
   to.tileSide = int(env("TILE", to.tileSide));
-  to.arrangementCells = int(env("CELLS", to.arrangementCells));
+  to.faceVariants = int(env("VARIANTS", to.faceVariants));
+  to.arrangementCopies = int(env("COPIES", to.arrangementCopies));
   to.iterations = int(env("ITER", to.iterations));
   to.finestIterations = int(env("FITER", to.finestIterations));
   to.histogramWeight = float(env("HIST", to.histogramWeight));
@@ -167,7 +168,8 @@ int main(int argc, char** argv) {
     std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.4f\n", name.c_str(), "2d", baseFid, baseComp, base.contrast,
                 base.histogramDistance);
 
-    const std::vector<Plane> planes{axisPlane(2, 40 + 5, n), axisPlane(0, 77, n), axisPlane(1, 301, n), obliquePlane(n)};
+    const std::vector<Plane> planes{axisPlane(2, 45, n), axisPlane(0, 77, n), axisPlane(1, 301, n),
+                                    obliquePlane(n)};
     auto measure = [&](const std::function<std::vector<Triple>(const Plane&)>& slice, const std::string& method,
                        int period) {
       Measures m;

@@ -25,44 +25,49 @@ namespace fs = std::filesystem;
 void SolidTileOptions::validate() const {
   if (tileSide < 8 || tileSide > 64 || !std::has_single_bit(uint32_t(tileSide)))
     throw Error("tile side must be 8, 16, 32 or 64, got " + std::to_string(tileSide));
-  if (arrangementCells != 4 && arrangementCells != 8)
-    throw Error("arrangement cells must be 4 or 8, got " + std::to_string(arrangementCells));
+  if (faceVariants != 2 && faceVariants != 3)
+    throw Error("face variants must be 2 or 3, got " + std::to_string(faceVariants));
+  if (arrangementCopies != 1 && arrangementCopies != 2)
+    throw Error("arrangement copies must be 1 or 2, got " + std::to_string(arrangementCopies));
   if (iterations < 1 || iterations > 16 || finestIterations < 1 || finestIterations > 16)
     throw Error("tile iterations must be in [1, 16]");
   if (!(histogramWeight >= 0.0f && histogramWeight <= 16.0f))
     throw Error("histogram weight must be in [0, 16], got " + std::to_string(histogramWeight));
 }
 
-SolidTileLayout::SolidTileLayout(int n) : side(n), shift(n > 0 ? std::countr_zero(uint32_t(n)) : 0) {
-  const size_t m = n > 0 ? size_t(n - 1) : 0;
+SolidTileLayout::SolidTileLayout(int n, int faceVariants)
+    : side(n), shift(n > 0 ? std::countr_zero(uint32_t(n)) : 0), variants(faceVariants) {
+  const size_t m = n > 0 ? size_t(n - 1) : 0, v = size_t(faceVariants);
   faces = 2 + 6 * m;
-  interiors = faces + 6 * m * m;
-  elements = interiors + 64 * m * m * m;
+  interiors = faces + 3 * v * m * m;
+  elements = interiors + v * v * v * v * v * v * m * m * m;
 }
 
-size_t SolidTileLayout::element(int x, int y, int z, uint32_t bits) const {
-  const size_t m = size_t(side - 1);
+size_t SolidTileLayout::element(int x, int y, int z, uint32_t code) const {
+  const size_t m = size_t(side - 1), tile = code & 1023u;
   const int local[3] = {x, y, z};
   const int zeros = (x == 0) + (y == 0) + (z == 0);
   if (zeros == 0)  // the interior of the tile of the cell's 6 face variants
-    return interiors + ((size_t(bits & 63u) * m + size_t(z - 1)) * m + size_t(y - 1)) * m + size_t(x - 1);
-  if (zeros == 1) {  // a face, of the axis whose coordinate is 0
+    return interiors + ((tile * m + size_t(z - 1)) * m + size_t(y - 1)) * m + size_t(x - 1);
+  if (zeros == 1) {  // a face, of the axis whose coordinate is 0: its start variant, digit 2a
     const int a = x == 0 ? 0 : y == 0 ? 1 : 2, b = (a + 1) % 3, c = (a + 2) % 3;
-    const size_t face = size_t(a) * 2 + ((bits >> (2 * a)) & 1u);
+    size_t digit = tile;
+    for (int i = 0; i < 2 * a; ++i) digit /= size_t(variants);
+    const size_t face = size_t(a) * size_t(variants) + digit % size_t(variants);
     return faces + (face * m + size_t(local[c] - 1)) * m + size_t(local[b] - 1);
   }
   if (zeros == 2) {  // an edge, along the axis whose coordinate is not 0
     const int a = x != 0 ? 0 : y != 0 ? 1 : 2;
-    const size_t edge = size_t(a) * 2 + ((bits >> (6 + a)) & 1u);
+    const size_t edge = size_t(a) * 2 + ((code >> (10 + a)) & 1u);
     return 2 + edge * m + size_t(local[a] - 1);
   }
-  return (bits >> 9) & 1u;
+  return (code >> 13) & 1u;
 }
 
 namespace {
 
 constexpr uint32_t kTilesMagic = 0x53544654;  // "TFTS"
-constexpr uint32_t kTilesVersion = 1;
+constexpr uint32_t kTilesVersion = 2;
 constexpr uint32_t kOptimizationSeed = 0x2545f491u;
 constexpr uint32_t kArrangementPurpose = 0x41525247u;
 constexpr uint32_t kPlacementPurpose = 0x504c4345u;
@@ -134,20 +139,24 @@ struct ExemplarLevel {
   }
 };
 
-// A periodic arrangement of cells^3 tiles (cells = 4 or 8) in which every tile of the set appears
-// equally often (once or 8 times): along each axis a face variants follow a binary de Bruijn
-// sequence (0011 or 00011101: every pair of consecutive variants, a tile's two faces, occurs as
-// often) shifted by s_a; the shifts are triangular in a permutation (a, b, c) of the axes, s_a a
-// function of the cell's b and c, s_b of its c, s_c a constant, so the cell -> tile map stays
+// A periodic arrangement of cells^3 tiles (cells = V^2 or 2 V^2) in which every tile of the set
+// appears equally often (once or 8 times): along each axis a face variants follow a de Bruijn
+// sequence (0011, or 001021122: every ordered pair of variants, a tile's two faces, once per
+// period) shifted by s_a. The shifts are triangular in a permutation (a, b, c) of the axes (s_a a
+// function of the cell's b and c, s_b of its c, s_c a constant), so the cell -> tile map stays
 // onto, and they are drawn anew per salt so that tiles meet different neighbours. Edge and corner
 // variants are plain hashes of the cell.
 struct Arrangement {
   int cells = 0, side = 0;
   std::vector<uint32_t> element;  // side^3, x fastest
 
-  Arrangement(const SolidTileLayout& layout, int cellCount, uint32_t salt, const Context& ctx)
-      : cells(cellCount), side(cellCount * layout.side), element(size_t(side) * side * side) {
-    const uint32_t sequence = cells == 4 ? 0b1100u : 0b10111000u;  // bit i: the variant at i
+  Arrangement(const SolidTileLayout& layout, int copies, uint32_t salt, const Context& ctx)
+      : cells(layout.variants * layout.variants * copies), side(cells * layout.side),
+        element(size_t(side) * side * side) {
+    // De Bruijn sequences: every ordered pair of variants once per period.
+    const std::array<int, 9> sequence = layout.variants == 2 ? std::array<int, 9>{0, 0, 1, 1} :
+                                                               std::array<int, 9>{0, 0, 1, 0, 2, 1, 1, 2, 2};
+    const int period = layout.variants * layout.variants;
     const uint32_t order = voxelHash(kOptimizationSeed, salt, 0, 0, 0, kArrangementPurpose + 16) % 6;
     const int a = int(order / 2), b = (a + 1 + int(order % 2)) % 3, c = 3 - a - b;
     int rank[3];
@@ -163,8 +172,7 @@ struct Arrangement {
     };
     auto variant = [&](int kind, int64_t x, int64_t y, int64_t z) {
       const int64_t cell[3] = {x, y, z};
-      if (kind < 3)
-        return (sequence >> cpu::floorMod(cell[kind] + shift(kind, cell), cells)) & 1u;
+      if (kind < 3) return uint32_t(sequence[size_t(cpu::floorMod(cell[kind] + shift(kind, cell), period))]);
       return voxelHash(kOptimizationSeed, salt, int32_t(cpu::floorMod(x, cells)), int32_t(cpu::floorMod(y, cells)),
                        int32_t(cpu::floorMod(z, cells)), kArrangementPurpose + uint32_t(kind)) & 1u;
     };
@@ -369,7 +377,8 @@ private:
       for (int value = 0; value < kValues; ++value) {
         // the target value at quantile (below + count / 2) / sourceTotal, in 1/6 units
         const int64_t q = (2 * below + source[size_t(value)]) * targetTotal;  // times 2 * sourceTotal
-        while (bin < 255 && 2 * sourceTotal * (targetBelow + target[size_t(bin)]) <= q) targetBelow += target[size_t(bin++)];
+        while (bin < 255 && 2 * sourceTotal * (targetBelow + target[size_t(bin)]) <= q)
+          targetBelow += target[size_t(bin++)];
         const int64_t inBin = target[size_t(bin)] > 0 ? q - 2 * sourceTotal * targetBelow : 0;
         const int64_t span = 2 * sourceTotal * std::max<int64_t>(1, target[size_t(bin)]);
         map[size_t(value)] = int16_t(std::clamp<int64_t>(6 * bin - 3 + (6 * inBin + span / 2) / span, 0, kValues - 1));
@@ -414,10 +423,10 @@ std::array<ExemplarLevel, 3> exemplarLevels(const SolidAnalysis& a, const SolidL
 }
 
 // A random 3-D candidate of the analysis (a crossbar-consistent triple) for every element.
-LevelState initialState(const SolidAnalysis& a, int side) {
+LevelState initialState(const SolidAnalysis& a, const SolidTileLayout& layout) {
   const SolidLevel& level = a.levels.front();
   const auto ex = exemplarLevels(a, level);
-  LevelState s{SolidTileLayout(side), {}, {}};
+  LevelState s{layout, {}, {}};
   s.triples.resize(s.layout.elements);
   s.colors.resize(s.layout.elements);
   const uint32_t pixels = uint32_t(a.width * a.height);
@@ -433,12 +442,12 @@ LevelState initialState(const SolidAnalysis& a, int side) {
 // The next finer level: each element takes its parent's triple moved by its sub-voxel offset
 // (coordinate inheritance, as lazy synthesis upsamples), read through one arrangement that both
 // levels share.
-LevelState upsample(const SolidAnalysis& a, const LevelState& parent, int childLevel, int cells, const Context& ctx) {
+LevelState upsample(const SolidAnalysis& a, const LevelState& parent, int childLevel, int copies, const Context& ctx) {
   const SolidLevel& level = a.levels[size_t(childLevel)];
   const auto ex = exemplarLevels(a, level);
-  LevelState child{SolidTileLayout(parent.layout.side * 2), {}, {}};
+  LevelState child{SolidTileLayout(parent.layout.side * 2, parent.layout.variants), {}, {}};
   const uint32_t salt = 0x10000u + uint32_t(childLevel);
-  const Arrangement up(parent.layout, cells, salt, ctx), down(child.layout, cells, salt, ctx);
+  const Arrangement up(parent.layout, copies, salt, ctx), down(child.layout, copies, salt, ctx);
   child.triples.resize(child.layout.elements);
   child.colors.resize(child.layout.elements);
   std::vector<uint8_t> set(child.layout.elements, 0);
@@ -454,7 +463,7 @@ LevelState upsample(const SolidAnalysis& a, const LevelState& parent, int childL
           child.triples[el][size_t(e)] =
               ex[size_t(e)].upsample(p[size_t(e)], bits[axisU(e)], bits[axisV(e)], level.spacing);
       }
-  LevelState fallback = initialState(a, child.layout.side);  // elements no arrangement showed (rare)
+  LevelState fallback = initialState(a, child.layout);  // elements no arrangement showed (rare)
   for (size_t el = 0; el < child.layout.elements; ++el) {
     if (!set[el]) child.triples[el] = fallback.triples[el];
     child.colors[el] = meanColor(ex, child.triples[el]);
@@ -465,7 +474,7 @@ LevelState upsample(const SolidAnalysis& a, const LevelState& parent, int childL
 } // namespace
 
 double solidTilesCpuSeconds(const SolidTileOptions& o) {
-  const double finest = std::pow(double(o.arrangementCells * o.tileSide), 3.0);
+  const double finest = std::pow(double(o.faceVariants * o.faceVariants * o.arrangementCopies * o.tileSide), 3.0);
   return finest * 6e-6 * (o.finestIterations + o.iterations / 7.0);  // measured: ~6 us per voxel and iteration
 }
 
@@ -475,7 +484,8 @@ uint64_t solidTilesKey(const SolidAnalysis& a, const SolidTileOptions& o) {
   hash.add(kTilesVersion);
   hash.add(a.key);
   hash.add(o.tileSide);
-  hash.add(o.arrangementCells);
+  hash.add(o.faceVariants);
+  hash.add(o.arrangementCopies);
   hash.add(o.iterations);
   hash.add(o.finestIterations);
   hash.add(o.histogramWeight);
@@ -490,10 +500,10 @@ SolidTileSet buildSolidTiles(const SolidAnalysis& a, const SolidTileOptions& o, 
   int first = 0;  // the coarsest level whose tiles are kMinTileSide voxels wide or more
   while (first + 1 < levels && (side >> (levels - 1 - first)) < kMinTileSide) ++first;
   reportEstimate(ctx, solidTilesCpuSeconds(o), "the solid tile set");
-  LevelState state = initialState(a, side >> (levels - 1 - first));
+  LevelState state = initialState(a, SolidTileLayout(side >> (levels - 1 - first), o.faceVariants));
   for (int l = first; l < levels; ++l) {
     Stage stage(ctx, "tiles level " + std::to_string(l - first + 1) + "/" + std::to_string(levels - first));
-    if (l > first) state = upsample(a, state, l, o.arrangementCells, stage.inner());
+    if (l > first) state = upsample(a, state, l, o.arrangementCopies, stage.inner());
     const SolidLevel& level = a.levels[size_t(l)];
     const auto ex = exemplarLevels(a, level);
     const int iterations = l + 1 == levels ? o.finestIterations : o.iterations;
@@ -504,7 +514,7 @@ SolidTileSet buildSolidTiles(const SolidAnalysis& a, const SolidTileOptions& o, 
     double meanDistance = 0;
     for (int it = 0; it < iterations; ++it) {
       const uint32_t salt = uint32_t(l * 64 + it);
-      const Arrangement arr(state.layout, o.arrangementCells, salt, stage.inner());
+      const Arrangement arr(state.layout, o.arrangementCopies, salt, stage.inner());
       meanDistance = Iteration(level, ex, arr, salt, penaltyScale, stage.inner()).run(state);
       stage.advance(it + 1, iterations);
     }
@@ -529,8 +539,10 @@ namespace {
 
 struct Placement {
   uint32_t seed;
+  uint32_t variants;
   uint32_t operator()(int kind, int64_t x, int64_t y, int64_t z) const {
-    return voxelHash(seed, kPlacementPurpose, int32_t(x), int32_t(y), int32_t(z), uint32_t(kind)) & 1u;
+    const uint32_t h = voxelHash(seed, kPlacementPurpose, int32_t(x), int32_t(y), int32_t(z), uint32_t(kind));
+    return kind < 3 ? h % variants : h & 1u;
   }
 };
 
@@ -541,7 +553,7 @@ Triple SolidTileReader::operator()(int64_t x, int64_t y, int64_t z) {
   const int64_t c[3] = {x >> layout.shift, y >> layout.shift, z >> layout.shift};
   if (c[0] != cell_[0] || c[1] != cell_[1] || c[2] != cell_[2]) {
     std::copy_n(c, 3, cell_);
-    bits_ = SolidTileLayout::cellBits(c[0], c[1], c[2], Placement{seed_});
+    bits_ = layout.cellCode(c[0], c[1], c[2], Placement{seed_, uint32_t(layout.variants)});
   }
   const int64_t mask = layout.side - 1;
   return tiles_.elements[layout.element(int(x & mask), int(y & mask), int(z & mask), bits_)];
@@ -563,8 +575,8 @@ void evaluateSolidTiles(const SolidTileSet& tiles, uint32_t seed, std::span<cons
 void evaluateSolidTilesBox(const SolidTileSet& tiles, uint32_t seed, const VoxelBox& box, std::span<Triple> out,
                            const Context& ctx) {
   if (int64_t(out.size()) != box.count()) throw Error("evaluateSolidTilesBox: one output per voxel");
-  const Placement placement{seed};
   const SolidTileLayout& layout = tiles.layout;
+  const Placement placement{seed, uint32_t(layout.variants)};
   const int mask = layout.side - 1;
   parallelFor(0, box.nz, ctx, [&](int z0, int z1) {
     for (int z = z0; z < z1; ++z)
@@ -573,8 +585,7 @@ void evaluateSolidTilesBox(const SolidTileSet& tiles, uint32_t seed, const Voxel
         const int64_t vy = box.y + y, vz = box.z + z;
         for (int x = 0; x < box.nx;) {  // one cell's run of the row at a time
           const int64_t vx = box.x + x;
-          const uint32_t bits = SolidTileLayout::cellBits(vx >> layout.shift, vy >> layout.shift, vz >> layout.shift,
-                                                          placement);
+          const uint32_t bits = layout.cellCode(vx >> layout.shift, vy >> layout.shift, vz >> layout.shift, placement);
           const int run = std::min<int>(box.nx - x, layout.side - int(vx & mask));
           for (int i = 0; i < run; ++i, ++x)
             row[x] = tiles.elements[layout.element(int((vx + i) & mask), int(vy & mask), int(vz & mask), bits)];
@@ -594,6 +605,7 @@ void writeSolidTiles(const SolidTileSet& t, const fs::path& path) {
     w.value(t.width);
     w.value(t.height);
     w.value(t.layout.side);
+    w.value(t.layout.variants);
     w.value(t.seconds);
     w.vec(t.elements);
   });
@@ -604,7 +616,7 @@ std::optional<SolidTileSet> readSolidTiles(const fs::path& path, uint64_t expect
   if (!in) return std::nullopt;
   BinaryReader r{in};
   uint32_t magic = 0, version = 0;
-  int side = 0;
+  int side = 0, variants = 0;
   SolidTileSet t;
   r.value(magic);
   r.value(version);
@@ -612,11 +624,13 @@ std::optional<SolidTileSet> readSolidTiles(const fs::path& path, uint64_t expect
   r.value(t.width);
   r.value(t.height);
   r.value(side);
+  r.value(variants);
   r.value(t.seconds);
   if (!r.ok || magic != kTilesMagic || version != kTilesVersion || t.key != expectedKey || side < 2 || side > 64 ||
+      (variants != 2 && variants != 3) ||
       t.width < 1 || t.height < 1 || t.width > 65535 || t.height > 65535)
     return std::nullopt;
-  t.layout = SolidTileLayout(side);
+  t.layout = SolidTileLayout(side, variants);
   r.vec(t.elements, t.layout.elements);
   if (!r.ok || in.peek() != std::ifstream::traits_type::eof()) return std::nullopt;
   for (const Triple& triple : t.elements)

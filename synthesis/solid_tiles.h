@@ -14,12 +14,12 @@
 //     more than their share are penalized in the search, which keeps every part of the exemplar);
 //   A. C. Sibley, G. Taubin et al. Wang Cubes for Video Synthesis and Geometry Placement (2004);
 //     M. F. Cohen, J. Shade, S. Hiller, O. Deussen. Wang Tiles for Image and Texture Generation.
-//     SIGGRAPH 2003 (tiles selected by hashed edge colours; here faces, 2 colours per axis: the
-//     complete set of 64 cubes).
+//     SIGGRAPH 2003 (tiles selected by hashed edge colours; here faces, V = 2 or 3 colours per
+//     face: the complete set of V^6 cubes).
 // Notes: docs/synthesis-notes.md#solid-tiles.
 //
 // Layout. A tile is n^3 voxels; its face, edge and corner voxels (a local coordinate 0) belong to
-// shared storage: the x-face of a cell (local x = 0) is one of 2 face variants of its axis, chosen
+// shared storage: the x-face of a cell (local x = 0) is one of V face variants of its axis, chosen
 // by a hash of the face's lattice position, and the tile whose 6 face variants are those of its
 // cell's 6 faces fills the interior; edges and corners are shared variants too (2 each, hashed by
 // position). Every arrangement is therefore seamless by construction, and a voxel is a handful of
@@ -70,9 +70,14 @@ struct SolidTileOptions {
   /// half a minute on 2 cores). 32 even for exemplars of 50 pixels: 16 would be 10x faster, with
   /// a worse fidelity and a stronger lattice (docs/measurements.md#solid-tiles).
   int tileSide = 32;
-  /// Cells per side of the periodic arrangements the optimization runs on: 4 (each tile appears
-  /// once per iteration) or 8 (8 times: more neighbours met, 8x the work).
-  int arrangementCells = 4;
+  /// Variants per face, V: 2 (64 tiles) or 3 (729 tiles: a face variant shared by a third of the
+  /// cells instead of half, for 11x the storage and, with arrangements of 9^3 cells, 11x the
+  /// work at the same tile side). Three lower the lattice on some exemplars, not all, and cost
+  /// contrast on others (docs/measurements.md#solid-tiles).
+  int faceVariants = 2;
+  /// Copies of every tile in the periodic arrangements the optimization runs on, whose side is
+  /// copies * V^2 cells: 1 (each tile once per iteration) or 2 (more neighbours met, 8x the work).
+  int arrangementCopies = 1;
   /// Search-and-vote iterations per level above the finest, and at the finest. [1, 16]
   int iterations = 4;
   int finestIterations = 3;
@@ -87,23 +92,24 @@ struct SolidTileOptions {
 
 /// The storage of one tile set at one level (finest for a finished set).
 struct SolidTileLayout {
-  int side = 0;   ///< n, voxels per tile side: a power of two
-  int shift = 0;  ///< log2(n)
+  int side = 0;      ///< n, voxels per tile side: a power of two
+  int shift = 0;     ///< log2(n)
+  int variants = 2;  ///< V, variants per face (edges and corners have 2)
   size_t faces = 0, interiors = 0, elements = 0;  ///< first face element, first interior element, total
 
-  explicit SolidTileLayout(int n = 0);
+  explicit SolidTileLayout(int n = 0, int faceVariants = 2);
 
-  /// The variants of a cell's faces, edges and corner: bit 2a (2a + 1) the face at the start (end)
-  /// of axis a, bit 6 + a the edge along axis a at the cell's origin, bit 9 its corner.
-  /// `variant(kind, x, y, z)` is the variant (0 or 1) of the face (kind 0..2: axis), edge (3..5:
-  /// axis) or corner (6) of lattice cell (x, y, z).
-  template <class Variant> static uint32_t cellBits(int64_t x, int64_t y, int64_t z, const Variant& variant);
-  /// The storage element of local position (x, y, z) in [0, n)^3 of a cell with those bits.
-  size_t element(int x, int y, int z, uint32_t bits) const;
+  /// The variants of a cell's faces, edges and corner: bits 0-9 the tile, sum over the faces i
+  /// (2a: the start of axis a, 2a + 1: its end) of variant_i V^i; bit 10 + a the edge along axis a
+  /// at the cell's origin, bit 13 its corner. `variant(kind, x, y, z)` is the variant of the face
+  /// (kind 0..2: axis; 0..V-1), edge (3..5: axis; 0..1) or corner (6; 0..1) of lattice cell (x, y, z).
+  template <class Variant> uint32_t cellCode(int64_t x, int64_t y, int64_t z, const Variant& variant) const;
+  /// The storage element of local position (x, y, z) in [0, n)^3 of a cell with that code.
+  size_t element(int x, int y, int z, uint32_t code) const;
   /// The storage element of voxel (x, y, z).
   template <class Variant> size_t element(int64_t x, int64_t y, int64_t z, const Variant& variant) const {
     return element(int(x & (side - 1)), int(y & (side - 1)), int(z & (side - 1)),
-                   cellBits(x >> shift, y >> shift, z >> shift, variant));
+                   cellCode(x >> shift, y >> shift, z >> shift, variant));
   }
 };
 
@@ -156,12 +162,19 @@ void evaluateSolidTilesBox(const SolidTileSet& tiles, uint32_t seed, const Voxel
 // ---- implementation of the template ----
 
 template <class Variant>
-uint32_t SolidTileLayout::cellBits(int64_t x, int64_t y, int64_t z, const Variant& variant) {
-  uint32_t bits = uint32_t(variant(0, x, y, z)) | uint32_t(variant(0, x + 1, y, z)) << 1 |
-                  uint32_t(variant(1, x, y, z)) << 2 | uint32_t(variant(1, x, y + 1, z)) << 3 |
-                  uint32_t(variant(2, x, y, z)) << 4 | uint32_t(variant(2, x, y, z + 1)) << 5;
-  for (int a = 0; a < 3; ++a) bits |= uint32_t(variant(3 + a, x, y, z)) << (6 + a);
-  return bits | uint32_t(variant(6, x, y, z)) << 9;
+uint32_t SolidTileLayout::cellCode(int64_t x, int64_t y, int64_t z, const Variant& variant) const {
+  const uint32_t v = uint32_t(variants);
+  uint32_t tile = 0, weight = 1;
+  const int64_t next[3][3] = {{x + 1, y, z}, {x, y + 1, z}, {x, y, z + 1}};
+  for (int a = 0; a < 3; ++a) {
+    tile += weight * uint32_t(variant(a, x, y, z));
+    weight *= v;
+    tile += weight * uint32_t(variant(a, next[a][0], next[a][1], next[a][2]));
+    weight *= v;
+  }
+  uint32_t code = tile;
+  for (int a = 0; a < 3; ++a) code |= uint32_t(variant(3 + a, x, y, z)) << (10 + a);
+  return code | uint32_t(variant(6, x, y, z)) << 13;
 }
 
 } // namespace texfab::synthesis

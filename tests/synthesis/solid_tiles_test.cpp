@@ -44,7 +44,6 @@ const SolidAnalysis& analysis64() {
 SolidTileOptions smallOptions() {
   SolidTileOptions o;
   o.tileSide = 8;
-  o.arrangementCells = 4;
   o.iterations = 2;
   o.finestIterations = 2;
   return o;
@@ -55,7 +54,6 @@ const SolidTileSet& tiles64() {
   static const SolidTileSet t = [] {
     SolidTileOptions o;
     o.tileSide = 16;
-    o.arrangementCells = 4;
     return buildSolidTiles(analysis64(), o, Context{.threads = 2});
   }();
   return t;
@@ -70,31 +68,38 @@ std::vector<Voxel> boxVoxels(const VoxelBox& b) {
 }
 
 TEST(SolidTileLayout, EveryVoxelIsOneElementAndEveryElementIsReachable) {
-  const SolidTileLayout layout(8);
-  EXPECT_EQ(layout.elements, 2u + 6u * 7 + 6u * 49 + 64u * 343);
-  std::vector<int> seen(layout.elements, 0);
-  for (uint32_t bits = 0; bits < (1u << 10); ++bits)  // every choice of a cell's 10 variants
-    for (int z = 0; z < 8; ++z)
-      for (int y = 0; y < 8; ++y)
-        for (int x = 0; x < 8; ++x) {
-          const size_t e = layout.element(x, y, z, bits);
-          ASSERT_LT(e, layout.elements);
-          ++seen[e];
-        }
-  EXPECT_EQ(std::count(seen.begin(), seen.end(), 0), 0);
+  for (const int variants : {2, 3}) {
+    const SolidTileLayout layout(8, variants);
+    const size_t tiles = size_t(std::pow(variants, 6));
+    EXPECT_EQ(layout.elements, 2u + 6u * 7 + 3u * size_t(variants) * 49 + tiles * 343);
+    std::vector<int> seen(layout.elements, 0);
+    for (uint32_t tile = 0; tile < tiles; ++tile)  // every tile, edge and corner variant of a cell
+      for (uint32_t edges = 0; edges < 16; ++edges)
+        for (int z = 0; z < 8; ++z)
+          for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) {
+              const size_t e = layout.element(x, y, z, tile | edges << 10);
+              ASSERT_LT(e, layout.elements);
+              ++seen[e];
+            }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 0), 0) << variants << " variants";
+  }
 }
 
 TEST(SolidTileLayout, NeighbouringCellsShareTheirFace) {
   // Faces match by construction: the face plane x = 8 belongs to cell 1 (its start), and cell 0
   // (whose end it is) chose its interior by that face's variant.
-  const SolidTileLayout layout(8);
-  auto variant = [](int kind, int64_t x, int64_t y, int64_t z) {
-    return voxelHash(5, 0, int32_t(x), int32_t(y), int32_t(z), uint32_t(kind)) & 1u;
-  };
-  for (int64_t y = 0; y < 64; y += 8) {
-    const uint32_t left = SolidTileLayout::cellBits(0, y / 8, 0, variant);
-    const uint32_t right = SolidTileLayout::cellBits(1, y / 8, 0, variant);
-    EXPECT_EQ((left >> 1) & 1u, right & 1u);  // the end face of one is the start face of the other
+  for (const uint32_t variants : {2u, 3u}) {
+    const SolidTileLayout layout(8, int(variants));
+    auto variant = [&](int kind, int64_t x, int64_t y, int64_t z) {
+      const uint32_t h = voxelHash(5, 0, int32_t(x), int32_t(y), int32_t(z), uint32_t(kind));
+      return kind < 3 ? h % variants : h & 1u;
+    };
+    for (int64_t y = 0; y < 8; ++y) {
+      const uint32_t left = layout.cellCode(0, y, 0, variant) & 1023u;
+      const uint32_t right = layout.cellCode(1, y, 0, variant) & 1023u;
+      EXPECT_EQ((left / variants) % variants, right % variants);  // one's end face is the other's start
+    }
   }
 }
 
@@ -271,7 +276,10 @@ TEST(SolidTiles, BadOptionsAreRefusedByName) {
     EXPECT_NE(std::string(e.what()).find("tile side must be 8, 16, 32 or 64"), std::string::npos) << e.what();
   }
   o = {};
-  o.arrangementCells = 5;
+  o.faceVariants = 4;
+  EXPECT_THROW(o.validate(), Error);
+  o = {};
+  o.arrangementCopies = 3;
   EXPECT_THROW(o.validate(), Error);
   o = {};
   o.histogramWeight = std::nanf("");
