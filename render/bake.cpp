@@ -89,10 +89,10 @@ SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas
     return v;
   };
   if (options.method == synthesis::SolidMethod::Tiles) {  // one read per site, no request to build
-    if (!analysis.tiles) throw Error("the solid tiles method needs the analysis' tile set");
+    const synthesis::SolidTileSet& tiles = synthesis::requireTiles(analysis);
     SolidSites out{std::vector<synthesis::Triple>(sites.size()), int64_t(sites.size()), 0};
     parallelFor(0, int(sites.size()), ctx, [&](int begin, int end) {
-      synthesis::SolidTileReader read(*analysis.tiles, options.seed);
+      synthesis::SolidTileReader read(tiles, options.seed);
       for (int s = begin; s < end; ++s) {
         const synthesis::Voxel v = voxelAt(size_t(s));
         out.triples[size_t(s)] = read(v.x, v.y, v.z);

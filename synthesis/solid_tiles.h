@@ -137,6 +137,9 @@ SolidTileSet buildSolidTilesCached(const SolidAnalysis& analysis, const SolidTil
 void writeSolidTiles(const SolidTileSet& tiles, const std::filesystem::path& path);
 std::optional<SolidTileSet> readSolidTiles(const std::filesystem::path& path, uint64_t expectedKey);
 
+/// The analysis' tile set; throws texfab::Error when it has none (SolidMethod::Tiles needs it).
+const SolidTileSet& requireTiles(const SolidAnalysis& analysis);
+
 /// Reads voxels one at a time from the tile arrangement of `seed` (one tile set serves every seed),
 /// remembering the last cell's variants: neighbouring voxels mostly share a cell. One per thread.
 class SolidTileReader {

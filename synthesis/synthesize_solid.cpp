@@ -822,22 +822,13 @@ void SolidLevelCache::insert(const Key& key, std::shared_ptr<const Brick> brick)
 
 const char* toString(SolidMethod method) { return method == SolidMethod::Tiles ? "tiles" : "lazy"; }
 
-namespace {
-
-const SolidTileSet& tilesOf(const SolidAnalysis& a) {
-  if (!a.tiles) throw Error("the solid tiles method needs the analysis' tile set (buildSolidTilesCached)");
-  return *a.tiles;
-}
-
-} // namespace
-
 SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Voxel> voxels,
                                      const SolidSynthesisOptions& o, SolidLevelCache* cache, const Context& ctx) {
   for (const Voxel& v : voxels) validatePosition(v.x, v.y, v.z);
   if (o.method == SolidMethod::Tiles) {
     SolidSynthesisResult result;
     result.triples.resize(voxels.size());
-    evaluateSolidTiles(tilesOf(a), o.seed, voxels, result.triples, ctx);
+    evaluateSolidTiles(requireTiles(a), o.seed, voxels, result.triples, ctx);
     result.distinctVoxels = int64_t(voxels.size());
     return result;
   }
@@ -895,7 +886,7 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   if (o.method == SolidMethod::Tiles) {
     SolidSynthesisResult result;
     result.triples.resize(size_t(box.count()));
-    evaluateSolidTilesBox(tilesOf(a), o.seed, box, result.triples, ctx);
+    evaluateSolidTilesBox(requireTiles(a), o.seed, box, result.triples, ctx);
     result.distinctVoxels = box.count();
     return result;
   }

@@ -2,7 +2,6 @@
 // Lazy solid synthesis (Dong et al. 2008): the precomputation, subset determinism (the padding of
 // §5.2 is sufficient), the dependency chain of one voxel, and slice quality against baselines.
 #include "render/image/error.h"
-#include "render/image/crop.h"
 #include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
@@ -11,6 +10,7 @@
 #include "synthesis/refine_solid.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
+#include "solid_test_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -27,11 +27,8 @@
 namespace texfab::synthesis {
 namespace {
 
-// A square crop of GIMP's marble (bundled as models/exemplars/marble.png).
-Image marble(int side, int x0 = 0, int y0 = 0) {
-  static const Image full = readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png");
-  return crop(full, x0, y0, side, side);
-}
+using test::boxVoxels;
+using test::marble;
 
 const SolidAnalysis& analysis32() {
   static const SolidAnalysis a = [] {
@@ -39,14 +36,6 @@ const SolidAnalysis& analysis32() {
     return analyzeSolid(e, e, e, {}, Context{.threads = 2});
   }();
   return a;
-}
-
-std::vector<Voxel> boxVoxels(const VoxelBox& b) {
-  std::vector<Voxel> v;
-  for (int z = 0; z < b.nz; ++z)
-    for (int y = 0; y < b.ny; ++y)
-      for (int x = 0; x < b.nx; ++x) v.push_back({b.x + x, b.y + y, b.z + z});
-  return v;
 }
 
 // The triple of voxel p taken from a box result.

@@ -3,15 +3,14 @@
 // construction), determinism of the optimization and of evaluation (threads, subsets, order), the
 // seam across tile faces, slice quality against lazy synthesis and a shuffled image, the cache,
 // and bad input.
-#include "render/image/crop.h"
 #include "render/image/error.h"
-#include "render/image/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/hash.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_solid.h"
+#include "solid_test_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -25,13 +24,11 @@
 namespace texfab::synthesis {
 namespace {
 
+using test::boxVoxels;
+using test::marble;
+
 namespace fs = std::filesystem;
 using test::TempDir;
-
-Image marble(int side, int x0, int y0) {
-  static const Image full = readImage(fs::path(TEXFAB_SOURCE_DIR) / "models/exemplars/marble.png");
-  return crop(full, x0, y0, side, side);
-}
 
 const SolidAnalysis& analysis64() {
   static const SolidAnalysis a = [] {
@@ -57,14 +54,6 @@ const SolidTileSet& tiles64() {
     return buildSolidTiles(analysis64(), o, Context{.threads = 2});
   }();
   return t;
-}
-
-std::vector<Voxel> boxVoxels(const VoxelBox& b) {
-  std::vector<Voxel> v;
-  for (int z = 0; z < b.nz; ++z)
-    for (int y = 0; y < b.ny; ++y)
-      for (int x = 0; x < b.nx; ++x) v.push_back({b.x + x, b.y + y, b.z + z});
-  return v;
 }
 
 TEST(SolidTileLayout, EveryVoxelIsOneElementAndEveryElementIsReachable) {
