@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The whole `texfab slice` job (voxelize, colour from the solid texture, dither to CMYKW + clear,
+// The whole `texfab slice` job (render::PrintJob: the model made printable, voxelize, colour from the solid texture, dither to CMYKW + clear,
 // encode and write one PNG per layer, manifest) on CGAL's bunny00 (75K triangles), 50 mm tall,
 // written to a temporary folder. The solid analysis of the bundled marble (128^2) is computed
 // before timing (cached in real use). Counters: wall seconds, layers per second, peak memory, and
@@ -15,10 +15,8 @@
 #include "bench/bench_support.h"
 #include "geometry/mesh_io.h"
 #include "geometry/print_grid.h"
-#include "geometry/voxelize_layers.h"
 #include "render/image/image_io.h"
-#include "render/slice_model.h"
-#include "render/voxel_colors.h"
+#include "render/print_job.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 
@@ -51,24 +49,27 @@ void BM_SliceBunny(benchmark::State& state) {
   go.dpiY = double(state.range(0));
   go.layerMm = double(state.range(1)) / 1000.0;
   const geometry::PrintGrid grid = geometry::printGrid(geometry::boundingBox(mesh), go);
-  const double scale = exemplar.width / (kFeatureMm / grid.mmPerUnit);  // exemplar pixels per model unit
+  render::PrintJobOptions o;
+  o.grid = go;
+  o.colors = render::PrintColors::Solid;
+  o.textureScale = exemplar.width / (kFeatureMm / grid.mmPerUnit);  // exemplar pixels per model unit
   const fs::path out = fs::temp_directory_path() / "texfab_slice_bench";
   for (auto _ : state) {
     fs::remove_all(out);
     const auto t0 = std::chrono::steady_clock::now();
-    const geometry::LayerVoxelizer voxelizer(mesh, grid);
-    render::SolidVoxelColors colors(analysis, exemplar, exemplar, exemplar, {}, scale, grid);
+    const Context ctx{.threads = int(state.range(2))};
+    const render::PrintJob job(mesh, o, ctx);
     render::SliceWriter writer(out, true);
-    const render::SliceResult r =
-        render::sliceModel(voxelizer, colors, {}, writer, {}, Context{.threads = int(state.range(2))});
+    const render::PrintJobResult r = job.slice({&exemplar, &analysis, nullptr, "marble.png"}, 0, -1, writer,
+                                               model.filename().string(), ctx);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const render::SliceReport& s = r.report;
+    const render::SliceReport& s = r.slice.report;
     state.counters["seconds"] = seconds;
     state.counters["layers"] = s.layers;
     state.counters["layers_per_s"] = s.layers / seconds;
     state.counters["Mvoxels"] = double(grid.voxels()) * 1e-6;
     state.counters["shell_Mvox"] = double(s.shellVoxels) * 1e-6;
-    state.counters["solid_Mvox"] = double(colors.voxelsRequested()) * 1e-6;
+    state.counters["solid_Mvox"] = double(r.voxelsRequested) * 1e-6;
     state.counters["voxelize_cpu"] = s.voxelizeSeconds;
     state.counters["prepare_s"] = s.prepareSeconds;
     state.counters["colors_cpu"] = s.colorSeconds;

@@ -104,6 +104,13 @@ std::vector<Piece> splitSolid(const geometry::Mesh& solid, const BreakModelOptio
 
 } // namespace
 
+void BreakModelOptions::shareTextureSettings(uint32_t seed, const synthesis::SolidSynthesisOptions& solid) {
+  outer.atlas.pack.gutter = interior.atlas.pack.gutter;
+  outer.textureScale = interior.textureScale;
+  outer.solid = interior.solid = solid;
+  outer.surface.seed = outer.solid.seed = interior.solid.seed = seed;
+}
+
 BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer, const InteriorExemplar& interior,
                        const BreakModelOptions& o, const Context& ctx, synthesis::SolidLevelCache* cache) {
   if (o.planes.empty() == !o.fracture) throw Error("break: give cutting planes or fracture options (one of the two)");

@@ -32,6 +32,10 @@ struct BreakModelOptions {
   /// The cut faces' atlas and solid texture. Its textureScale 0 = the outer texture's scale when
   /// the job textures the outside, else the cut faces' atlas density.
   CutFaceTextureOptions interior;
+
+  /// One seed and one solid schedule for every texture of the job (the outer texture's surface or
+  /// solid synthesis, the cut faces'); the outer atlas takes the cut faces' scale and gutter.
+  void shareTextureSettings(uint32_t seed, const synthesis::SolidSynthesisOptions& solid);
 };
 
 /// The solid texture the cut faces show.

@@ -82,6 +82,25 @@ void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
   requireSize(ex.height, *ex.color, "height");
 }
 
+// Charts keep their surface area in UV space, so a W x H atlas has at most sqrt(W H / area) texels
+// per model unit.
+int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& o, const Image& exemplar) {
+  if (o.textureScale <= 0) return 1;
+  double area = 0;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const Eigen::Vector3d a = mesh.corner(t, 0).cast<double>(), b = mesh.corner(t, 1).cast<double>(),
+                          c = mesh.corner(t, 2).cast<double>();
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  if (!(area > 0)) return 1;
+  const double fewestPixelsPerTexel =
+      o.textureScale / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area);
+  const int side = std::min(exemplar.width, exemplar.height);
+  int factor = 1;
+  while (2 * factor <= fewestPixelsPerTexel && side / (2 * factor) >= kMinAnalysedSide) factor *= 2;
+  return factor;
+}
+
 double textureMeshMemoryBytes(const TextureMeshOptions& o) {
   const double texels = double(o.atlas.pack.width) * double(o.atlas.pack.height);
   if (o.mode != TextureMode::Solid) return texels * 220.0;

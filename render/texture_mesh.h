@@ -89,6 +89,14 @@ void checkCompanionMaps(const TextureExemplar& exemplar, TextureMode mode);
 /// (synthesis::refineSolidMemoryBytes).
 double textureMeshMemoryBytes(const TextureMeshOptions& options);
 
+/// The factor (a power of two) by which the exemplar and its maps are best analysed and synthesized
+/// smaller: where options.textureScale puts at least that many exemplar pixels in every texel,
+/// whatever the atlas, detail finer than a texel would cost analysis time and memory for nothing.
+/// 1 at the auto scale (0), and never below kMinAnalysedSide pixels a side. Callers downsample the
+/// exemplar and its maps by it and divide the scale by it.
+inline constexpr int kMinAnalysedSide = 32;
+int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& options, const Image& exemplar);
+
 /// Stages reported through ctx: atlas, tangent field (surface mode), fields, synthesis (solid mode:
 /// each level inside it), resolve, measures. Throws texfab::Error on bad input (no triangles, a
 /// missing analysis, maps of the wrong size, a scale that puts a whole exemplar inside one texel).

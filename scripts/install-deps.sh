@@ -16,6 +16,8 @@ packages=(
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
   # which Debian's blender package does not pull in)
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy prusa-slicer
+  # the Python module (pybind11) and its tests (pytest)
+  pybind11-dev python3-dev python3-pytest
   # the goldens on emulated CPUs (qemu-x86_64 -cpu ...): values must not follow the CPU
   qemu-user
   # a real single-node Slurm for the distributed slicing test (started by the test, not as services)

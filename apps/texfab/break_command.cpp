@@ -163,12 +163,11 @@ void runBreak(const std::string& command, BreakJob& job) {
       throw UsageError(e.what());
     }
   }
-  o.outer.atlas.pack.gutter = o.interior.atlas.pack.gutter;
-  o.outer.textureScale = o.interior.textureScale;
-  o.outer.surface.seed = o.outer.solid.seed = o.interior.solid.seed = job.seed;
-  o.outer.solid.method = o.interior.solid.method = job.solid.method;
-  o.outer.solid.contrastGain = o.interior.solid.contrastGain = job.contrastGain;
-  o.outer.solid.refinePasses = o.interior.solid.refinePasses = job.refinePasses;
+  synthesis::SolidSynthesisOptions solid;
+  solid.method = job.solid.method;
+  solid.contrastGain = job.contrastGain;
+  solid.refinePasses = job.refinePasses;
+  o.shareTextureSettings(job.seed, solid);
   o.outer.measure = false;
   render::TextureMeshOptions interiorCost;  // the cut faces' atlas costs as a solid texture job's
   interiorCost.mode = render::TextureMode::Solid;

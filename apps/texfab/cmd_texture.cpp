@@ -87,34 +87,10 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
   return in;
 }
 
-// Smallest side an exemplar is downsampled to for its analysis.
-constexpr int kMinAnalysedSide = 32;
-
-// The factor (a power of two) by which the exemplar and its maps are analysed smaller: where the
-// scale puts at least that many exemplar pixels in every texel, whatever the atlas, detail finer
-// than a texel would cost analysis time and memory for nothing. Charts keep their surface area in
-// UV space, so a W x H atlas has at most sqrt(W H / area) texels per model unit.
-int analysisDownsampling(const render::TextureMeshOptions& o, const Inputs& in) {
-  if (o.textureScale <= 0) return 1;
-  double area = 0;
-  for (size_t t = 0; t < in.mesh.triangleCount(); ++t) {
-    const Eigen::Vector3d a = in.mesh.corner(t, 0).cast<double>(), b = in.mesh.corner(t, 1).cast<double>(),
-                          c = in.mesh.corner(t, 2).cast<double>();
-    area += 0.5 * (b - a).cross(c - a).norm();
-  }
-  if (!(area > 0)) return 1;
-  const double fewestPixelsPerTexel =
-      o.textureScale / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area);
-  const int side = std::min(in.exemplar.width, in.exemplar.height);
-  int factor = 1;
-  while (2 * factor <= fewestPixelsPerTexel && side / (2 * factor) >= kMinAnalysedSide) factor *= 2;
-  return factor;
-}
-
-// Replaces the exemplar and its maps by the copy analysisDownsampling asks for (and the scale by
+// Replaces the exemplar and its maps by the copy render::analysisDownsampling asks for (and the scale by
 // the copy's), says so, and returns the factor.
 int downsampleForAnalysis(render::TextureMeshOptions& o, Inputs& in, const Run& run) {
-  const int factor = analysisDownsampling(o, in);
+  const int factor = render::analysisDownsampling(in.mesh, o, in.exemplar);
   if (factor == 1) return 1;
   for (std::optional<Image>* map : {&in.normal, &in.roughness, &in.height})
     if (*map) **map = downsample(**map, factor);

@@ -36,13 +36,18 @@ Image readPatFile(const fs::path& path) {
 }
 
 // The OpenImageIO module (oiio_codec.h), loaded on first use: from the build tree, else from the
-// folder of the running program.
+// folder of the running program, else from the folder of the binary that holds this code (the
+// installed Python module).
 const detail::OiioCodec& oiio() {
   static const detail::OiioCodec* codec = [] {
+    const fs::path name = fs::path(TEXFAB_OIIO_MODULE).filename();
     std::vector<std::string> candidates{TEXFAB_OIIO_MODULE};
     std::error_code ec;
-    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec) candidates.push_back((self.parent_path() / fs::path(TEXFAB_OIIO_MODULE).filename()).string());
+    const fs::path program = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back((program.parent_path() / name).string());
+    Dl_info self{};
+    if (::dladdr(reinterpret_cast<const void*>(&oiio), &self) != 0 && self.dli_fname)
+      candidates.push_back((fs::path(self.dli_fname).parent_path() / name).string());
     std::string why;
     for (const std::string& path : candidates) {
       if (void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL)) {
