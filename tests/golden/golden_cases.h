@@ -15,8 +15,10 @@
 #include "synthesis/synthesize_solid.h"
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 #include "atlas/generate_atlas.h"
-#include "render/texture_mesh.h"
 #include "geometry/mesh_io.h"
+#include "render/break_model.h"
+#include "render/print_job.h"
+#include "render/texture_mesh.h"
 #include "tests/test_support.h"
 #endif
 
@@ -60,6 +62,10 @@ inline constexpr Stage kSurfaceTexture[] = {{"analysis", "ec0cf9cad759bed8"},
 inline constexpr Stage kSolidTexture[] = {
     {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "9daa397972e6428e"}};
 inline constexpr Stage kGlbBytes[] = {{"bake", "3adea9d1a4d51a97"}, {"encode", "b4cb60ad089f5722"}};
+inline constexpr Stage kFracture[] = {
+    {"pieces", "96e8ccfdc41a24b6"}, {"interior atlas", "8d51fc005be5cb5b"}, {"interior bake", "ed799ecadda25659"},
+    {"encode", "694b129317c7e83c"}};
+inline constexpr Stage kSliceLayers[] = {{"layers", "34bc73eff57a75de"}, {"manifest", "c712e58ed7a70a0a"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {
@@ -338,6 +344,58 @@ inline Stages glbBytes(Backend backend = Backend::Cpu) {
   std::ifstream in(path, std::ios::binary);
   const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return Stages().add("bake", hashOf8Bit(*r.baseColor)).add("encode", hashOf(bytes));
+}
+
+/// The bundled elephant broken into 3 Voronoi pieces (seed 2), its cut faces textured from
+/// marble32's solid texture in a 128^2 atlas: the pieces' geometry, the atlas, its colours and the
+/// GLB of the pieces.
+inline Stages fracture(Backend backend = Backend::Cpu) {
+  const geometry::Mesh mesh = geometry::readMesh(bundled("meshes/elephant.off"));
+  render::BreakModelOptions options;
+  options.fracture.emplace().pieces = 3;
+  options.fracture->seed = 2;
+  options.interior.atlas.pack.width = options.interior.atlas.pack.height = 128;
+  options.shareTextureSettings(2, {});
+  const render::BrokenModel model =
+      render::breakModel(mesh, {}, {&marble32(), &solidAnalysis32()}, options, Context{.threads = 2, .backend = backend});
+  uint64_t pieces = 0xcbf29ce484222325ull;
+  for (const render::Piece& p : model.pieces) {
+    pieces = hashOf(p.mesh.positions, pieces);
+    pieces = hashOf(p.mesh.triangles, pieces);
+    pieces = hashOf(p.mesh.faceTags, pieces);
+  }
+  const test::TempDir dir("texfab-golden");
+  geometry::writeScene(render::sceneOf(model), dir / "pieces.glb");
+  std::ifstream in(dir / "pieces.glb", std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return Stages()
+      .add("pieces", pieces)
+      .add("interior atlas", hashOf(model.interior->atlas.atlas.texelUvs))
+      .add("interior bake", hashOf8Bit(*model.interior->baseColor))
+      .add("encode", hashOf(bytes));
+}
+
+/// Layers 12 to 15 of the bundled elephant printed 6 mm tall at 127 dpi and 0.2 mm layers, its
+/// shell coloured from marble32's solid texture and dithered to the default materials: the layer
+/// PNGs' bytes and the manifest.
+inline Stages sliceLayers(Backend backend = Backend::Cpu) {
+  render::PrintJobOptions options;
+  options.grid = {.heightMm = 6, .dpiX = 127, .dpiY = 127, .layerMm = 0.2, .up = geometry::UpAxis::Y};
+  options.voxelize.shellMm = 0.6;
+  options.colors = render::PrintColors::Solid;
+  const Context ctx{.threads = 2, .backend = backend};
+  const render::PrintJob job(geometry::readMesh(bundled("meshes/elephant.off")), options, ctx);
+  const test::TempDir dir("texfab-golden");
+  render::SliceWriter writer(dir / "layers", false);
+  job.slice({&marble32(), &solidAnalysis32(), nullptr, "marble32"}, 12, 4, writer, "elephant.off", ctx);
+  uint64_t layers = 0xcbf29ce484222325ull;
+  for (const render::SliceFile& f : writer.files()) {
+    std::ifstream in(dir / "layers" / f.file, std::ios::binary);
+    layers = hashOf(std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), layers);
+  }
+  std::ifstream in(dir / "layers" / "slices.json", std::ios::binary);
+  const std::vector<char> manifest((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return Stages().add("layers", layers).add("manifest", hashOf(manifest));
 }
 
 #endif

@@ -25,6 +25,8 @@ TEST(Golden, AtlasTexelUvs) { expectStages(atlasTexelUvs(), kAtlasTexelUvs); }
 TEST(Golden, SurfaceTexture) { expectStages(surfaceTexture(), kSurfaceTexture); }
 TEST(Golden, SolidTexture) { expectStages(solidTexture(), kSolidTexture); }
 TEST(Golden, GlbBytes) { expectStages(glbBytes(), kGlbBytes); }
+TEST(Golden, Fracture) { expectStages(fracture(), kFracture); }
+TEST(Golden, SliceLayers) { expectStages(sliceLayers(), kSliceLayers); }
 #endif
 
 } // namespace

@@ -54,6 +54,14 @@ TEST(VulkanGolden, SolidTexture) {
   TEXFAB_REQUIRE_SHARED_VULKAN();
   expectStages(solidTexture(Backend::Vulkan), kSolidTexture);
 }
+TEST(VulkanGolden, Fracture) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  expectStages(fracture(Backend::Vulkan), kFracture);
+}
+TEST(VulkanGolden, SliceLayers) {
+  TEXFAB_REQUIRE_SHARED_VULKAN();
+  expectStages(sliceLayers(Backend::Vulkan), kSliceLayers);
+}
 
 const synthesis::ExemplarAnalysis& marbleAnalysis() {
   static const synthesis::ExemplarAnalysis a = synthesis::analyzeExemplar(marble32(), {}, Context{.threads = 2});
