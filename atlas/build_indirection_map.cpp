@@ -3,8 +3,8 @@
 // §5 ("precomputed by marching across chart boundaries").
 #include "atlas/build_indirection_map.h"
 
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>

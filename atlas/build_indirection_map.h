@@ -12,7 +12,7 @@
 #include "atlas/rasterize_atlas.h"
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <array>
 #include <cstdint>

@@ -3,7 +3,7 @@
 // §5 (synthesis in an atlas: J = (t b)⁺ J_f).
 #include "atlas/compute_jacobians.h"
 
-#include "render/image/parallel.h"
+#include "core/parallel.h"
 
 #include <Eigen/Dense>
 

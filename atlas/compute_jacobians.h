@@ -11,7 +11,7 @@
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
 #include "geometry/tangent_field.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 namespace texfab::atlas {
 

@@ -11,8 +11,8 @@
 #include "atlas/chart_mesh.h"
 #include "atlas/convex_hull.h"
 #include "atlas/measure_stretch.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <array>

@@ -13,7 +13,7 @@
 #include "atlas/rasterize_atlas.h"
 #include "atlas/segment_charts.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <string>
 #include <vector>

@@ -6,8 +6,8 @@
 
 #include "atlas/chart_mask.h"
 #include "atlas/skyline_packer.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <array>

@@ -11,8 +11,8 @@
 
 #include "atlas/atlas.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
-#include "render/image/error.h"
+#include "core/context.h"
+#include "core/error.h"
 
 #include <cstddef>
 #include <string>

@@ -9,7 +9,7 @@
 #include "atlas/atlas.h"
 #include "geometry/mesh_connectivity.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <cstddef>
 

@@ -3,7 +3,7 @@
 //  - P.-E. Danielsson, "Euclidean distance mapping", CGIP 1980 (two-pass vector propagation).
 #include "atlas/rasterize_atlas.h"
 
-#include "render/image/parallel.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>

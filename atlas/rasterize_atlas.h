@@ -9,7 +9,7 @@
 #include "atlas/atlas.h"
 #include "atlas/texel_field.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <cstddef>
 

@@ -8,7 +8,7 @@
 #include "atlas/segment_charts.h"
 
 #include "atlas/chart_mesh.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <cmath>

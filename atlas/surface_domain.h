@@ -23,7 +23,7 @@
 #include "geometry/mesh_connectivity.h"
 #include "atlas/rasterize_atlas.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/synthesize_surface.h"
 
 namespace texfab::atlas {

@@ -2,8 +2,8 @@
 #pragma once
 // Pieces the benchmark programs share.
 
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 
 #include <sys/resource.h>
 

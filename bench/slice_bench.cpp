@@ -15,7 +15,7 @@
 #include "bench/bench_support.h"
 #include "geometry/mesh_io.h"
 #include "geometry/print_grid.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "render/print_job.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"

@@ -11,7 +11,7 @@
 // the finest level's passes (1, the default; 2, the paper's), so that the default and the paper's
 // schedule are both measured.
 #include "bench/bench_support.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/refine_solid.h"

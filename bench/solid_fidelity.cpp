@@ -15,8 +15,8 @@
 // WRAP=clamp (non-toroidal analyses, 2-D and solid, and fidelity measured without wrap),
 // RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png),
 // HISTPEN=lambda with HPITERS, HPBINS, HPBOX, HPALPHA, HPALL (see applyHistogramPenalty).
-#include "render/image/downsample.h"
-#include "render/image/image_io.h"
+#include "core/downsample.h"
+#include "core/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/hash.h"

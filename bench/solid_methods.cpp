@@ -9,7 +9,7 @@
 // Environment: SIDE, N (plane side, 256), TILE, VARIANTS, COPIES, ITER, FITER, HIST (SolidTileOptions), LAZY=0
 // (tiles only), TILES=0 (lazy only), TRIPLANAR=k (colours weighted by the plane's normal, an
 // experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT.
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"

@@ -5,8 +5,8 @@
 // with peak memory <= 1 GiB.
 //   build/bench/synthesis_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
-#include "render/image/image_io.h"
-#include "render/image/memory.h"
+#include "core/image_io.h"
+#include "core/memory.h"
 #include "synthesis/synthesize_2d.h"
 
 #include <benchmark/benchmark.h>

@@ -7,7 +7,7 @@
 #include "render/texture_mesh.h"
 #include "bench/bench_support.h"
 #include "geometry/mesh_io.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 

@@ -13,7 +13,7 @@
 // A plain program (no Google Benchmark, no image library): it links the synthesis library only,
 // so that it can be carried to a GPU machine with libvulkan and libtbb (bench/README.md). The
 // exemplar is a binary PPM/PGM or, by default, a procedural marble.
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/backend.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/hash.h"

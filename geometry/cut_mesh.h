@@ -9,7 +9,7 @@
 #include "geometry/intersect_cells.h"
 #include "geometry/mesh.h"
 #include "geometry/plane_arrangement.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <span>
 #include <vector>

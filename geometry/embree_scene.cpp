@@ -2,8 +2,8 @@
 #include "geometry/embree_scene.h"
 
 #include "geometry/mesh_connectivity.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 
 #include <embree3/rtcore.h>
 

@@ -6,7 +6,7 @@
 // work over ctx.threads (0 = all cores) and return results in input order.
 
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <Eigen/Core>
 

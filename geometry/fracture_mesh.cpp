@@ -4,7 +4,7 @@
 #include "geometry/counter_hash.h"
 #include "geometry/embree_scene.h"
 #include "geometry/measure_solid.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <cmath>

@@ -8,7 +8,7 @@
 #include "geometry/intersect_cells.h"
 #include "geometry/mesh.h"
 #include "geometry/voronoi_cells.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <Eigen/Core>
 

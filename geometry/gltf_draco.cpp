@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Draco compression of glTF primitives (KHR_draco_mesh_compression).
 #include "geometry/mesh_formats.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>

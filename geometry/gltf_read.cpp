@@ -5,8 +5,8 @@
 // image list, so it never touches image bytes).
 #include "geometry/mesh_formats.h"
 #include "geometry/model_path.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 
 #include <tiny_gltf.h>
 

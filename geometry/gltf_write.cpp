@@ -2,9 +2,9 @@
 // glTF 2.0 writing (.glb and .gltf with data URIs), built directly as JSON so that every detail
 // the Khronos validator checks (alignment, min/max, unit normals, targets) is under our control.
 #include "geometry/mesh_formats.h"
-#include "render/image/image_io.h"
-#include "render/image/error.h"
-#include "render/image/files.h"
+#include "core/image_io.h"
+#include "core/error.h"
+#include "core/files.h"
 
 #include <nlohmann/json.hpp>
 

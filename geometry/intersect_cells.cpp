@@ -10,8 +10,8 @@
 #include "geometry/intersect_cells.h"
 
 #include "geometry/cgal_surface_mesh.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>

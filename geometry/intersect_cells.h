@@ -13,7 +13,7 @@
 
 #include "geometry/cell_complex.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <cstdint>
 #include <span>

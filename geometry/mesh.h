@@ -9,8 +9,8 @@
 // metallic-roughness model. Halfedge structures (OpenMesh, CGAL) are built from this type inside
 // the algorithms that need them and converted back at their boundary.
 
-#include "render/image/image.h"
-#include "render/image/image_io.h"
+#include "core/image.h"
+#include "core/image_io.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

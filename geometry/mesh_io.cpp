@@ -2,9 +2,9 @@
 #include "geometry/mesh_io.h"
 
 #include "geometry/mesh_formats.h"
-#include "render/image/error.h"
-#include "render/image/files.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/files.h"
+#include "core/image_io.h"
 
 
 #include <algorithm>

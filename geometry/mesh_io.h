@@ -12,7 +12,7 @@
 // no partial output.
 
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <filesystem>
 #include <span>

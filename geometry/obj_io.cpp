@@ -2,10 +2,10 @@
 // Wavefront OBJ + MTL reading and writing.
 #include "geometry/mesh_formats.h"
 #include "geometry/model_path.h"
-#include "render/image/context.h"
-#include "render/image/error.h"
-#include "render/image/files.h"
-#include "render/image/image_io.h"
+#include "core/context.h"
+#include "core/error.h"
+#include "core/files.h"
+#include "core/image_io.h"
 
 #include <array>
 #include <cmath>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // OFF (Object File Format, as in CGAL's data set) reading and writing. ASCII only.
 #include "geometry/mesh_formats.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <cmath>
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // PLY (Stanford polygon format), ASCII and binary, reading and writing.
 #include "geometry/mesh_formats.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "geometry/print_grid.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <cmath>
 #include <sstream>

@@ -5,7 +5,7 @@
 
 #include "geometry/cgal_surface_mesh.h"
 #include "geometry/mesh_connectivity.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>

@@ -8,7 +8,7 @@
 // self-intersections are refused (they need a person's judgement: which surface is meant).
 
 #include "geometry/mesh.h"
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <string>
 #include <vector>

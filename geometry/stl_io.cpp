@@ -2,7 +2,7 @@
 // STL reading (ASCII and binary; identical corner positions are welded into shared vertices) and
 // writing.
 #include "geometry/mesh_formats.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <bit>
 #include <cstring>

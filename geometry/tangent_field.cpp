@@ -7,7 +7,7 @@
 //    Approximation", ICCV 1995 (per-vertex principal directions for the curvature option).
 #include "geometry/tangent_field.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/IterativeLinearSolvers>

@@ -14,8 +14,8 @@
 // object of every build item (with its transform), its texture coordinates and textures, and
 // base materials as plain colours.
 #include "geometry/mesh_formats.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 
 #include <Model/COM/NMR_DLLInterfaces.h>
 #include <zip.h>

@@ -5,7 +5,7 @@
 #include "geometry/voronoi_cells.h"
 
 #include "geometry/counter_hash.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_triangulation_3.h>

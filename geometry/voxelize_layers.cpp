@@ -7,7 +7,7 @@
 //   §5.1.5 gives the closest-point form).
 #include "geometry/voxelize_layers.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/bake.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/solid_tiles.h"
 
 #include <atomic>

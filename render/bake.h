@@ -6,9 +6,9 @@
 // shows the solid texture on a surface (the texture job's solid mode, cut faces).
 
 #include "atlas/rasterize_atlas.h"
-#include "render/image/context.h"
-#include "render/image/image.h"
-#include "render/image/parallel.h"
+#include "core/context.h"
+#include "core/image.h"
+#include "core/parallel.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 #include "synthesis/synthesize_surface.h"

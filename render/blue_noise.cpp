@@ -2,7 +2,7 @@
 // Based on: R. Ulichney. The void-and-cluster method for dither array generation. SPIE 1913, 1993.
 #include "render/blue_noise.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 #include "render/break_model.h"
 
 #include "geometry/measure_solid.h"
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <cmath>
 #include <cstdio>

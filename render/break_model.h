@@ -12,7 +12,7 @@
 #include "geometry/mesh.h"
 #include "geometry/mesh_io.h"
 #include "geometry/repair_solid.h"
-#include "render/image/context.h"
+#include "core/context.h"
 #include "render/texture_cut_faces.h"
 #include "render/texture_mesh.h"
 

@@ -3,7 +3,7 @@
 //   1976; R. Ulichney. The void-and-cluster method for dither array generation. SPIE 1913, 1993.
 #include "render/dither_layer.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <cstring>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/image_stack.h"
 
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 
 #include <algorithm>
 #include <cerrno>

@@ -5,8 +5,8 @@
 // 8-bit RGB. The folder and the raw file are outputs of an OutputSet: they appear, with the job's
 // other outputs, only once the whole stack is written, and never in part.
 
-#include "render/image/files.h"
-#include "render/image/image.h"
+#include "core/files.h"
+#include "core/image.h"
 
 #include <cstdint>
 #include <filesystem>

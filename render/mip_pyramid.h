@@ -4,7 +4,7 @@
 // light, bilinear sampling within a level, trilinear between levels [Williams 1983, "Pyramidal
 // Parametrics"]. Used by the preview renderer; lookups wrap (glTF's default REPEAT).
 
-#include "render/image/image.h"
+#include "core/image.h"
 
 #include <Eigen/Core>
 

@@ -3,7 +3,7 @@
 //   Halftones. HP Labs HPL-96-128R1, 1999 (minimal brightness variation).
 #include "render/mix_materials.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "render/mip_pyramid.h"
 
 #include <algorithm>

@@ -3,7 +3,7 @@
 //   ISO/IEC 15948 (PNG: chunks, CRC-32, filter type 0).
 #include "render/png_row_encoder.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <zlib.h>
 

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/preview_renderer.h"
 
-#include "render/image/error.h"
-#include "render/image/image_io.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/parallel.h"
 
 #include <Eigen/Geometry>
 

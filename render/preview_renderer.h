@@ -10,8 +10,8 @@
 
 #include "geometry/embree_scene.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "render/mip_pyramid.h"
 
 #include <Eigen/Core>

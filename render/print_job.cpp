@@ -3,7 +3,7 @@
 
 #include "geometry/close_holes.h"
 #include "geometry/orient_mesh.h"
-#include "render/image/text.h"
+#include "core/text.h"
 #include "render/texture_mesh.h"
 #include "render/voxel_colors.h"
 #include "synthesis/refine_solid.h"

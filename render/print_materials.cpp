@@ -2,7 +2,7 @@
 #include "render/print_materials.h"
 
 #include "render/color_difference.h"
-#include "render/image/error.h"
+#include "core/error.h"
 #include "render/mip_pyramid.h"
 
 #include <nlohmann/json.hpp>

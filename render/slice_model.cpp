@@ -4,8 +4,8 @@
 #include "render/slice_model.h"
 
 #include "render/color_difference.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 #include "render/mip_pyramid.h"
 #include "render/png_row_encoder.h"
 #include "render/slice_preview.h"

@@ -8,7 +8,7 @@
 
 #include "geometry/print_grid.h"
 #include "geometry/voxelize_layers.h"
-#include "render/image/image.h"
+#include "core/image.h"
 
 #include <array>
 #include <cstdint>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/slice_writer.h"
 
-#include "render/image/error.h"
-#include "render/image/files.h"
+#include "core/error.h"
+#include "core/files.h"
 
 #include <openssl/evp.h>
 

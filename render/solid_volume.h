@@ -3,8 +3,8 @@
 // Colouring the voxels of lazy solid synthesis (Dong et al. 2008): an image of any set of voxels,
 // and a whole N^3 volume synthesized slab by slab, delivered slice by slice.
 
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 

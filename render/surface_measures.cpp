@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/surface_measures.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/quality_measures.h"
 
 #include <algorithm>

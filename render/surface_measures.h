@@ -6,8 +6,8 @@
 // domain (atlas/surface_domain.h) and are deterministic.
 
 #include "atlas/rasterize_atlas.h"
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/synthesize_surface.h"
 
 #include <cstddef>

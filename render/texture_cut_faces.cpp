@@ -3,8 +3,8 @@
 
 #include "atlas/surface_domain.h"
 #include "render/bake.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cstring>

@@ -10,8 +10,8 @@
 
 #include "atlas/generate_atlas.h"
 #include "geometry/mesh.h"
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 #include "synthesis/synthesize_surface.h"

@@ -6,8 +6,8 @@
 // time on the next run, not correctness (a warning says so). Reading a file marks it as recently
 // used (its modification time), for pruneCache.
 
-#include "render/image/context.h"
-#include "render/image/error.h"
+#include "core/context.h"
+#include "core/error.h"
 
 #include <cstdint>
 #include <cstdio>

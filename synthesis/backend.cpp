@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/backend.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 namespace texfab::synthesis {
 

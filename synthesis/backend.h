@@ -4,7 +4,7 @@
 // device (synthesis/vulkan/), as the execution context asks (ctx.backend, ctx.device). Both give
 // the same bytes (the determinism contract); only speed differs.
 
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/vulkan/runtime.h"
 
 #include <memory>

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/coord_map.h"
 
-#include "render/image/error.h"
-#include "render/image/image_io.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 // The coordinate map: what parallel synthesis produces. Each output texel stores the exemplar
 // pixel it shows, so colours (and companion maps: normals, roughness, height) are a lookup.
 
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -5,10 +5,10 @@
 //             Theory of Computing 8, 2012 (the exact 1-D squared distance transform).
 #include "synthesis/exemplar_analysis.h"
 
-#include "render/image/error.h"
-#include "render/image/files.h"
-#include "render/image/image_io.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/files.h"
+#include "core/image_io.h"
+#include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/hash.h"

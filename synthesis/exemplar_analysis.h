@@ -35,8 +35,8 @@
 //     kExactAnalysisPixels neighborhoods, and the k-nearest sets are searched exactly only on a
 //     grid of sites, then spread to the other pixels (see analyzeExemplar).
 
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 
 #include <cstdint>
 #include <filesystem>

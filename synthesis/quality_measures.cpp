@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/quality_measures.h"
 
-#include "render/image/crop.h"
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/crop.h"
+#include "core/error.h"
+#include "core/parallel.h"
 #include "synthesis/synthesize_2d.h"
 
 #include <algorithm>

@@ -5,8 +5,8 @@
 // synthesis (noise, verbatim tiling, one region copied everywhere) lacks. Colour measures use the
 // first three channels (or the grey channel); alpha is ignored. All values are deterministic.
 
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 

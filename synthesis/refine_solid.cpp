@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/refine_solid.h"
 
-#include "render/image/parallel.h"
+#include "core/parallel.h"
 #include "synthesis/chunk_index.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"

@@ -37,7 +37,7 @@
 // per axis away), then refines a shrinking region, pass by pass, searching each axis only where a
 // vote reads its matches (in the slice across that axis around each voting voxel).
 
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 

@@ -3,10 +3,10 @@
 //           §4 (3-D candidate selection) and §6.1-6.2 (shared candidates, PCA, 8-bit storage).
 #include "synthesis/solid_analysis.h"
 
-#include "render/image/error.h"
-#include "render/image/files.h"
-#include "render/image/image_io.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/files.h"
+#include "core/image_io.h"
+#include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/binary_io.h"
 #include "synthesis/coord_map.h"

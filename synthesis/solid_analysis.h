@@ -42,8 +42,8 @@
 // adds h_l / 2 to a coordinate at least h_l from the border. Only the levels whose h_l is at most
 // (side - 1) / 4 are synthesized (a 32x32 exemplar: 3 levels instead of 4).
 
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/exemplar_analysis.h"
 
 #include <array>

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/solid_tiles.h"
 
-#include "render/image/error.h"
-#include "render/image/files.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/files.h"
+#include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/binary_io.h"
 #include "synthesis/coord_map.h"

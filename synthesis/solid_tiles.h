@@ -51,7 +51,7 @@
 //     the result is the same on any number of threads; all arithmetic is integer or IEEE float
 //     in a fixed order (docs/design.md#the-determinism-contract).
 
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 

@@ -2,9 +2,9 @@
 // Based on: S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3.
 #include "synthesis/synthesize_2d.h"
 
-#include "render/image/error.h"
-#include "render/image/image_io.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/parallel.h"
 #include "synthesis/backend.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #if TEXFAB_HAS_VULKAN

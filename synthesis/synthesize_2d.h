@@ -16,7 +16,7 @@
 // order of work changes a value. The padding each level needs is the dependency closure of the
 // correction sub-passes (one texel each) and of upsampling, computed per window, not guessed.
 
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 

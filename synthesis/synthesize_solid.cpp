@@ -3,8 +3,8 @@
 //           §5 (parallel solid synthesis, lazy subset synthesis) and §6.2 (coarse-level cache).
 #include "synthesis/synthesize_solid.h"
 
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 #include "synthesis/backend.h"
 #include "synthesis/chunk_index.h"
 #include "synthesis/coord_map.h"

@@ -40,8 +40,8 @@
 //   * the volume has no size and nothing wraps: only exemplar coordinates wrap, and only those of a
 //     toroidal exemplar (for one that does not tile, see solid_analysis.h: they never need to).
 
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/solid_analysis.h"
 
 #include <array>

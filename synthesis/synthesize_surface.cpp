@@ -3,8 +3,8 @@
 //           S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3.
 #include "synthesis/synthesize_surface.h"
 
-#include "render/image/error.h"
-#include "render/image/parallel.h"
+#include "core/error.h"
+#include "core/parallel.h"
 #include "synthesis/backend.h"
 #include "synthesis/cpu/surface_kernels.h"
 #if TEXFAB_HAS_VULKAN

@@ -21,7 +21,7 @@
 // Determinism: every coordinate is a pure function of (analysis, domain, options); the thread
 // count never changes a value (each kernel reads one buffer and writes another).
 
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/synthesize_2d.h"
 

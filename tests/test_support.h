@@ -22,6 +22,9 @@
 
 namespace texfab::test {
 
+/// GIMP's pattern folder (Debian gimp-data).
+inline std::filesystem::path gimpPatterns() { return "/usr/share/gimp/2.0/patterns"; }
+
 /// A fresh, empty folder under the system temp folder for one test, removed by the destructor.
 class TempDir {
 public:

@@ -5,9 +5,9 @@
 #include "apps/texfab/report_json.h"
 #include "geometry/mesh_io.h"
 #include "render/crack_measures.h"
-#include "render/image/image_io.h"
-#include "render/image/memory.h"
-#include "render/image/text.h"
+#include "core/image_io.h"
+#include "core/memory.h"
+#include "core/text.h"
 #include "render/own_texels.h"
 
 #include <optional>

@@ -22,9 +22,9 @@
 // run.finish().
 
 #include "geometry/mesh_io.h"
-#include "render/image/context.h"
-#include "render/image/error.h"
-#include "render/image/files.h"
+#include "core/context.h"
+#include "core/error.h"
+#include "core/files.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>

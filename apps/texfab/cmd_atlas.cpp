@@ -10,10 +10,10 @@
 #include "geometry/mesh_io.h"
 #include "geometry/orient_mesh.h"
 #include "geometry/tangent_field.h"
-#include "render/image/error.h"
-#include "render/image/memory.h"
-#include "render/image/image_io.h"
-#include "render/image/text.h"
+#include "core/error.h"
+#include "core/memory.h"
+#include "core/image_io.h"
+#include "core/text.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
-#include "render/image/error.h"
-#include "render/image/text.h"
+#include "core/error.h"
+#include "core/text.h"
 
 #include <memory>
 

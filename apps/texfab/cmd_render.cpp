@@ -3,9 +3,9 @@
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "geometry/mesh_io.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
-#include "render/image/text.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/text.h"
 #include "render/preview_renderer.h"
 
 #include <cstdio>

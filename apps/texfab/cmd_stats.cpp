@@ -5,8 +5,8 @@
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "apps/texfab/report_json.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 #include "synthesis/quality_measures.h"
 
 #include <cmath>

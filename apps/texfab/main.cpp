@@ -12,8 +12,8 @@
 #include "atlas/pack_charts.h"
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
-#include "render/image/error.h"
-#include "render/image/files.h"
+#include "core/error.h"
+#include "core/files.h"
 
 #include <fcntl.h>
 #include <signal.h>

@@ -4,7 +4,7 @@
 // On a terminal the running stage is a bar with a percentage, redrawn in place; otherwise (a log,
 // a pipe) each finished stage is one plain line. Both record the stage timings the --report gives.
 
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <nlohmann/json.hpp>
 

@@ -7,8 +7,8 @@
 
 #include "geometry/mesh_io.h"
 #include "render/break_model.h"
-#include "render/image/downsample.h"
-#include "render/image/memory.h"
+#include "core/downsample.h"
+#include "core/memory.h"
 #include "render/texture_mesh.h"
 
 #include <pybind11/stl.h>

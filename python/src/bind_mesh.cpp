@@ -5,7 +5,7 @@
 
 #include "geometry/mesh.h"
 #include "geometry/mesh_io.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 
 #include <pybind11/stl.h>
 

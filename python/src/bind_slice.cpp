@@ -5,7 +5,7 @@
 #include "python/src/convert.h"
 
 #include "geometry/mesh_io.h"
-#include "render/image/memory.h"
+#include "core/memory.h"
 #include "render/print_job.h"
 #include "render/print_materials.h"
 

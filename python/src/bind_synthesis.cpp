@@ -4,7 +4,7 @@
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
 
-#include "render/image/memory.h"
+#include "core/memory.h"
 #include "render/solid_volume.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/synthesize_2d.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "python/src/convert.h"
 
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/solid_tiles.h"
 

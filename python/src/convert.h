@@ -5,8 +5,8 @@
 // arguments of every long call (threads, backend, cache folder, progress).
 
 #include "geometry/mesh.h"
-#include "render/image/context.h"
-#include "render/image/image.h"
+#include "core/context.h"
+#include "core/image.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"

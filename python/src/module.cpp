@@ -2,7 +2,7 @@
 // texfab._texfab: the library's entries for Python (re-exported by the texfab package).
 #include "python/src/bindings.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 namespace texfab::python {
 

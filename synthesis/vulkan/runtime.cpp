@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/vulkan/runtime.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <vulkan/vulkan.h>
 

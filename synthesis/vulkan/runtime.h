@@ -14,7 +14,7 @@
 // (with $TEXFAB_VULKAN_VALIDATION=1) are texfab::Error with a one-line message. Waits check the
 // context's cancel flag; a device that stops answering is reported lost by its driver's watchdog.
 
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <algorithm>
 #include <cstddef>

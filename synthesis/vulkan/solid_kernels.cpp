@@ -3,7 +3,7 @@
 //           §4.3, §5.1, §5.2.
 #include "synthesis/vulkan/solid_kernels.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/vulkan/shaders/kernel_params.h"
 

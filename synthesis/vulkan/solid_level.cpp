@@ -3,7 +3,7 @@
 //           §5 (parallel solid synthesis of a sparse level).
 #include "synthesis/vulkan/solid_level.h"
 
-#include "render/image/parallel.h"
+#include "core/parallel.h"
 #include "synthesis/chunk_index.h"
 #include "synthesis/vulkan/solid_kernels.h"
 

@@ -10,7 +10,7 @@
 // with a halo of chunks around it deep enough for its correction steps (2 voxels per step), which
 // are computed again by the neighbouring part: a voxel's value does not depend on the part.
 
-#include "render/image/context.h"
+#include "core/context.h"
 #include "synthesis/chunk_index.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/vulkan/runtime.h"

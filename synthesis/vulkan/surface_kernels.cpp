@@ -2,7 +2,7 @@
 // Based on: S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §5–6.
 #include "synthesis/vulkan/surface_kernels.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/vulkan/shaders/kernel_params.h"
 
 #include <algorithm>

@@ -3,7 +3,7 @@
 //           S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §4.
 #include "synthesis/vulkan/synthesis_kernels.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/vulkan/shaders/kernel_params.h"
 

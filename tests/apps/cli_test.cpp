@@ -3,8 +3,8 @@
 // refuses NaN and infinity naming the flag, ranges are stated one way, unknown commands are named,
 // outputs are checked before any work and committed together, a signal leaves no temporary, the
 // analysis cache is bounded and an unwritable one is said once.
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

@@ -5,7 +5,7 @@
 #include "atlas/build_indirection_map.h"
 #include "atlas/chart_mesh.h"
 #include "atlas/generate_atlas.h"
-#include "render/image/error.h"
+#include "core/error.h"
 #include "geometry/mesh_io.h"
 #include "tests/atlas/test_meshes.h"
 #include "tests/test_support.h"

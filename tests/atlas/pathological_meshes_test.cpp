@@ -3,7 +3,7 @@
 // generators, swept over small atlases and large gutters. Every valid closed mesh gets an atlas
 // with no flipped triangle and no overlap, or a clear "cannot fit" error; never the internal one.
 #include "atlas/generate_atlas.h"
-#include "render/image/error.h"
+#include "core/error.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <gtest/gtest.h>

@@ -3,7 +3,7 @@
 // Small meshes and helpers shared by the geometry and render tests.
 
 #include "geometry/mesh.h"
-#include "render/image/error.h"
+#include "core/error.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

@@ -3,7 +3,7 @@
 // texture2d group, the texture's pixels, base material colours), texfab's own reader round trip,
 // and `texfab convert` and `texfab texture` writing 3MF.
 #include "geometry/mesh_io.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <Model/COM/NMR_DLLInterfaces.h>

@@ -6,8 +6,8 @@
 // Inputs are small bundled data so that the whole suite runs in seconds. The cases that synthesize
 // take the backend of their kernels (the Vulkan tests run them on the device: same hashes).
 
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"

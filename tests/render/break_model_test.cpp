@@ -6,8 +6,8 @@
 #include "render/break_model.h"
 #include "render/own_texels.h"
 #include "render/crack_measures.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 #include "render/preview_renderer.h"
 #include "tests/atlas/test_meshes.h"
 

@@ -3,7 +3,7 @@
 // preview and the report; shards through the command line merged by merge-slices; bad input and a
 // disk that fills up: one line, a non-zero exit, and no output.
 #include "geometry/mesh_io.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "render/slice_writer.h"
 #include "tests/geometry/solid_meshes.h"
 #include "tests/golden/golden_cases.h"

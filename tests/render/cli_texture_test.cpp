@@ -2,8 +2,8 @@
 // texfab texture end to end on the bundled model: both modes, companion maps, files a real glTF
 // validator accepts, the report's measures; bad input fails with one line and leaves no output.
 #include "geometry/mesh_io.h"
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

@@ -2,7 +2,7 @@
 // The preview renderer on known scenes, checked by pixel statistics.
 #include "render/mip_pyramid.h"
 #include "render/preview_renderer.h"
-#include "render/image/error.h"
+#include "core/error.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 // shards, thread counts and batch sizes that do not change a byte.
 #include "geometry/print_grid.h"
 #include "geometry/voxelize_layers.h"
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "render/mip_pyramid.h"
 #include "render/slice_model.h"
 #include "render/voxel_colors.h"

@@ -3,8 +3,8 @@
 // exemplar space, orientation by the tangent field, solid mode against the solid synthesizer,
 // determinism, and bad input.
 #include "render/texture_mesh.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 #include "tests/atlas/test_meshes.h"

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of `texfab synth` and `texfab stats`, through the real binary.
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "synthesis/backend.h"
 #include "synthesis/coord_map.h"
 #include "test_support.h"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "test_support.h"

@@ -2,8 +2,8 @@
 // Exemplars that do not tile (ExemplarWrap): auto detection on real photographs and on GIMP's
 // tileable patterns, clamp synthesis (2-D and solid) against the toroidal baseline, and
 // determinism.
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/crop.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/error.h"
+#include "core/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "test_support.h"
 

@@ -2,7 +2,7 @@
 // Synthesis of 1024^2 textures from real exemplars (GIMP's patterns, Debian gimp-data), each
 // measured against two baselines: a random-coordinate image (noise made of exemplar pixels) and a
 // verbatim tiling.
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 #include "test_support.h"

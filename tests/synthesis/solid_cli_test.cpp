@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of `texfab solid`, through the real binary: the three modes agree with each
 // other voxel for voxel, and bad input fails with one line, a non-zero exit and no output.
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Lazy solid synthesis (Dong et al. 2008): the precomputation, subset determinism (the padding of
 // §5.2 is sufficient), the dependency chain of one voxel, and slice quality against baselines.
-#include "render/image/error.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/exemplar_analysis.h"

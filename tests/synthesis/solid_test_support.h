@@ -2,8 +2,8 @@
 #pragma once
 // What the solid texture tests share: crops of the bundled marble, and boxes as voxel lists.
 
-#include "render/image/crop.h"
-#include "render/image/image_io.h"
+#include "core/crop.h"
+#include "core/image_io.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <filesystem>

@@ -3,7 +3,7 @@
 // construction), determinism of the optimization and of evaluation (threads, subsets, order), the
 // seam across tile faces, slice quality against lazy synthesis and a shuffled image, the cache,
 // and bad input.
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/hash.h"
 #include "synthesis/quality_measures.h"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"

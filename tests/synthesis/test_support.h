@@ -2,7 +2,7 @@
 #pragma once
 // Small helpers shared by the synthesis tests (plus tests/test_support.h).
 
-#include "render/image/image.h"
+#include "core/image.h"
 #include "synthesis/hash.h"
 #include "tests/test_support.h"
 
@@ -20,7 +20,5 @@ inline Image noiseImage(int w, int h, uint32_t seed = 7) {
   return image;
 }
 
-/// GIMP's pattern folder (Debian gimp-data).
-inline std::filesystem::path gimpPatterns() { return "/usr/share/gimp/2.0/patterns"; }
 
 } // namespace texfab::test

@@ -4,7 +4,7 @@
 // none), and random inputs. ctest runs them under the Khronos validation layer
 // ($TEXFAB_VULKAN_VALIDATION=1): any validation message is an Error at the next submit.
 
-#include "render/image/error.h"
+#include "core/error.h"
 #include "synthesis/vulkan/runtime.h"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The texfab_oiio module: image decoding and encoding through OpenImageIO (oiio_codec.h).
-#include "render/image/oiio_codec.h"
+#include "core/oiio_codec.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>

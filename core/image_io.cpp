@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/image_io.h"
+#include "core/image_io.h"
 
-#include "render/image/error.h"
-#include "render/image/files.h"
-#include "render/image/memory.h"
-#include "render/image/oiio_codec.h"
+#include "core/error.h"
+#include "core/files.h"
+#include "core/memory.h"
+#include "core/oiio_codec.h"
 
 #include <dlfcn.h>
 

@@ -4,7 +4,7 @@
 // Work items must write disjoint outputs, so results never depend on the thread count or on
 // scheduling.
 
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/crop.h"
-#include "render/image/downsample.h"
-#include "render/image/error.h"
-#include "render/image/image_io.h"
-#include "test_support.h"
+#include "core/crop.h"
+#include "core/downsample.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "tests/test_support.h"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/files.h"
+#include "core/files.h"
 
-#include "render/image/context.h"
-#include "render/image/error.h"
+#include "core/context.h"
+#include "core/error.h"
 
 #include <sys/stat.h>
 #include <unistd.h>

@@ -5,7 +5,7 @@
 // Writing: PNG (8 or 16 bit), EXR (half or float), and any other format OIIO writes by extension.
 // Every function throws texfab::Error with a one-line message naming the file on failure.
 
-#include "render/image/image.h"
+#include "core/image.h"
 
 #include <cstdint>
 #include <filesystem>

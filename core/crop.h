@@ -2,7 +2,7 @@
 #pragma once
 // Cropping: a rectangle of an image, every channel, same format.
 
-#include "render/image/image.h"
+#include "core/image.h"
 
 namespace texfab {
 

@@ -8,7 +8,7 @@
 // Progress follows xatlas's single callback: a computation reports named stages (Stage below);
 // the sink decides what to show (a line per stage, a bar on a terminal, timings for a report).
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <atomic>
 #include <chrono>

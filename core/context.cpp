@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/context.h"
+#include "core/context.h"
 
 #include <algorithm>
 #include <cstdio>

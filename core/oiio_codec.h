@@ -6,9 +6,9 @@
 // most runs of texfab (--help, a usage error, a mesh-only command) and most tests decode no image.
 // Errors cross the boundary as texfab::Error.
 
-#include "render/image/error.h"
-#include "render/image/image.h"
-#include "render/image/image_io.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/image_io.h"
 
 #include <cstdint>
 #include <span>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "render/image/downsample.h"
+#include "core/downsample.h"
 
-#include "render/image/error.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <string>

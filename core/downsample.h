@@ -4,7 +4,7 @@
 // factor x factor block of input pixels (every channel, in the image's own values: no colour-space
 // conversion). Trailing rows and columns that do not fill a block are dropped.
 
-#include "render/image/image.h"
+#include "core/image.h"
 
 namespace texfab {
 
