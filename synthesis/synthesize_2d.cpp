@@ -101,6 +101,11 @@ template <class Fn> void forSubpasses(const SynthesisOptions& options, Fn&& fn) 
       for (int cx = 0; cx < options.interleave; ++cx) fn(cx, cy, ++inset);
 }
 
+// The stage of level l as progress reports it: "level k/n", k counted from the first synthesized.
+std::string levelStageName(const Plan& plan, int l) {
+  return "level " + std::to_string(l - plan.first + 1) + "/" + std::to_string(plan.finest - plan.first + 1);
+}
+
 // The finest padded level on the CPU.
 std::vector<uint32_t> synthesizeOnCpu(const ExemplarAnalysis& analysis, const Plan& plan,
                                       const SynthesisOptions& options, const Context& ctx,
@@ -109,6 +114,7 @@ std::vector<uint32_t> synthesizeOnCpu(const ExemplarAnalysis& analysis, const Pl
   std::vector<uint32_t> previous, current, scratch;
   for (int l = plan.first; l <= plan.finest; ++l) {
     const auto start = Clock::now();
+    Stage stage(ctx, levelStageName(plan, l));
     const LevelGrid& grid = plan.grid(l);
     const int spacing = plan.spacing(l);
     const int64_t periodX = plan.period(options.periodX, l), periodY = plan.period(options.periodY, l);
@@ -135,9 +141,11 @@ std::vector<uint32_t> synthesizeOnCpu(const ExemplarAnalysis& analysis, const Pl
                            grid.width - inset, r0, r1);
       }, kRowGrain);
       current.swap(scratch);
+      stage.advance(inset, plan.subpasses);
     });
     previous.swap(current);
     stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
+    stage.finish();
   }
   return previous;
 }
@@ -160,6 +168,7 @@ void synthesizeOnDevice(vulkan::Device& device, const ExemplarAnalysis& analysis
   vulkan::Buffer previous, current, scratch;
   for (int l = plan.first; l <= plan.finest; ++l) {
     const auto start = Clock::now();
+    Stage stage(ctx, levelStageName(plan, l));
     const LevelGrid& grid = plan.grid(l);
     const int spacing = plan.spacing(l);
     const int64_t periodX = plan.period(options.periodX, l), periodY = plan.period(options.periodY, l);
@@ -179,6 +188,7 @@ void synthesizeOnDevice(vulkan::Device& device, const ExemplarAnalysis& analysis
     commands.submit(ctx);
     previous = std::move(current);
     stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
+    stage.finish();
   }
   const LevelGrid& grid = plan.grid(plan.finest);
   std::vector<vulkan::Commands::Region> rows(size_t(plan.window.height));
