@@ -8,11 +8,11 @@
 // the boundary.
 
 #include "atlas/atlas.h"
-#include "geometry/mesh_connectivity.h"
 #include "atlas/rasterize_atlas.h"
 #include "atlas/texel_field.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <array>
 #include <cstdint>

@@ -9,9 +9,9 @@
 #include "atlas/atlas.h"
 #include "atlas/rasterize_atlas.h"
 #include "atlas/texel_field.h"
+#include "core/context.h"
 #include "geometry/mesh.h"
 #include "geometry/tangent_field.h"
-#include "core/context.h"
 
 namespace texfab::atlas {
 

@@ -8,9 +8,9 @@
 // parameterizeCharts and packCharts.
 
 #include "atlas/atlas.h"
-#include "geometry/mesh_connectivity.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <cstddef>
 

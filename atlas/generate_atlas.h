@@ -7,13 +7,13 @@
 
 #include "atlas/atlas.h"
 #include "atlas/cut_charts.h"
-#include "geometry/mesh_connectivity.h"
 #include "atlas/pack_charts.h"
 #include "atlas/parameterize_charts.h"
 #include "atlas/rasterize_atlas.h"
 #include "atlas/segment_charts.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <string>
 #include <vector>

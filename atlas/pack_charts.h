@@ -10,9 +10,9 @@
 // Re-runnable: call again with other options without redoing charts or parameterizations.
 
 #include "atlas/atlas.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
 #include "core/error.h"
+#include "geometry/mesh.h"
 
 #include <cstddef>
 #include <string>

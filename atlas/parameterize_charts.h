@@ -7,9 +7,9 @@
 // are always valid. The result never has flipped or overlapping triangles.
 
 #include "atlas/atlas.h"
-#include "geometry/mesh_connectivity.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <cstddef>
 

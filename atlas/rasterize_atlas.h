@@ -8,8 +8,8 @@
 
 #include "atlas/atlas.h"
 #include "atlas/texel_field.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
 
 #include <cstddef>
 

@@ -5,8 +5,8 @@
 // chart is checked to be a topological disk and split until it is.
 
 #include "atlas/atlas.h"
-#include "geometry/mesh_connectivity.h"
 #include "geometry/mesh.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <string>
 

@@ -20,10 +20,10 @@
 
 #include "atlas/atlas.h"
 #include "atlas/compute_jacobians.h"
-#include "geometry/mesh_connectivity.h"
 #include "atlas/rasterize_atlas.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
+#include "geometry/mesh_connectivity.h"
 #include "synthesis/synthesize_surface.h"
 
 namespace texfab::atlas {

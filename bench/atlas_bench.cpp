@@ -6,7 +6,7 @@
 #include "atlas/build_indirection_map.h"
 #include "atlas/compute_jacobians.h"
 #include "atlas/generate_atlas.h"
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "geometry/tangent_field.h"
 
 #include <benchmark/benchmark.h>

@@ -13,9 +13,9 @@
 //   seen_xz      the same on a vertical section (what a side wall shows: rows of many layers).
 // Run: build/bench/dither_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
-#include "render/blue_noise.h"
-#include "render/dither_measures.h"
-#include "render/mip_pyramid.h"
+#include "core/mip_pyramid.h"
+#include "print/blue_noise.h"
+#include "print/dither_measures.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
@@ -26,7 +26,7 @@
 
 namespace {
 using namespace texfab;
-using namespace texfab::render;
+using namespace texfab::print;
 
 constexpr int kW = 192, kH = 96, kL = 128;  // voxels
 const Eigen::Vector3d kPitch(25.4 / 600, 25.4 / 300, 0.027);

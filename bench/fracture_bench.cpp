@@ -7,8 +7,8 @@
 // 50 <= 3 s, a re-cut <= 50 ms; Blender 3.4's Cell Fracture: 5.75 s and 13.3 s, cut faces untextured.
 //   build/bench/fracture_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
-#include "geometry/mesh_io.h"
-#include "render/break_model.h"
+#include "geometry/io/mesh_io.h"
+#include "render/break/break_model.h"
 #include "synthesis/solid_analysis.h"
 
 #include <benchmark/benchmark.h>

@@ -4,7 +4,7 @@
 // per second, and a 1024^2 preview render at 4 samples per pixel.
 //   build/bench/mesh_bench --benchmark_counters_tabular=true
 #include "geometry/embree_scene.h"
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "render/preview_renderer.h"
 
 #include <benchmark/benchmark.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The whole `texfab slice` job (render::PrintJob: the model made printable, voxelize, colour from the solid texture, dither to CMYKW + clear,
+// The whole `texfab slice` job (print::PrintJob: the model made printable, voxelize, colour from the solid texture, dither to CMYKW + clear,
 // encode and write one PNG per layer, manifest) on CGAL's bunny00 (75K triangles), 50 mm tall,
 // written to a temporary folder. The solid analysis of the bundled marble (128^2) is computed
 // before timing (cached in real use). Counters: wall seconds, layers per second, peak memory, and
@@ -13,10 +13,10 @@
 //   layers per second at 1 and 2 threads.
 // Run: build/bench/slice_bench --benchmark_counters_tabular=true
 #include "bench/bench_support.h"
-#include "geometry/mesh_io.h"
-#include "geometry/print_grid.h"
 #include "core/image_io.h"
-#include "render/print_job.h"
+#include "geometry/io/mesh_io.h"
+#include "print/print_grid.h"
+#include "print/print_job.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 
@@ -42,28 +42,28 @@ void BM_SliceBunny(benchmark::State& state) {
   const Image exemplar = readImage(fs::path(TEXFAB_SOURCE_DIR) / "models" / "exemplars" / "marble.png");
   const synthesis::SolidAnalysis analysis =
       synthesis::analyzeSolidCached(exemplar, exemplar, exemplar, {}, synthesis::defaultCacheDir());
-  geometry::PrintGridOptions go;
+  print::PrintGridOptions go;
   go.up = geometry::UpAxis::Y;  // the bunny sits on its feet
   go.heightMm = 50;
   go.dpiX = 600;
   go.dpiY = double(state.range(0));
   go.layerMm = double(state.range(1)) / 1000.0;
-  const geometry::PrintGrid grid = geometry::printGrid(geometry::boundingBox(mesh), go);
-  render::PrintJobOptions o;
+  const print::PrintGrid grid = print::printGrid(geometry::boundingBox(mesh), go);
+  print::PrintJobOptions o;
   o.grid = go;
-  o.colors = render::PrintColors::Solid;
+  o.colors = print::PrintColors::Solid;
   o.textureScale = exemplar.width / (kFeatureMm / grid.mmPerUnit);  // exemplar pixels per model unit
   const fs::path out = fs::temp_directory_path() / "texfab_slice_bench";
   for (auto _ : state) {
     fs::remove_all(out);
     const auto t0 = std::chrono::steady_clock::now();
     const Context ctx{.threads = int(state.range(2))};
-    const render::PrintJob job(mesh, o, ctx);
-    render::SliceWriter writer(out, true);
-    const render::PrintJobResult r = job.slice({&exemplar, &analysis, nullptr, "marble.png"}, 0, -1, writer,
+    const print::PrintJob job(mesh, o, ctx);
+    print::SliceWriter writer(out, true);
+    const print::PrintJobResult r = job.slice({&exemplar, &analysis, nullptr, "marble.png"}, 0, -1, writer,
                                                model.filename().string(), ctx);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const render::SliceReport& s = r.slice.report;
+    const print::SliceReport& s = r.slice.report;
     state.counters["seconds"] = seconds;
     state.counters["layers"] = s.layers;
     state.counters["layers_per_s"] = s.layers / seconds;

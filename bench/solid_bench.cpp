@@ -13,8 +13,8 @@
 #include "bench/bench_support.h"
 #include "core/image_io.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/solid_analysis.h"
 #include "synthesis/refine_solid.h"
+#include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <benchmark/benchmark.h>

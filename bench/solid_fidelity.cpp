@@ -16,10 +16,10 @@
 // RULES=mean,cal (only these rules), SAVE=1 (writes the images to /tmp/solidfid-*.png),
 // HISTPEN=lambda with HPITERS, HPBINS, HPBOX, HPALPHA, HPALL (see applyHistogramPenalty).
 #include "core/downsample.h"
+#include "core/hash.h"
 #include "core/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/hash.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_2d.h"

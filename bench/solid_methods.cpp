@@ -10,11 +10,11 @@
 // (tiles only), TILES=0 (lazy only), TRIPLANAR=k (colours weighted by the plane's normal, an
 // experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT.
 #include "core/image_io.h"
+#include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
-#include "synthesis/coord_map.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <algorithm>

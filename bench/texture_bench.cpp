@@ -4,10 +4,10 @@
 // resolve, write) and peak memory. The exemplar analyses are computed before timing (cached in
 // real use). Targets: surface ≤ 20 s, solid ≤ 10 s. Run:
 //   build/bench/texture_bench --benchmark_counters_tabular=true
-#include "render/texture_mesh.h"
 #include "bench/bench_support.h"
-#include "geometry/mesh_io.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
+#include "render/texture_mesh.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 

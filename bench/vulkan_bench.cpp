@@ -14,9 +14,9 @@
 // so that it can be carried to a GPU machine with libvulkan and libtbb (bench/README.md). The
 // exemplar is a binary PPM/PGM or, by default, a procedural marble.
 #include "core/error.h"
+#include "core/hash.h"
 #include "synthesis/backend.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/hash.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_2d.h"
 #include "synthesis/synthesize_solid.h"

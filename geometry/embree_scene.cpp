@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "geometry/embree_scene.h"
 
-#include "geometry/mesh_connectivity.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "geometry/mesh_connectivity.h"
 
 #include <embree3/rtcore.h>
 

@@ -5,8 +5,8 @@
 // errors as texfab::Error. All queries are const and thread-safe; the batch versions spread the
 // work over ctx.threads (0 = all cores) and return results in input order.
 
-#include "geometry/mesh.h"
 #include "core/context.h"
+#include "geometry/mesh.h"
 
 #include <Eigen/Core>
 

@@ -155,6 +155,18 @@ void computeTangents(Mesh& mesh) {
   }
 }
 
+void flipTriangle(Mesh& mesh, size_t t) {
+  std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
+  if (mesh.hasUvs()) std::swap(mesh.uvs[3 * t + 1], mesh.uvs[3 * t + 2]);
+  if (mesh.hasTangents()) std::swap(mesh.tangents[3 * t + 1], mesh.tangents[3 * t + 2]);
+  if (mesh.hasNormals()) {
+    std::swap(mesh.normals[3 * t + 1], mesh.normals[3 * t + 2]);
+    const Eigen::Vector3f n = faceNormal(mesh, t);
+    for (size_t k = 0; k < 3; ++k)
+      if (mesh.normals[3 * t + k].dot(n) < 0) mesh.normals[3 * t + k] *= -1.0f;
+  }
+}
+
 void weldPositions(Mesh& mesh) {
   struct KeyHash {
     size_t operator()(const std::array<uint32_t, 3>& k) const {

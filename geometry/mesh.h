@@ -118,6 +118,10 @@ void computeTangents(Mesh& mesh);
 /// restores the connectivity the surface has.
 void weldPositions(Mesh& mesh);
 
+/// Reverses the winding of triangle t: corners 1 and 2 swap, with their UVs, normals and tangents;
+/// a normal that then points against its triangle is negated.
+void flipTriangle(Mesh& mesh, size_t t);
+
 /// Removes vertices no triangle uses; the rest are renumbered in order of first use.
 void removeUnusedVertices(Mesh& mesh);
 

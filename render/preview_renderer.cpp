@@ -2,6 +2,7 @@
 #include "render/preview_renderer.h"
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
 
@@ -22,15 +23,9 @@ namespace {
 
 constexpr float kPi = std::numbers::pi_v<float>;
 
-// Counter-based random numbers: a pure function of (pixel, sample, dimension).
+// Counter-based random numbers in [0, 1): a pure function of (pixel, sample, dimension).
 float hashUnit(uint32_t x, uint32_t y, uint32_t s, uint32_t d) {
-  uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ s * 0xcb1ab31fu ^ d * 0x165667b1u;
-  h ^= h >> 16;
-  h *= 0x7feb352du;
-  h ^= h >> 15;
-  h *= 0x846ca68bu;
-  h ^= h >> 16;
-  return float(h >> 8) * (1.0f / 16777216.0f);
+  return float(counterHash(x, y, s, d) >> 8) * (1.0f / 16777216.0f);
 }
 
 // An orthonormal basis around n.

@@ -8,11 +8,11 @@
 // camera, and a sky light with ambient occlusion. Deterministic: the same inputs give the same
 // image on any thread count.
 
-#include "geometry/embree_scene.h"
-#include "geometry/mesh.h"
 #include "core/context.h"
 #include "core/image.h"
-#include "render/mip_pyramid.h"
+#include "core/mip_pyramid.h"
+#include "geometry/embree_scene.h"
+#include "geometry/mesh.h"
 
 #include <Eigen/Core>
 

@@ -5,11 +5,11 @@
 
 #include "atlas/compute_jacobians.h"
 #include "atlas/surface_domain.h"
-#include "geometry/orient_mesh.h"
-#include "render/bake.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/text.h"
+#include "geometry/repair/orient_mesh.h"
+#include "render/bake.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/refine_solid.h"
 #include "synthesis/synthesize_surface.h"

@@ -13,10 +13,10 @@
 // unsynthesized texels.
 
 #include "atlas/generate_atlas.h"
-#include "geometry/mesh.h"
-#include "geometry/tangent_field.h"
 #include "core/context.h"
 #include "core/image.h"
+#include "geometry/mesh.h"
+#include "geometry/tangent_field.h"
 #include "render/surface_measures.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"

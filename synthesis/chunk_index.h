@@ -3,7 +3,7 @@
 // The slots of a sparse grid's chunks: a chunk gets the next slot when it is first added, so slots
 // index dense per-chunk storage kept beside the index.
 
-#include "synthesis/hash.h"
+#include "core/hash.h"
 
 #include <cstdint>
 #include <unordered_map>

@@ -7,11 +7,11 @@
 
 #include "core/error.h"
 #include "core/files.h"
+#include "core/hash.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/coord_map.h"
-#include "synthesis/hash.h"
 
 #include <Eigen/Dense>
 #include <nanoflann.hpp>

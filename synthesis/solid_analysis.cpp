@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "core/files.h"
+#include "core/hash.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
@@ -12,7 +13,6 @@
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/hash.h"
 
 #include <Eigen/Dense>
 

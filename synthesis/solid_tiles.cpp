@@ -3,12 +3,12 @@
 
 #include "core/error.h"
 #include "core/files.h"
+#include "core/hash.h"
 #include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
 #include "synthesis/binary_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/synthesis_kernels.h"
-#include "synthesis/hash.h"
 
 #include <algorithm>
 #include <bit>

@@ -4,13 +4,13 @@
 #include "synthesis/synthesize_solid.h"
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/parallel.h"
 #include "synthesis/backend.h"
 #include "synthesis/chunk_index.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/cpu/synthesis_kernels.h"
-#include "synthesis/hash.h"
 #include "synthesis/refine_solid.h"
 #include "synthesis/solid_tiles.h"
 #if TEXFAB_HAS_VULKAN

@@ -77,14 +77,7 @@ synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, con
 
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached) {
-  Stage stage(run.ctx(), "analysis");
-  const auto dir = run.cacheDir();
-  cached = false;
-  synthesis::ExemplarAnalysis a = dir ? synthesis::analyzeExemplarCached(exemplar, options, *dir, stage.inner(), &cached)
-                                      : synthesis::analyzeExemplar(exemplar, options, stage.inner());
-  run.pruneCache();
-  stage.finish(cached ? "(cached)" : std::to_string(a.levels.size()) + " levels");
-  return a;
+  return synthesis::analyzeExemplar(exemplar, options, run.analysisCache(), run.ctx(), &cached);
 }
 
 synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey, const Image& ez,
@@ -118,24 +111,8 @@ synthesis::SolidAnalysis analyzeSolid(Run& run, const Image& ex, const Image& ey
                   pair[0], pair[1], worst);
     run.ctx().warn(warning);
   }
-  Stage stage(run.ctx(), "analysis");
-  const auto dir = run.cacheDir();
-  cached = false;
-  synthesis::SolidAnalysis a = dir ? synthesis::analyzeSolidCached(ex, ey, ez, options, *dir, stage.inner(), &cached)
-                                   : synthesis::analyzeSolid(ex, ey, ez, options, stage.inner());
-  run.pruneCache();
-  stage.finish(cached ? "(cached)"
-                      : std::to_string(a.levels.size()) + " levels" + (a.shared ? ", candidates shared" : ""));
-  if (method.method == synthesis::SolidMethod::Tiles) {
-    Stage tiles(run.ctx(), "tiles");
-    bool tilesCached = false;
-    a.tiles = std::make_shared<const synthesis::SolidTileSet>(
-        dir ? synthesis::buildSolidTilesCached(a, method.tiles, *dir, tiles.inner(), &tilesCached)
-            : synthesis::buildSolidTiles(a, method.tiles, tiles.inner()));
-    run.pruneCache();
-    tiles.finish(tilesCached ? "(cached)" : std::to_string(a.tiles->layout.side) + "^3 voxels per tile");
-  }
-  return a;
+  return synthesis::analyzeSolid(ex, ey, ez, options, method.method, method.tiles, run.analysisCache(), run.ctx(),
+                                 &cached);
 }
 
 } // namespace texfab::cli

@@ -5,10 +5,7 @@
 // --contrast-gain.
 
 #include "apps/texfab/cli.h"
-#include "synthesis/exemplar_analysis.h"
-#include "synthesis/solid_analysis.h"
-#include "synthesis/solid_tiles.h"
-#include "synthesis/synthesize_solid.h"
+#include "synthesis/analyze_exemplar.h"
 
 namespace texfab::cli {
 

@@ -3,12 +3,12 @@
 
 #include "apps/texfab/analysis.h"
 #include "apps/texfab/report_json.h"
-#include "geometry/mesh_io.h"
-#include "render/crack_measures.h"
 #include "core/image_io.h"
 #include "core/memory.h"
 #include "core/text.h"
-#include "render/own_texels.h"
+#include "geometry/io/mesh_io.h"
+#include "render/break/crack_measures.h"
+#include "render/break/own_texels.h"
 
 #include <optional>
 
@@ -16,45 +16,6 @@ namespace texfab::cli {
 namespace fs = std::filesystem;
 
 namespace {
-
-// The exemplars and their analyses: the outer one (the analysis its mode needs) and the interior
-// one (default: the outer).
-struct Exemplars {
-  std::optional<Image> outer, interior;
-  std::optional<synthesis::ExemplarAnalysis> surface;
-  std::optional<synthesis::SolidAnalysis> outerSolid, interiorSolid;
-  render::TextureExemplar outerView;
-  render::InteriorExemplar interiorView;
-};
-
-synthesis::SolidAnalysis solidAnalysis(Run& run, const Image& image, WrapChoice wrap, const SolidMethodChoice& method) {
-  bool cached = false;
-  synthesis::validateSolidExemplars(image, image, image);
-  return analyzeSolid(run, image, image, image, {}, wrap, cached, method);
-}
-
-void analyze(Run& run, const BreakJob& job, Exemplars& e) {
-  if (e.outer) {
-    e.outerView.color = &*e.outer;
-    if (job.options.outer.mode == render::TextureMode::Surface) {
-      bool cached = false;
-      synthesis::AnalysisOptions options;
-      options.wrap = chooseWrap(job.wrap, *e.outer, run);
-      e.surface = analyzeExemplar(run, *e.outer, options, cached);
-      e.outerView.analysis = &*e.surface;
-    } else {
-      e.outerSolid = solidAnalysis(run, *e.outer, job.wrap, job.solid);
-      e.outerView.solidAnalysis = &*e.outerSolid;
-    }
-  }
-  if (e.interior) {
-    e.interiorSolid = solidAnalysis(run, *e.interior, job.wrap, job.solid);
-    e.interiorView = {&*e.interior, &*e.interiorSolid};
-  } else {
-    if (!e.outerSolid) e.outerSolid = solidAnalysis(run, *e.outer, job.wrap, job.solid);
-    e.interiorView = {&*e.outer, &*e.outerSolid};
-  }
-}
 
 nlohmann::json piecesJson(const render::BrokenModel& model) {
   nlohmann::json pieces = nlohmann::json::array();
@@ -188,11 +149,12 @@ void runBreak(const std::string& command, BreakJob& job) {
 
   Stage load(run.ctx(), "load");
   const geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
-  Exemplars ex;
+  render::BreakExemplars ex;
   if (!job.exemplar.empty()) ex.outer = readImage(job.exemplar);
   if (!job.interior.empty()) ex.interior = readImage(job.interior);
   load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle"));
-  analyze(run, job, ex);
+  ex.analyze(o, [&](const Image& image) { return chooseWrap(job.wrap, image, run); }, job.solid.tiles,
+             run.analysisCache(), run.ctx());
 
   const render::BrokenModel model = render::breakModel(mesh, ex.outerView, ex.interiorView, o, run.ctx());
   for (const std::string& repair : model.repairs) run.ctx().warn("repaired: " + repair);
@@ -211,7 +173,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   if (!job.preview.empty()) {
     Stage stage(run.ctx(), "preview");
     render::RenderOptions view = job.previewOptions;
-    view.up = upVector(job.up, job.model);
+    view.up = geometry::upVector(upAxisFor(job.up, job.model));
     const geometry::Mesh merged = render::mergedPieces(model, job.explode > 0 ? job.explode : 0.4);
     writeImage(render::PreviewRenderer(merged).render(view, stage.inner()), preview);
     stage.finish(job.preview);

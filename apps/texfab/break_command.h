@@ -6,7 +6,7 @@
 
 #include "apps/texfab/analysis.h"
 #include "apps/texfab/cli.h"
-#include "render/break_model.h"
+#include "render/break/break_model.h"
 #include "render/preview_renderer.h"
 #include "synthesis/synthesize_solid.h"
 
@@ -25,7 +25,7 @@ struct BreakJob {
   double explode = 0;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;
-  UpAxis up = UpAxis::Auto;
+  UpChoice up;
   WrapChoice wrap = WrapChoice::Auto;
   CommonFlags common;
 };

@@ -206,25 +206,15 @@ void Flags::common(CommonFlags& c, unsigned which) {
   if (which & Common::Quiet) flag("-q,--quiet", c.quiet, "No progress output (warnings and errors are still printed)");
 }
 
-Eigen::Vector3f upVector(UpAxis axis, const fs::path& model) {
-  switch (axis) {
-  case UpAxis::PosX: return Eigen::Vector3f::UnitX();
-  case UpAxis::NegX: return -Eigen::Vector3f::UnitX();
-  case UpAxis::PosY: return Eigen::Vector3f::UnitY();
-  case UpAxis::NegY: return -Eigen::Vector3f::UnitY();
-  case UpAxis::PosZ: return Eigen::Vector3f::UnitZ();
-  case UpAxis::NegZ: return -Eigen::Vector3f::UnitZ();
-  case UpAxis::Auto: break;
-  }
-  std::string ext = model.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".stl" ? Eigen::Vector3f::UnitZ() : Eigen::Vector3f::UnitY();
+geometry::UpAxis upAxisFor(const UpChoice& choice, const fs::path& model) {
+  return choice ? *choice : geometry::conventionalUpAxis(model);
 }
 
-CLI::Option* Flags::up(UpAxis& axis) {
+CLI::Option* Flags::up(UpChoice& axis) {
+  using geometry::UpAxis;
   return choice("--up", axis,
-                Names<UpAxis>{{"auto", UpAxis::Auto}, {"x", UpAxis::PosX}, {"-x", UpAxis::NegX}, {"y", UpAxis::PosY},
-                              {"-y", UpAxis::NegY}, {"z", UpAxis::PosZ}, {"-z", UpAxis::NegZ}},
+                Names<UpChoice>{{"auto", std::nullopt}, {"x", UpAxis::X}, {"-x", UpAxis::NegX}, {"y", UpAxis::Y},
+                                {"-y", UpAxis::NegY}, {"z", UpAxis::Z}, {"-z", UpAxis::NegZ}},
                 "The model's up axis (auto: z for STL, as 3-D printing uses, else y as glTF and OBJ do): previews "
                 "stand the model on it and look at its front; a 3MF output builds along it");
 }
@@ -331,13 +321,11 @@ Run::~Run() = default;
 
 void Run::note(const std::string& message) const { printer_->note(message); }
 
-std::optional<fs::path> Run::cacheDir() const {
-  if (common_.noCache) return std::nullopt;
-  return common_.cacheDir.empty() ? synthesis::defaultCacheDir() : fs::path(common_.cacheDir);
-}
-
-void Run::pruneCache() const {
-  if (const auto dir = cacheDir()) synthesis::pruneCache(*dir, common_.cacheBytes);
+synthesis::AnalysisCacheSettings Run::analysisCache() const {
+  synthesis::AnalysisCacheSettings cache;
+  if (!common_.noCache) cache.dir = common_.cacheDir.empty() ? synthesis::defaultCacheDir() : fs::path(common_.cacheDir);
+  cache.maxBytes = common_.cacheBytes;
+  return cache;
 }
 
 void Run::finish() {

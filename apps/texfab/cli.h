@@ -21,10 +21,12 @@
 // and runFoo opens a Run, reserves its outputs, reports stages through run.ctx() and calls
 // run.finish().
 
-#include "geometry/mesh_io.h"
 #include "core/context.h"
 #include "core/error.h"
 #include "core/files.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/up_axis.h"
+#include "synthesis/analyze_exemplar.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
@@ -109,10 +111,10 @@ struct CommonFlags {
   int device = -1;  ///< -1: $TEXFAB_VULKAN_DEVICE, else the best device
 };
 
-/// A model's up axis for previews (--up); Auto: +Z for STL (3-D printing's convention), else +Y
-/// (glTF's and OBJ's).
-enum class UpAxis { Auto, PosX, NegX, PosY, NegY, PosZ, NegZ };
-Eigen::Vector3f upVector(UpAxis axis, const std::filesystem::path& model);
+/// --up: the model's up axis, or none (auto) for its file's convention.
+using UpChoice = std::optional<geometry::UpAxis>;
+/// The axis given, else the model file's (geometry::conventionalUpAxis).
+geometry::UpAxis upAxisFor(const UpChoice& choice, const std::filesystem::path& model);
 /// Throws UsageError when --unit or --height (Flags::printSize) is given for an output that is not 3MF.
 void checkPrintSize(const geometry::MeshWriteOptions& options, const std::string& output);
 
@@ -169,7 +171,7 @@ public:
   CLI::Option* size(const std::string& flags, int& width, int& height, const std::string& help, const Range& range,
                     bool powerOfTwo = false, bool allowAuto = false);
   /// --up, the model's up axis for previews.
-  CLI::Option* up(UpAxis& axis);
+  CLI::Option* up(UpChoice& axis);
   /// --azimuth and --elevation: where a preview's camera stands (render::RenderOptions).
   void camera(float& azimuthDegrees, float& elevationDegrees);
   /// The common flags the command takes (Common::Threads | ...).
@@ -209,10 +211,8 @@ public:
   bool reporting() const { return !reportPath_.empty(); }
   /// A line of information on stderr (not with --quiet).
   void note(const std::string& message) const;
-  /// The analysis cache folder, or nothing with --no-cache.
-  std::optional<std::filesystem::path> cacheDir() const;
-  /// Keeps the cache within --cache-size (least recently used files go first).
-  void pruneCache() const;
+  /// The analysis cache: --cache-dir (no folder with --no-cache) kept within --cache-size.
+  synthesis::AnalysisCacheSettings analysisCache() const;
   /// Writes the report (timings and peak memory added) and commits every output.
   void finish();
 

@@ -7,13 +7,13 @@
 #include "atlas/build_indirection_map.h"
 #include "atlas/compute_jacobians.h"
 #include "atlas/generate_atlas.h"
-#include "geometry/mesh_io.h"
-#include "geometry/orient_mesh.h"
-#include "geometry/tangent_field.h"
 #include "core/error.h"
-#include "core/memory.h"
 #include "core/image_io.h"
+#include "core/memory.h"
 #include "core/text.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/repair/orient_mesh.h"
+#include "geometry/tangent_field.h"
 
 #include <algorithm>
 #include <cmath>
@@ -162,7 +162,7 @@ void runAtlas(AtlasJob& job) {
 
   Stage write(run.ctx(), "write");
   const geometry::Mesh textured = withAtlasUvs(mesh, result.atlas, run.ctx());
-  job.write.up = upVector(UpAxis::Auto, job.model);
+  job.write.up = geometry::upVector(geometry::conventionalUpAxis(job.model));
   geometry::writeMesh(textured, out, job.write);
   if (!debug.empty()) writeDebugImages(debug, textured, result.atlas, result.fields, jacobians);
   write.finish(job.output);

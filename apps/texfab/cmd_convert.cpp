@@ -2,9 +2,9 @@
 // texfab convert: between mesh formats, keeping UVs and materials where both formats can.
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
-#include "geometry/mesh_io.h"
 #include "core/error.h"
 #include "core/text.h"
+#include "geometry/io/mesh_io.h"
 
 #include <memory>
 
@@ -16,7 +16,7 @@ struct ConvertJob {
   std::string input, output;
   geometry::MeshWriteOptions options;
   bool ascii = false;
-  UpAxis up = UpAxis::Auto;
+  UpChoice up;
   CommonFlags common;
 };
 
@@ -28,7 +28,7 @@ void runConvert(ConvertJob& job) {
   if (job.options.draco && out != MeshFormat::Glb && out != MeshFormat::Gltf)
     throw UsageError("--draco needs a .glb or .gltf output, not " + job.output);
   job.options.binary = !job.ascii;
-  job.options.up = upVector(job.up, job.input);
+  job.options.up = geometry::upVector(upAxisFor(job.up, job.input));
   const std::filesystem::path staged = run.output(job.output);
   Stage read(run.ctx(), "read");
   const Mesh mesh = readMesh(job.input, run.ctx());

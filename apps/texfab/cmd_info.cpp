@@ -3,7 +3,7 @@
 // the Vulkan devices the synthesis kernels can run on.
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "geometry/mesh_connectivity.h"
 #include "synthesis/backend.h"
 

@@ -2,10 +2,10 @@
 // texfab render: a ray-traced preview picture of a model (Embree), or a turntable of them.
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
-#include "geometry/mesh_io.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/text.h"
+#include "geometry/io/mesh_io.h"
 #include "render/preview_renderer.h"
 
 #include <cstdio>
@@ -21,7 +21,7 @@ struct RenderJob {
   render::RenderOptions options;
   int turntable = 0;
   float zoom = 1;
-  UpAxis up = UpAxis::Auto;
+  UpChoice up;
   CommonFlags common;
 };
 
@@ -67,7 +67,7 @@ void runRender(RenderJob& job) {
   const render::PreviewRenderer renderer(mesh);
   bvh.finish();
   render::RenderOptions options = job.options;
-  options.up = upVector(job.up, job.model);
+  options.up = geometry::upVector(upAxisFor(job.up, job.model));
   options.margin = job.options.margin / job.zoom;
   for (int i = 0; i < views; ++i) {
     Stage stage(run.ctx(), "render");

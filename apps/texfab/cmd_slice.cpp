@@ -5,13 +5,13 @@
 #include "apps/texfab/analysis.h"
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
-#include "geometry/mesh_io.h"
-#include "geometry/print_grid.h"
 #include "core/image_io.h"
 #include "core/memory.h"
 #include "core/text.h"
-#include "render/print_job.h"
-#include "render/slice_writer.h"
+#include "geometry/io/mesh_io.h"
+#include "print/print_grid.h"
+#include "print/print_job.h"
+#include "print/slice_writer.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <algorithm>
@@ -26,24 +26,14 @@ namespace {
 struct SliceJob {
   std::string model, output, exemplar, materials, preview, layers, shard;
   std::string core = "white";
-  render::PrintJobOptions print;
-  render::PrintColors mode = render::PrintColors::Solid;  ///< with --exemplar: Solid or Surface
+  print::PrintJobOptions print;
+  print::PrintColors mode = print::PrintColors::Solid;  ///< with --exemplar: Solid or Surface
   SolidMethodChoice solid;
   bool force = false;
   WrapChoice wrap = WrapChoice::Auto;
-  UpAxis up = UpAxis::Auto;
+  UpChoice up;
   CommonFlags common;
 };
-
-// The model axis that points up in the print: as the previews stand the model (upVector).
-geometry::UpAxis printUpAxis(UpAxis axis, const fs::path& model) {
-  const Eigen::Vector3f v = upVector(axis, model);
-  const int a = v.x() != 0 ? 0 : v.y() != 0 ? 1 : 2;
-  const bool negative = v[a] < 0;
-  static const geometry::UpAxis positive[3] = {geometry::UpAxis::X, geometry::UpAxis::Y, geometry::UpAxis::Z};
-  static const geometry::UpAxis negatives[3] = {geometry::UpAxis::NegX, geometry::UpAxis::NegY, geometry::UpAxis::NegZ};
-  return negative ? negatives[a] : positive[a];
-}
 
 // --layers A:B (B exclusive) or --shard I/K (the I-th of K near-equal ranges) into first, count.
 std::pair<int, int> layerRange(const SliceJob& job, int layers) {
@@ -77,11 +67,11 @@ struct Exemplar {
   std::optional<synthesis::ExemplarAnalysis> surface;
 };
 
-render::PrintExemplar analyze(const SliceJob& job, Run& run, Exemplar& e) {
+print::PrintExemplar analyze(const SliceJob& job, Run& run, Exemplar& e) {
   if (!e.image) return {};
-  const render::PrintExemplar view{&*e.image, nullptr, nullptr, fs::path(job.exemplar).filename().string()};
+  const print::PrintExemplar view{&*e.image, nullptr, nullptr, fs::path(job.exemplar).filename().string()};
   bool cached = false;
-  if (job.print.colors == render::PrintColors::Solid) {
+  if (job.print.colors == print::PrintColors::Solid) {
     synthesis::validateSolidExemplars(*e.image, *e.image, *e.image);
     e.solid = analyzeSolid(run, *e.image, *e.image, *e.image, {}, job.wrap, cached, job.solid);
     return {view.color, &*e.solid, nullptr, view.name};
@@ -94,25 +84,25 @@ render::PrintExemplar analyze(const SliceJob& job, Run& run, Exemplar& e) {
 
 void runSlice(SliceJob& job) {
   Run run("slice", job.common);
-  render::PrintJobOptions& o = job.print;
+  print::PrintJobOptions& o = job.print;
   // Everything checkable is checked before any work.
   if (o.textureScale != 0 && o.featureSize != 0) throw UsageError("give --texture-scale or --feature-size, not both");
-  if (!job.materials.empty()) o.slice.materials = render::readPrintMaterials(job.materials);
+  if (!job.materials.empty()) o.slice.materials = print::readPrintMaterials(job.materials);
   o.slice.coreMaterial = job.core;
   o.slice.preview = !job.preview.empty();
-  o.colors = job.exemplar.empty() ? render::PrintColors::Model : job.mode;
+  o.colors = job.exemplar.empty() ? print::PrintColors::Model : job.mode;
   o.solid.method = job.solid.method;
-  o.grid.up = printUpAxis(job.up, job.model);
+  o.grid.up = upAxisFor(job.up, job.model);  // as the previews stand the model
   o.validate();
   if (!job.preview.empty()) checkImageWritable(job.preview);
   const fs::path preview = job.preview.empty() ? fs::path() : run.output(job.preview);
-  render::SliceWriter writer(job.output, job.force);  // refuses a non-empty output before any work
+  print::SliceWriter writer(job.output, job.force);  // refuses a non-empty output before any work
 
   Stage load(run.ctx(), "load");
-  const render::PrintJob print(geometry::readMesh(job.model, run.ctx()), o, run.ctx());
+  const print::PrintJob print(geometry::readMesh(job.model, run.ctx()), o, run.ctx());
   Exemplar exemplar;
   if (!job.exemplar.empty()) exemplar.image = readImage(job.exemplar);
-  const geometry::PrintGrid& grid = print.grid();
+  const print::PrintGrid& grid = print.grid();
   const auto [first, count] = layerRange(job, grid.layers);
   checkMemory(print.memoryBytes(job.common.threads),
               "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
@@ -123,25 +113,25 @@ void runSlice(SliceJob& job) {
               std::to_string(grid.width) + " x " + std::to_string(grid.height) + " x " + std::to_string(grid.layers) +
               " voxels");
 
-  const render::PrintJobResult result = print.slice(analyze(job, run, exemplar), first, count, writer,
+  const print::PrintJobResult result = print.slice(analyze(job, run, exemplar), first, count, writer,
                                                     fs::path(job.model).filename().string(), run.ctx());
-  const render::SliceReport& r = result.slice.report;
+  const print::SliceReport& r = result.slice.report;
   run.note(counted(int64_t(r.layers), "layer") + " in " + job.output + " (" + figure(r.layers / std::max(1e-9, r.seconds)) +
            " layers/s), " + std::to_string(r.shellVoxels) + " shell voxels of " + std::to_string(r.insideVoxels));
   if (result.slice.preview) writeImage(*result.slice.preview, preview);
-  const render::PrintColorError& ce = r.colorError;
+  const print::PrintColorError& ce = r.colorError;
   if (ce.blocks > 0)
     run.note("colour as printed: ΔE2000 " + figure(ce.mean) + " mean, " + figure(ce.p95) + " at the 95th percentile over " +
              counted(int64_t(ce.blocks), "block") + " of 16³ voxels");
 
   nlohmann::json& report = run.report();
-  render::SliceOptions sliced = o.slice;
+  print::SliceOptions sliced = o.slice;
   sliced.firstLayer = first;
   sliced.layerCount = count;
-  report["print"] = nlohmann::json::parse(render::slicePrintInfo(grid, sliced, o.voxelize.shellMm, result.source).dump());
+  report["print"] = nlohmann::json::parse(print::slicePrintInfo(grid, sliced, o.voxelize.shellMm, result.source).dump());
   report["layers"] = {{"first", first}, {"count", count}, {"total", grid.layers}};
   report["voxels"] = {{"inside", r.insideVoxels}, {"shell", r.shellVoxels}, {"per_layer", grid.voxelsPerLayer()}};
-  if (o.colors == render::PrintColors::Solid)
+  if (o.colors == print::PrintColors::Solid)
     report["solid"] = {{"voxels_requested", result.voxelsRequested}, {"voxels_synthesized", result.voxelsSynthesized}};
   report["color_error"] = {{"blocks", ce.blocks}, {"delta_e2000_mean", ce.mean}, {"delta_e2000_p95", ce.p95},
                            {"delta_e2000_max", ce.max}};
@@ -157,8 +147,8 @@ void runSlice(SliceJob& job) {
 
 Command addSliceCommand(CLI::App& root) {
   auto job = std::make_shared<SliceJob>();
-  render::PrintJobOptions& o = job->print;
-  geometry::PrintGridOptions& g = o.grid;
+  print::PrintJobOptions& o = job->print;
+  print::PrintGridOptions& g = o.grid;
   Flags f(root.add_subcommand("slice", "Slice a closed model into one image per print layer for full-colour 3D "
                                        "printing: every voxel one material, coloured from the model's texture or a "
                                        "solid texture and dithered"));
@@ -183,16 +173,16 @@ Command addSliceCommand(CLI::App& root) {
   f.text("--materials", job->materials,
          "Printer materials (JSON: name, color #RRGGBB, opacity); default: Vero cyan, magenta, yellow, black, white, clear");
   f.choice("--dither", o.slice.dither,
-           Names<render::DitherMode>{{"blue-noise", render::DitherMode::BlueNoise},
-                                     {"floyd-steinberg", render::DitherMode::FloydSteinberg},
-                                     {"none", render::DitherMode::None}},
+           Names<print::DitherMode>{{"blue-noise", print::DitherMode::BlueNoise},
+                                     {"floyd-steinberg", print::DitherMode::FloydSteinberg},
+                                     {"none", print::DitherMode::None}},
            "blue-noise (3-D, position-based), floyd-steinberg (within each layer) or none (the continuous colour)");
   f.choice("--format", o.slice.format,
-           Names<render::SliceFormat>{{"png", render::SliceFormat::Indexed}, {"voxelprint", render::SliceFormat::VoxelPrint}},
+           Names<print::SliceFormat>{{"png", print::SliceFormat::Indexed}, {"voxelprint", print::SliceFormat::VoxelPrint}},
            "png (indexed, material colours) or voxelprint (RGBA, empty voxels transparent, as GrabCAD Voxel Print reads)");
   f.text("-e,--exemplar", job->exemplar, "Colour from this exemplar's texture instead of the model's own");
   f.choice("--mode", job->mode,
-           Names<render::PrintColors>{{"solid", render::PrintColors::Solid}, {"surface", render::PrintColors::Surface}},
+           Names<print::PrintColors>{{"solid", print::PrintColors::Solid}, {"surface", print::PrintColors::Surface}},
            "With --exemplar: solid (the solid texture of texfab texture --mode solid) or surface (synthesize over the "
            "surface first)");
   f.option("--texture-scale", o.textureScale,
@@ -223,7 +213,7 @@ Command addMergeSlicesCommand(CLI::App& root) {
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");
   return {f.app(), [job] {
             const std::vector<fs::path> shards(job->shards.begin(), job->shards.end());
-            render::mergeSliceFolders(shards, job->output, job->force);
+            print::mergeSliceFolders(shards, job->output, job->force);
           }};
 }
 

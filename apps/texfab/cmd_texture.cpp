@@ -5,11 +5,11 @@
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "apps/texfab/report_json.h"
-#include "geometry/mesh_io.h"
 #include "core/downsample.h"
 #include "core/image_io.h"
 #include "core/memory.h"
 #include "core/text.h"
+#include "geometry/io/mesh_io.h"
 #include "render/preview_renderer.h"
 #include "render/texture_mesh.h"
 
@@ -28,7 +28,7 @@ struct TextureJob {
   render::TextureMeshOptions options;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;
-  UpAxis up = UpAxis::Auto;
+  UpChoice up;
   WrapChoice wrap = WrapChoice::Auto;
   SolidMethodChoice method;
   CommonFlags common;
@@ -148,14 +148,14 @@ void runTexture(TextureJob& job) {
   const render::TextureMeshResult result = render::textureMesh(in.mesh, ex, o, run.ctx());
 
   Stage write(run.ctx(), "write");
-  job.write.up = upVector(job.up, job.model);
+  job.write.up = geometry::upVector(upAxisFor(job.up, job.model));
   geometry::writeMesh(result.mesh, out, job.write);
   if (result.height) writeImage(*result.height, heightOut);
   write.finish(job.output + (result.height ? ", " + heightOut.filename().string() : ""));
   if (!job.preview.empty()) {
     Stage preview(run.ctx(), "preview");
     render::RenderOptions view = job.previewOptions;
-    view.up = upVector(job.up, job.model);
+    view.up = geometry::upVector(upAxisFor(job.up, job.model));
     writeImage(render::PreviewRenderer(result.mesh).render(view, preview.inner()), previewOut);
     preview.finish(job.preview);
   }

@@ -9,9 +9,9 @@
 // stops at its next check and unwinds, removing its temporaries. A second one removes the
 // registered temporaries and exits at once.
 
-#include "atlas/pack_charts.h"
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
+#include "atlas/pack_charts.h"
 #include "core/error.h"
 #include "core/files.h"
 

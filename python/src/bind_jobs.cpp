@@ -5,10 +5,10 @@
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
 
-#include "geometry/mesh_io.h"
-#include "render/break_model.h"
 #include "core/downsample.h"
 #include "core/memory.h"
+#include "geometry/io/mesh_io.h"
+#include "render/break/break_model.h"
 #include "render/texture_mesh.h"
 
 #include <pybind11/stl.h>
@@ -132,35 +132,6 @@ struct BrokenOutput {
 
 // The analyses of the break job: the outer exemplar's (for its mode) and the interior's (default
 // the outer exemplar), as `texfab fracture` and `texfab cut` make them.
-struct BreakExemplars {
-  std::optional<Image> outer, interior;
-  std::optional<synthesis::ExemplarAnalysis> surface;
-  std::optional<synthesis::SolidAnalysis> outerSolid, interiorSolid;
-  render::TextureExemplar outerView;
-  render::InteriorExemplar interiorView;
-
-  void analyze(const Call& call, const render::BreakModelOptions& o, const std::string& wrap, int tileSide) {
-    const synthesis::SolidMethod method = o.interior.solid.method;
-    if (outer) {
-      outerView.color = &*outer;
-      if (o.outer.mode == render::TextureMode::Surface) {
-        synthesis::AnalysisOptions options;
-        options.wrap = chooseWrap(wrap, *outer);
-        outerView.analysis = &surface.emplace(analyze2d(call, *outer, options));
-      } else {
-        outerView.solidAnalysis = &outerSolid.emplace(analyzeSolid(call, *outer, chooseWrap(wrap, *outer), method, tileSide));
-      }
-    }
-    if (interior) {
-      interiorSolid.emplace(analyzeSolid(call, *interior, chooseWrap(wrap, *interior), method, tileSide));
-      interiorView = {&*interior, &*interiorSolid};
-    } else {
-      if (!outerSolid) outerSolid.emplace(analyzeSolid(call, *outer, chooseWrap(wrap, *outer), method, tileSide));
-      interiorView = {&*outer, &*outerSolid};
-    }
-  }
-};
-
 BrokenOutput breakModel(const py::object& meshLike, const py::object& planes, int pieces, const py::object& impact,
                         double roughness, double minVolume, const py::object& exemplar, const py::object& interior,
                         const std::string& mode, double textureScale, const py::object& resolution,
@@ -198,12 +169,14 @@ BrokenOutput breakModel(const py::object& meshLike, const py::object& planes, in
   o.outer.measure = false;
   o.shareTextureSettings(seed, solidOptions(seed, method, contrastGain, refine));
 
-  BreakExemplars ex;
+  render::BreakExemplars ex;
   if (!exemplar.is_none()) ex.outer = toImage(exemplar, "exemplar");
   if (!interior.is_none()) ex.interior = toImage(interior, "interior");
   const geometry::Mesh mesh = toMesh(meshLike);
   auto model = std::make_shared<const render::BrokenModel>(call.run([&] {
-    ex.analyze(call, o, wrap, tileSide);
+    synthesis::SolidTileOptions tiles;
+    tiles.tileSide = tileSide;
+    ex.analyze(o, [&](const Image& image) { return chooseWrap(wrap, image); }, tiles, call.analysisCache(), call.ctx());
     return render::breakModel(mesh, ex.outerView, ex.interiorView, o, call.ctx());
   }));
   BrokenOutput out{model, {}};

@@ -3,9 +3,10 @@
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
 
-#include "geometry/mesh.h"
-#include "geometry/mesh_io.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/mesh.h"
+#include "geometry/up_axis.h"
 
 #include <pybind11/stl.h>
 
@@ -76,16 +77,10 @@ void bindMaterial(py::module_& m) {
 
 } // namespace
 
-Eigen::Vector3f upAxis(const std::string& name) {
-  return choose<Eigen::Vector3f>(name, "up",
-                {{"x", Eigen::Vector3f(1, 0, 0)}, {"-x", Eigen::Vector3f(-1, 0, 0)}, {"y", Eigen::Vector3f(0, 1, 0)},
-                 {"-y", Eigen::Vector3f(0, -1, 0)}, {"z", Eigen::Vector3f(0, 0, 1)}, {"-z", Eigen::Vector3f(0, 0, -1)}});
-}
-
 geometry::MeshWriteOptions writeOptions(const std::string& up, bool draco, bool embed, const std::string& textureFormat) {
   using geometry::TextureEncoding;
   geometry::MeshWriteOptions o;
-  o.up = upAxis(up);
+  o.up = geometry::upVector(geometry::parseUpAxis(up));
   o.draco = draco;
   o.embed = embed;
   o.textures = choose<TextureEncoding>(textureFormat, "texture_format",

@@ -4,10 +4,10 @@
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
 
-#include "geometry/mesh_io.h"
 #include "core/memory.h"
-#include "render/print_job.h"
-#include "render/print_materials.h"
+#include "geometry/io/mesh_io.h"
+#include "print/print_job.h"
+#include "print/print_materials.h"
 
 #include <pybind11/stl.h>
 
@@ -26,7 +26,7 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
                  int resolution, bool force, int threads, const std::string& backend, const py::object& cacheDir,
                  const py::object& progress) {
   Call call(threads, backend, cacheDir, progress);
-  render::PrintJobOptions o;
+  print::PrintJobOptions o;
   o.grid.up = geometry::parseUpAxis(up);
   o.grid.heightMm = heightMm;
   o.grid.mmPerUnit = unitMm;
@@ -34,16 +34,16 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
   o.grid.dpiY = dpi.second;
   o.grid.layerMm = layerMm;
   o.voxelize.shellMm = shellMm;
-  o.slice.dither = choose<render::DitherMode>(dither, "dither", {{"blue-noise", render::DitherMode::BlueNoise},
-                                             {"floyd-steinberg", render::DitherMode::FloydSteinberg},
-                                             {"none", render::DitherMode::None}});
-  o.slice.format = choose<render::SliceFormat>(format, "format", {{"png", render::SliceFormat::Indexed},
-                                             {"voxelprint", render::SliceFormat::VoxelPrint}});
+  o.slice.dither = choose<print::DitherMode>(dither, "dither", {{"blue-noise", print::DitherMode::BlueNoise},
+                                             {"floyd-steinberg", print::DitherMode::FloydSteinberg},
+                                             {"none", print::DitherMode::None}});
+  o.slice.format = choose<print::SliceFormat>(format, "format", {{"png", print::SliceFormat::Indexed},
+                                             {"voxelprint", print::SliceFormat::VoxelPrint}});
   o.slice.coreMaterial = core;
-  if (!materials.is_none()) o.slice.materials = render::readPrintMaterials(toPath(materials));
+  if (!materials.is_none()) o.slice.materials = print::readPrintMaterials(toPath(materials));
   const bool textured = !exemplarLike.is_none();
-  o.colors = !textured ? render::PrintColors::Model
-             : choose<render::PrintColors>(mode, "mode", {{"solid", render::PrintColors::Solid}, {"surface", render::PrintColors::Surface}});
+  o.colors = !textured ? print::PrintColors::Model
+             : choose<print::PrintColors>(mode, "mode", {{"solid", print::PrintColors::Solid}, {"surface", print::PrintColors::Surface}});
   o.textureScale = textureScale;
   o.featureSize = featureSize;
   o.seed = seed;
@@ -64,8 +64,8 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
   }
 
   const nlohmann::ordered_json manifest = call.run([&] {
-    render::SliceWriter writer(folder, force);
-    const render::PrintJob job(meshPath.empty() ? mesh : geometry::readMesh(meshPath, call.ctx()), o, call.ctx());
+    print::SliceWriter writer(folder, force);
+    const print::PrintJob job(meshPath.empty() ? mesh : geometry::readMesh(meshPath, call.ctx()), o, call.ctx());
     if (!layers.is_none() && (first < 0 || count < 1 || first + count > job.grid().layers))
       throw Error("layers: expected (A, B) with 0 <= A < B <= " + std::to_string(job.grid().layers) +
                   " (the print's layers)");
@@ -73,11 +73,11 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
                                               std::to_string(job.grid().height) + " voxels with its batch");
     std::optional<synthesis::SolidAnalysis> solid;
     std::optional<synthesis::ExemplarAnalysis> surface;
-    render::PrintExemplar ex;
+    print::PrintExemplar ex;
     if (exemplar) {
       ex = {&*exemplar, nullptr, nullptr, exemplarName};
       const synthesis::ExemplarWrap w = chooseWrap(wrap, *exemplar);
-      if (o.colors == render::PrintColors::Solid) {
+      if (o.colors == print::PrintColors::Solid) {
         ex.solid = &solid.emplace(analyzeSolid(call, *exemplar, w, o.solid.method, tileSide));
       } else {
         synthesis::AnalysisOptions options;
@@ -86,7 +86,7 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
       }
     }
     job.slice(ex, first, count, writer, modelName, call.ctx());
-    return render::readSliceManifest(folder);
+    return print::readSliceManifest(folder);
   });
   return py::module_::import("json").attr("loads")(manifest.dump());
 }
@@ -94,7 +94,7 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
 // The print's grid (width, height, layers) as slice() lays it out.
 py::dict printGrid(const py::object& meshLike, const std::string& up, double heightMm, double unitMm,
                    const std::pair<double, double>& dpi, double layerMm) {
-  geometry::PrintGridOptions o;
+  print::PrintGridOptions o;
   o.up = geometry::parseUpAxis(up);
   o.heightMm = heightMm;
   o.mmPerUnit = unitMm;
@@ -104,7 +104,7 @@ py::dict printGrid(const py::object& meshLike, const std::string& up, double hei
   o.validate();
   const geometry::BoundingBox box =
       geometry::boundingBox(isPath(meshLike) ? geometry::readMesh(toPath(meshLike)) : meshLike.cast<geometry::Mesh>());
-  const geometry::PrintGrid grid = geometry::printGrid(box, o);
+  const print::PrintGrid grid = print::printGrid(box, o);
   using namespace pybind11::literals;
   return py::dict("width"_a = grid.width, "height"_a = grid.height, "layers"_a = grid.layers);
 }
@@ -112,7 +112,7 @@ py::dict printGrid(const py::object& meshLike, const std::string& up, double hei
 } // namespace
 
 void bindSlice(py::module_& m) {
-  const render::PrintJobOptions o;
+  const print::PrintJobOptions o;
   const synthesis::SolidSynthesisOptions so;
   m.def("slice", &slice, py::arg("mesh"), py::arg("output"), py::kw_only(), py::arg("exemplar") = py::none(),
         py::arg("mode") = "solid", py::arg("up") = "y", py::arg("height_mm") = o.grid.heightMm,

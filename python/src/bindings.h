@@ -3,7 +3,7 @@
 // The parts of the module, one per file: images and meshes; 2-D and solid synthesis; the jobs
 // (texture, fracture and cut, slice).
 
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 
 #include <pybind11/pybind11.h>
 
@@ -18,7 +18,6 @@ void bindJobs(py::module_& m);
 void bindSlice(py::module_& m);
 
 /// The up axis by name: "x", "-x", "y", "-y", "z", "-z".
-Eigen::Vector3f upAxis(const std::string& name);
 /// The writer's options as Mesh.save takes them.
 geometry::MeshWriteOptions writeOptions(const std::string& up, bool draco, bool embed, const std::string& textureFormat);
 /// Adds save(path, *, up, draco, embed, texture_format) to a class whose objects `write`s.

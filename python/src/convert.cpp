@@ -2,7 +2,6 @@
 #include "python/src/convert.h"
 
 #include "core/image_io.h"
-#include "synthesis/analysis_cache.h"
 #include "synthesis/solid_tiles.h"
 
 #include <pybind11/stl.h>
@@ -14,11 +13,6 @@
 #include <thread>
 
 namespace texfab::python {
-
-namespace {
-// What the command line keeps in its cache folder (--cache-size's default).
-constexpr uint64_t kCacheBytes = uint64_t(1) << 30;
-} // namespace
 
 py::array imageArray(std::shared_ptr<const Image> image) {
   const auto c = py::ssize_t(image->channels), w = py::ssize_t(image->width), h = py::ssize_t(image->height);
@@ -89,8 +83,8 @@ Call::Call(int threads, const std::string& backend, py::object cacheDir, py::obj
   ctx_.threads = threads;
   ctx_.backend = choose<Backend>(backend, "backend", {{"cpu", Backend::Cpu}, {"vulkan", Backend::Vulkan}, {"auto", Backend::Auto}});
   ctx_.cancel = &state_->cancel;
-  if (cacheDir.is_none()) cacheDir_ = synthesis::defaultCacheDir();
-  else if (!(py::isinstance<py::bool_>(cacheDir) && !cacheDir.cast<bool>())) cacheDir_ = toPath(cacheDir);
+  if (cacheDir.is_none()) cache_.dir = synthesis::defaultCacheDir();
+  else if (!(py::isinstance<py::bool_>(cacheDir) && !cacheDir.cast<bool>())) cache_.dir = toPath(cacheDir);
   state_->progress = std::move(progress);
   // The sink runs on texfab's threads: it takes the GIL and calls back.
   ctx_.progress = [state = state_](const ProgressEvent& e) {
@@ -163,13 +157,7 @@ synthesis::ExemplarWrap chooseWrap(const std::string& choice, const Image& exemp
 
 synthesis::ExemplarAnalysis analyze2d(const Call& call, const Image& exemplar, const synthesis::AnalysisOptions& options) {
   synthesis::validateExemplarSize(exemplar);
-  Stage stage(call.ctx(), "analysis");
-  const auto& dir = call.cacheDir();
-  synthesis::ExemplarAnalysis a = dir ? synthesis::analyzeExemplarCached(exemplar, options, *dir, stage.inner())
-                                      : synthesis::analyzeExemplar(exemplar, options, stage.inner());
-  if (dir) synthesis::pruneCache(*dir, kCacheBytes);
-  stage.finish();
-  return a;
+  return synthesis::analyzeExemplar(exemplar, options, call.analysisCache(), call.ctx());
 }
 
 synthesis::SolidAnalysis analyzeSolid(const Call& call, const Image& exemplar, synthesis::ExemplarWrap wrap,
@@ -177,23 +165,9 @@ synthesis::SolidAnalysis analyzeSolid(const Call& call, const Image& exemplar, s
   synthesis::validateSolidExemplars(exemplar, exemplar, exemplar);
   synthesis::SolidAnalysisOptions options;
   options.wrap = wrap;
-  const auto& dir = call.cacheDir();
-  Stage stage(call.ctx(), "analysis");
-  synthesis::SolidAnalysis a =
-      dir ? synthesis::analyzeSolidCached(exemplar, exemplar, exemplar, options, *dir, stage.inner())
-          : synthesis::analyzeSolid(exemplar, exemplar, exemplar, options, stage.inner());
-  stage.finish();
-  if (method == synthesis::SolidMethod::Tiles) {
-    synthesis::SolidTileOptions tiles;
-    tiles.tileSide = tileSide;
-    Stage build(call.ctx(), "tiles");
-    a.tiles = std::make_shared<const synthesis::SolidTileSet>(
-        dir ? synthesis::buildSolidTilesCached(a, tiles, *dir, build.inner())
-            : synthesis::buildSolidTiles(a, tiles, build.inner()));
-    build.finish();
-  }
-  if (dir) synthesis::pruneCache(*dir, kCacheBytes);
-  return a;
+  synthesis::SolidTileOptions tiles;
+  tiles.tileSide = tileSide;
+  return synthesis::analyzeSolid(exemplar, exemplar, exemplar, options, method, tiles, call.analysisCache(), call.ctx());
 }
 
 } // namespace texfab::python

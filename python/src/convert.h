@@ -4,11 +4,10 @@
 // arguments (a file or an array), names of choices ("surface", "tile", ...) and the shared
 // arguments of every long call (threads, backend, cache folder, progress).
 
-#include "geometry/mesh.h"
 #include "core/context.h"
 #include "core/image.h"
-#include "synthesis/exemplar_analysis.h"
-#include "synthesis/solid_analysis.h"
+#include "geometry/mesh.h"
+#include "synthesis/analyze_exemplar.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <pybind11/numpy.h>
@@ -63,8 +62,8 @@ class Call {
 public:
   Call(int threads, const std::string& backend, py::object cacheDir, py::object progress);
   const Context& ctx() const { return ctx_; }
-  /// The analysis cache folder (nullopt: no cache), pruned after each analysis as the command line does.
-  const std::optional<std::filesystem::path>& cacheDir() const { return cacheDir_; }
+  /// The analysis cache (no folder: none), kept within 1 GiB as the command line's default.
+  const synthesis::AnalysisCacheSettings& analysisCache() const { return cache_; }
   /// Runs `work` (C++ only: no Python object may be touched) and returns its result.
   template <class F>
   auto run(F&& work) {
@@ -83,7 +82,7 @@ private:
   void execute(const std::function<void()>& work);
   std::shared_ptr<State> state_ = std::make_shared<State>();
   Context ctx_;
-  std::optional<std::filesystem::path> cacheDir_;
+  synthesis::AnalysisCacheSettings cache_;
 };
 
 /// The exemplar's wrap for a choice ("auto": measured on the exemplar, as the command line does).

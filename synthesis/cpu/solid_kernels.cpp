@@ -8,10 +8,10 @@
 //           two-step search), §5.2 (dependency masks).
 #include "synthesis/cpu/solid_kernels.h"
 
+#include "core/hash.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_search.h"
 #include "synthesis/cpu/synthesis_kernels.h"
-#include "synthesis/hash.h"
 #include "synthesis/solid_analysis.h"
 
 #include <algorithm>

@@ -3,9 +3,9 @@
 //           docs/synthesis-notes.md#atlas-synthesis, #anisometric-step, #anisometric-candidates.
 #include "synthesis/cpu/surface_kernels.h"
 
+#include "core/hash.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/hash.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,9 +3,9 @@
 //           S. Lefebvre, H. Hoppe. Appearance-space texture synthesis. SIGGRAPH 2006, §4.
 #include "synthesis/cpu/synthesis_kernels.h"
 
+#include "core/hash.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
-#include "synthesis/hash.h"
 
 #include <algorithm>
 #include <cstddef>

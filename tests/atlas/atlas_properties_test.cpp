@@ -6,7 +6,7 @@
 #include "atlas/chart_mesh.h"
 #include "atlas/generate_atlas.h"
 #include "core/error.h"
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/atlas/test_meshes.h"
 #include "tests/test_support.h"
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab atlas end to end: outputs, report, debug images; bad arguments fail before any output.
-#include "geometry/mesh_io.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

@@ -2,8 +2,8 @@
 // Bad input: references escaping the model's folder, non-finite coordinates, bad indices, empty
 // models, glTF accessors overrunning their buffers. Each must fail with one line naming the file
 // and the problem; the command line exits 2 and writes nothing.
-#include "geometry/mesh_io.h"
-#include "geometry/model_path.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/io/model_path.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <fstream>

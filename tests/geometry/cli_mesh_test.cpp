@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end: texfab info / convert / render on the bundled models.
-#include "geometry/mesh_io.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <nlohmann/json.hpp>

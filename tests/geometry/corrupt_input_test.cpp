@@ -2,7 +2,7 @@
 // Fuzz-style robustness: real files of every format, truncated and mutated deterministically,
 // must either load or fail with texfab::Error: never crash, hang, leak or throw anything else.
 // Run it under AddressSanitizer/UBSan with a -DTEXFAB_SANITIZE=ON build (see the README).
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <fstream>

@@ -2,7 +2,7 @@
 // The Embree scene against brute-force references: ray hits, inside/outside on closed meshes from
 // CGAL's data set (generalized winding number over every triangle), closest points.
 #include "geometry/embree_scene.h"
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "geometry/mesh_connectivity.h"
 #include "tests/geometry/test_meshes.h"
 

@@ -2,13 +2,13 @@
 // Cut and fracture geometry on small meshes: every piece closed, manifold and oriented; volumes
 // add up to the model's; no two pieces overlap (sample points inside exactly one piece);
 // attributes carried through splits; determinism; repairs and refusals of bad solids.
-#include "geometry/counter_hash.h"
-#include "geometry/cut_mesh.h"
+#include "core/hash.h"
 #include "geometry/embree_scene.h"
-#include "geometry/fracture_mesh.h"
-#include "geometry/measure_solid.h"
+#include "geometry/fracture/cut_mesh.h"
+#include "geometry/fracture/fracture_mesh.h"
+#include "geometry/fracture/measure_solid.h"
 #include "geometry/mesh_connectivity.h"
-#include "geometry/repair_solid.h"
+#include "geometry/repair/repair_solid.h"
 #include "tests/atlas/test_meshes.h"
 #include "tests/geometry/test_meshes.h"
 
@@ -68,8 +68,8 @@ void expectPartition(const Mesh& model, const std::vector<Mesh>& pieces, int sam
   const BoundingBox box = boundingBox(model);
   int inside = 0;
   for (int i = 0; i < samples; ++i) {
-    const Eigen::Vector3f u(float(unitInterval(counterHash(3, uint64_t(i), 0))), float(unitInterval(counterHash(3, uint64_t(i), 1))),
-                            float(unitInterval(counterHash(3, uint64_t(i), 2))));
+    const Eigen::Vector3f u(float(unitInterval(counterHash(3, uint32_t(i), 0))), float(unitInterval(counterHash(3, uint32_t(i), 1))),
+                            float(unitInterval(counterHash(3, uint32_t(i), 2))));
     const Eigen::Vector3f p = box.min + u.cwiseProduct(box.max - box.min);
     int in = 0;
     for (const auto& s : scenes) in += s->inside(p);

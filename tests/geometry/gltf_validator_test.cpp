@@ -3,7 +3,7 @@
 // warnings: binary and text (buffers and images beside the file, or embedded), Draco, and textures
 // as PNG, JPEG or WebP (EXT_texture_webp). The validator is the npm package gltf-validator, installed by scripts/install-deps.sh
 // into .tools/ (or found through $TEXFAB_GLTF_VALIDATOR = a node_modules folder).
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
 
 using namespace texfab;

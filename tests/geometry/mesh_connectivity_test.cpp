@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // One connectivity for every module, and orientation repair: tiny meshes with one defect each.
 #include "geometry/mesh_connectivity.h"
-#include "geometry/orient_mesh.h"
+#include "geometry/repair/orient_mesh.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <gtest/gtest.h>

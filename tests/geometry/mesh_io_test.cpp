@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Round trips through every mesh format, what each keeps, and the real clients that must load
 // our outputs (assimp, draco_decoder).
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "geometry/mesh_connectivity.h"
 #include "tests/geometry/test_meshes.h"
 

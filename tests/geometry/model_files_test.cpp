@@ -3,7 +3,7 @@
 // where Blender looks for it, OBJ readers' tolerance of missing material files, a dielectric
 // default material, texture encodings (PNG, JPEG, WebP; input bytes kept as they are), and .gltf
 // with its buffer and images beside it.
-#include "geometry/mesh_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <nlohmann/json.hpp>

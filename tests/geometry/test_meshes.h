@@ -2,8 +2,8 @@
 #pragma once
 // Small meshes and helpers shared by the geometry and render tests.
 
-#include "geometry/mesh.h"
 #include "core/error.h"
+#include "geometry/mesh.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

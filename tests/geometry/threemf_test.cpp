@@ -2,8 +2,8 @@
 // Textured 3MF: files texfab writes read back with lib3mf itself (geometry, per-corner UVs in a
 // texture2d group, the texture's pixels, base material colours), texfab's own reader round trip,
 // and `texfab convert` and `texfab texture` writing 3MF.
-#include "geometry/mesh_io.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <Model/COM/NMR_DLLInterfaces.h>

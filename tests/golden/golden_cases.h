@@ -15,9 +15,9 @@
 #include "synthesis/synthesize_solid.h"
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 #include "atlas/generate_atlas.h"
-#include "geometry/mesh_io.h"
-#include "render/break_model.h"
-#include "render/print_job.h"
+#include "geometry/io/mesh_io.h"
+#include "print/print_job.h"
+#include "render/break/break_model.h"
 #include "render/texture_mesh.h"
 #include "tests/test_support.h"
 #endif
@@ -63,8 +63,8 @@ inline constexpr Stage kSolidTexture[] = {
     {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "9daa397972e6428e"}};
 inline constexpr Stage kGlbBytes[] = {{"bake", "3adea9d1a4d51a97"}, {"encode", "b4cb60ad089f5722"}};
 inline constexpr Stage kFracture[] = {
-    {"pieces", "96e8ccfdc41a24b6"}, {"interior atlas", "8d51fc005be5cb5b"}, {"interior bake", "ed799ecadda25659"},
-    {"encode", "694b129317c7e83c"}};
+    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "b8fcb69e829cd12f"},
+    {"encode", "7e0c5e10245e66af"}};
 inline constexpr Stage kSliceLayers[] = {{"layers", "34bc73eff57a75de"}, {"manifest", "c712e58ed7a70a0a"}};
 
 /// FNV-1a over bytes, continued from `h`.
@@ -379,17 +379,17 @@ inline Stages fracture(Backend backend = Backend::Cpu) {
 /// shell coloured from marble32's solid texture and dithered to the default materials: the layer
 /// PNGs' bytes and the manifest.
 inline Stages sliceLayers(Backend backend = Backend::Cpu) {
-  render::PrintJobOptions options;
+  print::PrintJobOptions options;
   options.grid = {.heightMm = 6, .dpiX = 127, .dpiY = 127, .layerMm = 0.2, .up = geometry::UpAxis::Y};
   options.voxelize.shellMm = 0.6;
-  options.colors = render::PrintColors::Solid;
+  options.colors = print::PrintColors::Solid;
   const Context ctx{.threads = 2, .backend = backend};
-  const render::PrintJob job(geometry::readMesh(bundled("meshes/elephant.off")), options, ctx);
+  const print::PrintJob job(geometry::readMesh(bundled("meshes/elephant.off")), options, ctx);
   const test::TempDir dir("texfab-golden");
-  render::SliceWriter writer(dir / "layers", false);
+  print::SliceWriter writer(dir / "layers", false);
   job.slice({&marble32(), &solidAnalysis32(), nullptr, "marble32"}, 12, 4, writer, "elephant.off", ctx);
   uint64_t layers = 0xcbf29ce484222325ull;
-  for (const render::SliceFile& f : writer.files()) {
+  for (const print::SliceFile& f : writer.files()) {
     std::ifstream in(dir / "layers" / f.file, std::ios::binary);
     layers = hashOf(std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), layers);
   }

@@ -3,11 +3,11 @@
 // the same colours, a solid outer texture continues into the cuts without a seam, cut faces are
 // the solid texture at their positions, re-cuts texture only their new faces (reusing the cache),
 // results do not depend on threads or runs, the exploded view shows every piece; bad input.
-#include "render/break_model.h"
-#include "render/own_texels.h"
-#include "render/crack_measures.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "render/break/break_model.h"
+#include "render/break/crack_measures.h"
+#include "render/break/own_texels.h"
 #include "render/preview_renderer.h"
 #include "tests/atlas/test_meshes.h"
 
@@ -54,10 +54,12 @@ BreakModelOptions fractureOptions(int pieces, int resolution = 256) {
 
 InteriorExemplar interior() { return {&marble().image, &marble().solid}; }
 
-BrokenModel fracturedSphere(int pieces, bool texturedOutside, const Context& ctx = {}) {
+BrokenModel fracturedSphere(int pieces, bool texturedOutside, const Context& ctx = {}, uint32_t seed = 1) {
   TextureExemplar outer;
   if (texturedOutside) outer.color = &marble().image, outer.solidAnalysis = &marble().solid;
-  return breakModel(makeSphere(32, 16), outer, interior(), fractureOptions(pieces), ctx);
+  BreakModelOptions o = fractureOptions(pieces);
+  o.fracture->seed = seed;
+  return breakModel(makeSphere(32, 16), outer, interior(), o, ctx);
 }
 
 // Mean difference of horizontally adjacent chart texels of the interior atlas: its noise level.
@@ -72,20 +74,30 @@ double interiorNoise(const CutFaceTexture& t) {
   return n ? sum / double(n) : 0;
 }
 
+// The two measures below are over one random fracture each: three seeds, so that a property of the
+// method is tested rather than one draw (over seeds 1-6 the match ratio to unrelated colours was
+// 0.27-0.31 and the seam ratio 0.77-1.15).
 TEST(BreakModel, TheTwoFacesOfACrackShowTheSameColors) {
-  const BrokenModel m = fracturedSphere(6, false);
-  ASSERT_TRUE(m.interior);
-  const CrackMatch match = measureCrackMatch(m);
-  EXPECT_GT(match.samples, 500u);
-  EXPECT_LT(match.difference, 0.3 * match.unrelatedDifference);
-  EXPECT_LT(match.difference, 1.5 * interiorNoise(*m.interior));
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    const BrokenModel m = fracturedSphere(6, false, {}, seed);
+    ASSERT_TRUE(m.interior);
+    const CrackMatch match = measureCrackMatch(m);
+    EXPECT_GT(match.samples, 500u) << "seed " << seed;
+    EXPECT_LT(match.difference, 0.4 * match.unrelatedDifference) << "seed " << seed;
+    EXPECT_LT(match.difference, 1.5 * interiorNoise(*m.interior)) << "seed " << seed;
+  }
 }
 
 TEST(BreakModel, SolidOutsideContinuesIntoTheCuts) {
-  const BrokenModel m = fracturedSphere(5, true);
-  const CrackSeams seams = measureCrackSeams(m);
-  EXPECT_GT(seams.samples, 50u);
-  EXPECT_LE(seams.ratio, 1.1) << "across " << seams.acrossDifference << ", within " << seams.withinDifference;
+  double sum = 0;
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    const CrackSeams seams = measureCrackSeams(fracturedSphere(5, true, {}, seed));
+    EXPECT_GT(seams.samples, 50u) << "seed " << seed;
+    EXPECT_LE(seams.ratio, 1.25) << "seed " << seed << ": across " << seams.acrossDifference << ", within "
+                                 << seams.withinDifference;
+    sum += seams.ratio;
+  }
+  EXPECT_LE(sum / 3, 1.1);
 }
 
 // Several two-thread runs: an order that depends on memory addresses (CGAL's corefinement)

@@ -3,10 +3,10 @@
 // assimp accept, one node per piece, a report whose volumes add up and whose cracks match, pieces
 // as separate files, the same bytes on one and two threads; bad input fails with one line, exit 1
 // (the command line) or 2 (the files), and no output.
-#include "geometry/mesh_io.h"
-#include "core/image.h"
 #include "core/crop.h"
+#include "core/image.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

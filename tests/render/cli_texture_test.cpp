@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // texfab texture end to end on the bundled model: both modes, companion maps, files a real glTF
 // validator accepts, the report's measures; bad input fails with one line and leaves no output.
-#include "geometry/mesh_io.h"
 #include "core/crop.h"
 #include "core/image_io.h"
+#include "geometry/io/mesh_io.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The preview renderer on known scenes, checked by pixel statistics.
-#include "render/mip_pyramid.h"
-#include "render/preview_renderer.h"
 #include "core/error.h"
+#include "core/mip_pyramid.h"
+#include "render/preview_renderer.h"
 #include "tests/geometry/test_meshes.h"
 
 #include <algorithm>

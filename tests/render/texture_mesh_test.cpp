@@ -2,9 +2,9 @@
 // texfab texture's job (atlas/texture_mesh.h) on analytic surfaces: seams, scale, fidelity in
 // exemplar space, orientation by the tangent field, solid mode against the solid synthesizer,
 // determinism, and bad input.
-#include "render/texture_mesh.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "render/texture_mesh.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 #include "tests/atlas/test_meshes.h"

@@ -3,6 +3,7 @@
 // §5.2 is sufficient), the dependency chain of one voxel, and slice quality against baselines.
 #include "core/error.h"
 #include "core/image_io.h"
+#include "solid_test_support.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/cpu/solid_kernels.h"
 #include "synthesis/exemplar_analysis.h"
@@ -10,7 +11,6 @@
 #include "synthesis/refine_solid.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
-#include "solid_test_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

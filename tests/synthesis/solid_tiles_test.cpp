@@ -4,13 +4,13 @@
 // seam across tile faces, slice quality against lazy synthesis and a shuffled image, the cache,
 // and bad input.
 #include "core/error.h"
+#include "core/hash.h"
+#include "solid_test_support.h"
 #include "synthesis/coord_map.h"
-#include "synthesis/hash.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_solid.h"
-#include "solid_test_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

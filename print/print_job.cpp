@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "print/print_job.h"
+
+#include "core/text.h"
+#include "geometry/repair/close_holes.h"
+#include "geometry/repair/orient_mesh.h"
+#include "print/voxel_colors.h"
+#include "render/texture_mesh.h"
+#include "synthesis/refine_solid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+namespace texfab::print {
+
+namespace {
+
+// Threads assumed for the memory estimate when a caller does not say (a large machine's layers in flight).
+constexpr int kEstimateThreads = 16;
+
+// The model coloured by surface synthesis (the texture job's surface mode).
+geometry::Mesh surfaceTextured(const geometry::Mesh& mesh, const PrintExemplar& ex, const PrintJobOptions& o,
+                               const Context& ctx) {
+  if (!ex.surface) throw Error("surface colours need the exemplar's 2-D analysis");
+  render::TextureMeshOptions t;
+  t.atlas.pack.width = t.atlas.pack.height = o.resolution;
+  t.surface.seed = o.seed;
+  t.measure = false;
+  t.textureScale = o.featureSize > 0 ? std::max(ex.color->width, ex.color->height) / o.featureSize : o.textureScale;
+  render::TextureExemplar texture;
+  texture.color = ex.color;
+  texture.analysis = ex.surface;
+  Stage stage(ctx, "surface texture");
+  geometry::Mesh textured = render::textureMesh(mesh, texture, t, stage.inner()).mesh;
+  stage.finish();
+  return textured;
+}
+
+} // namespace
+
+void PrintJobOptions::validate() const {
+  grid.validate();
+  voxelize.validate();
+  slice.validate();
+  solid.validate();
+  if (!(textureScale >= 0) || !(featureSize >= 0) || !std::isfinite(textureScale) || !std::isfinite(featureSize))
+    throw Error("texture scale and feature size must be finite and >= 0");
+  if (textureScale > 0 && featureSize > 0) throw Error("give a texture scale or a feature size, not both");
+  if (resolution < 64 || resolution > 16384) throw Error("the surface atlas must be 64 to 16384 texels a side");
+}
+
+PrintJob::PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Context& ctx)
+    : mesh_(std::move(mesh)), options_(options) {
+  options_.validate();
+  options_.solid.seed = options_.seed;
+  // Wound one way, outward, as texture and fracture do (a flipped triangle is no hole).
+  if (const std::string repair = geometry::describeRepair(geometry::orientMesh(mesh_)); !repair.empty())
+    ctx.warn(repair);
+  if (const geometry::CloseHolesReport holes = geometry::closeHoles(mesh_); holes.holes > 0)
+    ctx.warn("closed " + counted(int64_t(holes.holes), "hole") + " (" +
+             counted(int64_t(holes.boundaryEdges), "boundary edge") + ") with fans of triangles");
+  grid_ = print::printGrid(geometry::boundingBox(mesh_), options_.grid);
+}
+
+double PrintJob::memoryBytes(int threads) const {
+  // A batch's solid voxels are at most its print voxels; refinement's slab is the part that grows.
+  const int64_t batchVoxels = int64_t(grid_.width) * grid_.height * options_.slice.batchLayers;
+  const double refinement = options_.colors == PrintColors::Solid
+                                ? synthesis::refineSolidMemoryBytes(batchVoxels, options_.solid.refinePasses)
+                                : 0.0;
+  return double(sliceMemoryBytes(grid_, options_.slice, threads > 0 ? threads : kEstimateThreads)) + refinement;
+}
+
+PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, SliceWriter& writer,
+                               const std::string& modelName, const Context& ctx) const {
+  const PrintJobOptions& o = options_;
+  if (o.colors != PrintColors::Model && !ex.color) throw Error("textured colours need an exemplar");
+  PrintJobResult result;
+  nlohmann::ordered_json& source = result.source;
+  source["model"] = modelName;
+  geometry::Mesh surface;  // Surface: the model with its synthesized texture
+  std::unique_ptr<VoxelColorSource> colors;
+  const SolidVoxelColors* solid = nullptr;
+  if (o.colors == PrintColors::Solid) {
+    if (!ex.solid) throw Error("solid colours need the exemplar's solid analysis");
+    // Default: one exemplar spans a quarter of the print's height (model units along the up axis).
+    const geometry::BoundingBox box = geometry::boundingBox(mesh_);
+    const double height = std::abs((grid_.rotation * (box.max - box.min).cast<double>()).z());
+    const double span = o.featureSize > 0 ? o.featureSize : height / 4;
+    const double scale = o.textureScale > 0 ? o.textureScale : std::max(ex.color->width, ex.color->height) / span;
+    source["colors"] = {{"mode", "solid"}, {"method", synthesis::toString(o.solid.method)}, {"exemplar", ex.name},
+                        {"seed", o.seed}, {"contrast_gain", o.solid.contrastGain},
+                        {"refine_passes", o.solid.refinePasses}, {"texture_scale", scale}};
+    auto s = std::make_unique<SolidVoxelColors>(*ex.solid, *ex.color, *ex.color, *ex.color, o.solid, scale, grid_);
+    solid = s.get();
+    colors = std::move(s);
+  } else {
+    if (o.colors == PrintColors::Surface) surface = surfaceTextured(mesh_, ex, o, ctx);
+    source["colors"] = o.colors == PrintColors::Surface
+                           ? nlohmann::ordered_json{{"mode", "surface"}, {"exemplar", ex.name}, {"seed", o.seed}}
+                           : nlohmann::ordered_json{{"mode", "model"}};
+    colors = std::make_unique<SurfaceVoxelColors>(o.colors == PrintColors::Surface ? surface : mesh_, grid_,
+                                                  o.voxelize.shellMm);
+  }
+
+  Stage prepare(ctx, "voxelizer");
+  const print::LayerVoxelizer voxelizer(o.colors == PrintColors::Surface ? surface : mesh_, grid_, o.voxelize);
+  for (const std::string& repair : voxelizer.report().repairs) ctx.warn(repair);
+  prepare.finish();
+
+  SliceOptions slice = o.slice;
+  slice.firstLayer = first;
+  slice.layerCount = count;
+  result.slice = sliceModel(voxelizer, *colors, slice, writer, source, ctx);
+  if (solid) result.voxelsRequested = solid->voxelsRequested(), result.voxelsSynthesized = solid->voxelsSynthesized();
+  return result;
+}
+
+} // namespace texfab::render

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The print job (`texfab slice`, texfab.slice in Python): a model made printable (wound outward,
+// holes closed), its print grid, the colour of its voxels (the model's own materials, the solid
+// texture, or a surface synthesized first) and the slices of a layer range (slice_model.h)
+// committed with their manifest. Callers make the exemplar's analyses (through their cache).
+
+#include "core/context.h"
+#include "core/image.h"
+#include "geometry/mesh.h"
+#include "print/print_grid.h"
+#include "print/slice_model.h"
+#include "print/slice_writer.h"
+#include "print/voxelize_layers.h"
+#include "synthesis/exemplar_analysis.h"
+#include "synthesis/solid_analysis.h"
+#include "synthesis/synthesize_solid.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <string>
+
+namespace texfab::print {
+
+enum class PrintColors { Model, Solid, Surface };
+
+struct PrintJobOptions {
+  print::PrintGridOptions grid;
+  print::VoxelizeOptions voxelize;
+  SliceOptions slice;
+  /// Model: the model's own materials; Solid: the solid texture (texfab texture --mode solid);
+  /// Surface: a texture synthesized over the surface first.
+  PrintColors colors = PrintColors::Model;
+  /// Exemplar pixels per model unit; 0 = auto: Solid, an exemplar spans a quarter of the print's
+  /// height (or featureSize, model units one exemplar spans); Surface, the atlas density.
+  double textureScale = 0;
+  double featureSize = 0;
+  uint32_t seed = 1;
+  synthesis::SolidSynthesisOptions solid;  ///< Solid; its seed is `seed`
+  int resolution = 2048;                   ///< Surface: the atlas size
+
+  void validate() const;  ///< throws texfab::Error naming the bad option
+};
+
+/// The exemplar of the Solid and Surface colours, with the analysis that mode needs.
+struct PrintExemplar {
+  const Image* color = nullptr;
+  const synthesis::SolidAnalysis* solid = nullptr;
+  const synthesis::ExemplarAnalysis* surface = nullptr;
+  std::string name;  ///< for the manifest, e.g. the file name
+};
+
+struct PrintJobResult {
+  SliceResult slice;
+  nlohmann::ordered_json source;   ///< the manifest's "print"."source": model and colours
+  int64_t voxelsRequested = 0, voxelsSynthesized = 0;  ///< Solid
+};
+
+class PrintJob {
+public:
+  /// Makes `mesh` printable and lays out its grid; repairs are reported as warnings through ctx.
+  /// Throws texfab::Error on bad options or a mesh with nothing to print.
+  PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Context& ctx = {});
+
+  const print::PrintGrid& grid() const { return grid_; }
+  const geometry::Mesh& mesh() const { return mesh_; }
+  /// Memory the slicing needs at worst with `threads` layers in flight (0: a machine's worth).
+  double memoryBytes(int threads) const;
+  /// Slices layers [first, first + count) (count -1: through the last) into `writer` and commits
+  /// it. `modelName` goes to the manifest. Stages: "surface texture" (Surface), "voxelizer", "slice".
+  PrintJobResult slice(const PrintExemplar& exemplar, int first, int count, SliceWriter& writer,
+                       const std::string& modelName, const Context& ctx = {}) const;
+
+private:
+  geometry::Mesh mesh_;
+  PrintJobOptions options_;
+  print::PrintGrid grid_;
+};
+
+} // namespace texfab::render

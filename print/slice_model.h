@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The slice job (`texfab slice`): a closed model, a source of colour and a set of printer
+// materials in; one image per layer out, each voxel one material (or the continuous colour), for
+// full-colour material-jetting printers.
+//
+// Streaming (after OpenFab, Vidimce et al. 2013, §4): layers go through in batches; a batch is
+// voxelized (inside and shell, per layer), its shell coloured (the solid texture is synthesized
+// for the batch's shell voxels only, in one request), and its layers rendered row by row straight
+// into the PNG encoder, several layers at a time. Memory holds a batch's spans and colours and a
+// few rows per thread, whatever the number of layers.
+//
+// Determinism: every output byte is a function of the inputs and the layer's index alone: inside
+// and shell come from the mesh, colours from the voxel's position, the default dither from a
+// position-based threshold array (DitherMode). A run over any layer range writes exactly the
+// files a full run writes for those layers, whatever the thread count or batch size.
+
+#include "core/context.h"
+#include "core/image.h"
+#include "print/blue_noise.h"
+#include "print/dither_layer.h"
+#include "print/print_materials.h"
+#include "print/slice_writer.h"
+#include "print/voxel_colors.h"
+#include "print/voxelize_layers.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace texfab::print {
+
+/// How layers are written. Indexed: 8-bit palette PNGs, index 0 transparent (empty), index i the
+/// i-th material's colour. VoxelPrint: GrabCAD Voxel Print's conventions as texfab reads them:
+/// 8-bit RGBA PNGs, each material a distinct opaque colour, empty voxels transparent. With
+/// DitherMode::None both write RGBA with the continuous colour.
+enum class SliceFormat { Indexed, VoxelPrint };
+
+struct SliceOptions {
+  int firstLayer = 0;   ///< first layer written, [0, layers)
+  int layerCount = -1;  ///< layers written from firstLayer; -1 = through the last layer
+  DitherMode dither = DitherMode::BlueNoise;
+  SliceFormat format = SliceFormat::Indexed;
+  std::vector<PrintMaterial> materials = defaultPrintMaterials();
+  /// Material of voxels deeper than the shell (found by name, case-insensitive; "white" finds
+  /// VeroWhite).
+  std::string coreMaterial = "white";
+  int blueNoiseSize = 32;  ///< period of the threshold array in voxels; 16, 24, 32, ... 64
+  int batchLayers = 64;    ///< layers per batch; 1-4096. Larger batches synthesize fewer, larger requests
+  bool preview = false;    ///< also render SliceResult::preview
+
+  void validate() const;
+};
+
+/// Where the time went, summed over threads (seconds of CPU), and what was written.
+/// The colour a print shows against the colour asked for, as a person sees it: over blocks of
+/// 16^3 voxels at least half of which are opaque shell voxels, the mean requested colour against
+/// the mean of the materials the dither chose (both in linear light, as the eye mixes them), as
+/// CIEDE2000. Measured in dithered modes only.
+struct PrintColorError {
+  size_t blocks = 0;
+  double mean = 0, p95 = 0, max = 0;  ///< ΔE2000 over the blocks
+};
+
+struct SliceReport {
+  int layers = 0;             ///< layers written
+  PrintColorError colorError;
+  int64_t insideVoxels = 0, shellVoxels = 0;
+  uint64_t bytes = 0;         ///< PNG bytes written
+  double voxelizeSeconds = 0; ///< inside and shell spans (and the blue-noise array, built beside them)
+  double prepareSeconds = 0;  ///< colour source preparation (solid synthesis), wall clock
+  double colorSeconds = 0;    ///< shell colours
+  double ditherSeconds = 0;   ///< material choice and row assembly
+  double encodeSeconds = 0;   ///< PNG encoding
+  double writeSeconds = 0;    ///< checksums and file writes
+  double seconds = 0;         ///< wall clock of the whole job
+};
+
+struct SliceResult {
+  SliceReport report;
+  std::optional<Image> preview;  ///< when SliceOptions::preview
+};
+
+/// The "print" block of the manifest: grid, materials and options (and `source`, a caller's
+/// description of the model and colour source). Equal inputs give equal blocks, so shards of one
+/// print can be checked against each other.
+nlohmann::ordered_json slicePrintInfo(const print::PrintGrid& grid, const SliceOptions& options, double shellMm,
+                                      const nlohmann::ordered_json& source);
+
+/// Memory the job needs beyond its inputs, in bytes, at worst (a layer of noise), for `threads`
+/// layers in flight. Callers refuse prints whose single layers do not fit.
+uint64_t sliceMemoryBytes(const print::PrintGrid& grid, const SliceOptions& options, int threads);
+
+/// Slices the layer range of `options` into `writer` and commits it with the manifest. Stages
+/// reported through ctx: "slice" (advancing per layer written). Throws texfab::Error on bad
+/// options or a failed write (nothing is committed then).
+SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource& colors, const SliceOptions& options,
+                       SliceWriter& writer, const nlohmann::ordered_json& source, const Context& ctx = {});
+
+} // namespace texfab::render

@@ -1,0 +1,236 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The slice job on small prints: a cube with a colour per face (colours before dithering, and
+// dithered 16^3 blocks averaging to them), solid colours equal to the solid synthesizer's, and
+// shards, thread counts and batch sizes that do not change a byte.
+#include "core/image_io.h"
+#include "core/mip_pyramid.h"
+#include "print/print_grid.h"
+#include "print/slice_model.h"
+#include "print/voxel_colors.h"
+#include "print/voxelize_layers.h"
+#include "tests/geometry/solid_meshes.h"
+#include "tests/golden/golden_cases.h"
+#include "tests/test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace texfab::print {
+namespace {
+
+namespace fs = std::filesystem;
+using test::TempDir;
+using print::LayerSpans;
+using print::LayerVoxelizer;
+using print::PrintGrid;
+
+// Linear colours of the six faces (-x, +x, -y, +y, -z, +z): mixes of the default materials, so
+// printable exactly.
+const Eigen::Vector3f kFaceColors[6] = {{0.4f, 1, 1}, {0.5f, 0, 0.5f}, {0.7f, 1, 0.3f},
+                                        {0.6f, 0.6f, 0.6f}, {1, 0.5f, 0.5f}, {0.8f, 0.7f, 1}};
+
+// A 4 mm cube (model units = mm) whose faces carry the colours above (makeBox's face order).
+geometry::Mesh faceColoredCube() {
+  geometry::Mesh m = test::makeBox({0, 0, 0}, {4, 4, 4});
+  for (int f = 0; f < 6; ++f) {
+    geometry::Material material;
+    material.name = "face" + std::to_string(f);
+    material.baseColorFactor << kFaceColors[f], 1.0f;
+    m.materials.push_back(material);
+    m.faceMaterials.insert(m.faceMaterials.end(), 2, uint32_t(f));
+  }
+  return m;
+}
+
+PrintGrid gridFor(const geometry::Mesh& mesh, double pitchMm) {
+  print::PrintGridOptions o;
+  o.mmPerUnit = 1;
+  o.dpiX = o.dpiY = 25.4 / pitchMm;
+  o.layerMm = pitchMm;
+  return print::printGrid(geometry::boundingBox(mesh), o);
+}
+
+std::vector<uint8_t> readBytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Every file of two folders, byte for byte.
+void expectSameFolders(const fs::path& a, const fs::path& b) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(a)) names.push_back(e.path().filename().string());
+  size_t countB = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(b)) ++countB;
+  ASSERT_EQ(names.size(), countB);
+  for (const std::string& name : names) EXPECT_EQ(readBytes(a / name), readBytes(b / name)) << name;
+}
+
+TEST(SliceModel, FaceColorsBeforeDithering) {
+  const geometry::Mesh cube = faceColoredCube();
+  const PrintGrid grid = gridFor(cube, 0.1);
+  const LayerVoxelizer voxelizer(cube, grid);
+  const SurfaceVoxelColors colors(cube, grid, 1.0);
+  int checked = 0;
+  for (int layer : {3, 20, 37}) {
+    const LayerSpans spans = voxelizer.voxelize(layer);
+    for (int r = 0; r < spans.rows(); ++r)
+      for (const print::VoxelSpan& s : spans.row(r)) {
+        if (!s.shell) continue;
+        std::vector<float> rgba(4 * size_t(s.end - s.begin));
+        const int y = grid.height - 1 - r;
+        colors.colors(layer, y, s.begin, s.end, rgba.data());
+        for (int x = s.begin; x < s.end; ++x) {
+          const Eigen::Vector3d p = grid.center(x, y, layer);
+          const double d[6] = {p.x(), 4 - p.x(), p.y(), 4 - p.y(), p.z(), 4 - p.z()};
+          const int face = int(std::min_element(d, d + 6) - d);
+          if (std::count_if(d, d + 6, [&](double v) { return v < d[face] + 0.05; }) > 1) continue;  // near an edge
+          for (int c = 0; c < 3; ++c) ASSERT_EQ(rgba[4 * size_t(x - s.begin) + size_t(c)], kFaceColors[face][c]);
+          ++checked;
+        }
+      }
+  }
+  EXPECT_GT(checked, 3000);
+}
+
+// Mean linear colour of a dithered block of voxels [x0, x0+16) x [y0, y0+16) x the folder's layers.
+Eigen::Vector3f blockMean(const fs::path& folder, int x0, int y0, int height) {
+  Eigen::Vector3f sum(0, 0, 0);
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.path().extension() != ".png") continue;
+    const Image layer = readImage(entry.path());
+    for (int y = y0; y < y0 + 16; ++y)
+      for (int x = x0; x < x0 + 16; ++x, ++n)
+        for (int c = 0; c < 3; ++c) sum[c] += srgbToLinear(layer.at(x, height - 1 - y, c));
+  }
+  EXPECT_EQ(n, 16 * 16 * 16);
+  return sum / float(n);
+}
+
+TEST(SliceModel, DitheredBlocksAverageToTheFaceColors) {
+  // 0.05 mm voxels, 1 mm shell (20 voxels): a 16^3 block against each side face is all shell.
+  const geometry::Mesh cube = faceColoredCube();
+  const PrintGrid grid = gridFor(cube, 0.05);  // 80^3
+  const LayerVoxelizer voxelizer(cube, grid);
+  SurfaceVoxelColors colors(cube, grid, 1.0);
+  for (DitherMode dither : {DitherMode::BlueNoise, DitherMode::FloydSteinberg}) {
+    TempDir dir;
+    SliceOptions o;
+    o.dither = dither;
+    o.firstLayer = 32;
+    o.layerCount = 16;
+    SliceWriter writer(dir / "out", false);
+    sliceModel(voxelizer, colors, o, writer, {});
+    // Blocks against faces -x, +x, -y, +y, in the middle of each.
+    const int blocks[4][2] = {{0, 32}, {64, 32}, {32, 0}, {32, 64}};
+    for (int f = 0; f < 4; ++f) {
+      const Eigen::Vector3f mean = blockMean(dir / "out", blocks[f][0], blocks[f][1], grid.height);
+      EXPECT_LT((mean - kFaceColors[f]).cwiseAbs().maxCoeff(), 0.03f)
+          << (dither == DitherMode::BlueNoise ? "blue noise" : "Floyd-Steinberg") << ", face " << f << ": "
+          << mean.transpose() << " for " << kFaceColors[f].transpose();
+    }
+  }
+}
+
+TEST(SliceModel, SolidColorsAreTheSynthesizersColors) {
+  const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3);
+  const PrintGrid grid = gridFor(sphere, 0.1);
+  const LayerVoxelizer voxelizer(sphere, grid);
+  const double scale = 6.0;  // solid voxels per mm
+  const synthesis::SolidSynthesisOptions options;
+  SolidVoxelColors colors(golden::solidAnalysis32(), golden::marble32(), golden::marble32(), golden::marble32(), options,
+                          scale, grid);
+  const std::vector<LayerSpans> layers = {voxelizer.voxelize(20), voxelizer.voxelize(21)};
+  colors.prepare(layers, {});
+  int checked = 0;
+  for (const LayerSpans& spans : layers)
+    for (int r = 0; r < spans.rows(); r += 7)
+      for (const print::VoxelSpan& s : spans.row(r)) {
+        if (!s.shell) continue;
+        const int y = grid.height - 1 - r;
+        std::vector<float> rgba(4 * size_t(s.end - s.begin));
+        colors.colors(spans.layer, y, s.begin, s.end, rgba.data());
+        for (int x = s.begin; x < s.end; x += 3, ++checked) {
+          const Eigen::Vector3d p = grid.center(x, y, spans.layer) * scale;
+          const synthesis::Voxel v{int64_t(std::floor(p.x())), int64_t(std::floor(p.y())), int64_t(std::floor(p.z()))};
+          const synthesis::SolidSynthesisResult alone = synthesis::synthesizeSolid(golden::solidAnalysis32(), {&v, 1}, options);
+          std::vector<float> color;
+          synthesis::solidColors(alone.triples, golden::marble32(), golden::marble32(), golden::marble32(), color);
+          const size_t channels = color.size();  // 1 for grey exemplars, else 3
+          for (size_t c = 0; c < 3; ++c)
+            ASSERT_EQ(rgba[4 * size_t(x - s.begin) + c], srgbToLinear(color[channels == 1 ? 0 : c]));
+        }
+      }
+  EXPECT_GT(checked, 50);
+}
+
+TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
+  const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3, {0.2f, -0.1f, 0.05f});
+  const PrintGrid grid = gridFor(sphere, 0.1);
+  print::VoxelizeOptions vo;
+  vo.shellMm = 0.5;
+  const LayerVoxelizer voxelizer(sphere, grid, vo);
+  for (DitherMode dither : {DitherMode::BlueNoise, DitherMode::FloydSteinberg}) {
+    TempDir dir;
+    auto run = [&](const fs::path& out, int first, int count, int threads, int batch) {
+      SolidVoxelColors colors(golden::solidAnalysis32(), golden::marble32(), golden::marble32(), golden::marble32(), {},
+                              5.0, grid);
+      SliceOptions o;
+      o.dither = dither;
+      o.firstLayer = first;
+      o.layerCount = count;
+      o.batchLayers = batch;
+      SliceWriter writer(out, false);
+      sliceModel(voxelizer, colors, o, writer, {{"model", "sphere"}}, Context{.threads = threads});
+    };
+    run(dir / "full", 0, -1, 1, 16);
+    const int n = grid.layers;
+    run(dir / "a", 0, 7, 2, 3);
+    run(dir / "b", 7, n / 2 - 7, 2, 16);
+    run(dir / "c", n / 2, n - n / 2, 2, 5);
+    const std::vector<fs::path> shards = {dir / "c", dir / "a", dir / "b"};
+    mergeSliceFolders(shards, dir / "merged", false);
+    expectSameFolders(dir / "full", dir / "merged");
+    // A shard's own files equal the full run's too.
+    EXPECT_EQ(readBytes(dir / "b" / sliceFileName(9, n)), readBytes(dir / "full" / sliceFileName(9, n)));
+  }
+}
+
+TEST(SliceModel, MergeRefusesGapsOverlapsAndOtherPrints) {
+  const geometry::Mesh box = test::makeBox({0, 0, 0}, {1, 1, 1});
+  const PrintGrid grid = gridFor(box, 0.1);
+  const LayerVoxelizer voxelizer(box, grid);
+  SurfaceVoxelColors colors(box, grid, 1.0);
+  TempDir dir;
+  auto run = [&](const fs::path& out, int first, int count, DitherMode dither) {
+    SliceOptions o;
+    o.firstLayer = first;
+    o.layerCount = count;
+    o.dither = dither;
+    SliceWriter writer(out, false);
+    sliceModel(voxelizer, colors, o, writer, {});
+  };
+  run(dir / "a", 0, 4, DitherMode::BlueNoise);
+  run(dir / "b", 4, 6, DitherMode::BlueNoise);
+  run(dir / "c", 3, 7, DitherMode::BlueNoise);
+  run(dir / "d", 4, 6, DitherMode::FloydSteinberg);
+  auto error = [&](std::vector<fs::path> parts) {
+    try {
+      mergeSliceFolders(parts, dir / "merged", false);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error({dir / "a"}).find("end at layer 4 of 10"), std::string::npos);
+  EXPECT_NE(error({dir / "a", dir / "c"}).find("overlap"), std::string::npos);
+  EXPECT_NE(error({dir / "a", dir / "d"}).find("a different print"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "merged"));
+  std::ofstream(dir / "b" / sliceFileName(5, 10), std::ios::app) << "x";
+  EXPECT_NE(error({dir / "a", dir / "b"}).find("checksum"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "merged"));
+}
+
+} // namespace
+} // namespace texfab::print
