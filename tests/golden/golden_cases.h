@@ -18,6 +18,7 @@
 #include "geometry/io/mesh_io.h"
 #include "print/print_job.h"
 #include "render/break/break_model.h"
+#include "render/filter_normal_map.h"
 #include "render/texture_mesh.h"
 #include "tests/test_support.h"
 #endif
@@ -65,6 +66,7 @@ inline constexpr Stage kGlbBytes[] = {{"bake", "3adea9d1a4d51a97"}, {"encode", "
 inline constexpr Stage kFracture[] = {
     {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "b8fcb69e829cd12f"},
     {"encode", "7e0c5e10245e66af"}};
+inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
 inline constexpr Stage kSliceLayers[] = {{"layers", "34bc73eff57a75de"}, {"manifest", "c712e58ed7a70a0a"}};
 
 /// FNV-1a over bytes, continued from `h`.
@@ -398,6 +400,29 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
   return Stages().add("layers", layers).add("manifest", hashOf(manifest));
 }
 
-#endif
 
+/// The normal map of the bundled brick's luminance as a height field, and its NDF fitted per texel
+/// and MIP level (render/filter_normal_map.h, default options): every lobe of every level.
+inline Stages ndfMipChain() {
+  const Image brick = readImage(bundled("exemplars/brick.png"));
+  const int w = brick.width, h = brick.height;
+  const auto height = [&](int x, int y) {
+    x = (x + w) % w, y = (y + h) % h;
+    return 0.2126 * brick.at(x, y, 0) + 0.7152 * brick.at(x, y, 1) + 0.0722 * brick.at(x, y, 2);
+  };
+  Image map(w, h, 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double dx = 4 * (height(x + 1, y) - height(x - 1, y)), dy = 4 * (height(x, y + 1) - height(x, y - 1));
+      const double length = std::sqrt(dx * dx + dy * dy + 1);
+      map.at(x, y, 0) = float((1 - dx / length) / 2), map.at(x, y, 1) = float((1 - dy / length) / 2);
+      map.at(x, y, 2) = float((1 + 1 / length) / 2);
+    }
+  const render::NdfMipChain chain = render::filterNormalMap(map, {}, Context{.threads = 2});
+  uint64_t lobes = 0xcbf29ce484222325ull;
+  for (const render::NdfLevel& l : chain.levels) lobes = hashOf(l.lobes, lobes);
+  return Stages().add("normal map", hashOf(map.pixels)).add("lobes", lobes);
+}
+
+#endif
 } // namespace texfab::golden

@@ -27,6 +27,7 @@ TEST(Golden, SolidTexture) { expectStages(solidTexture(), kSolidTexture); }
 TEST(Golden, GlbBytes) { expectStages(glbBytes(), kGlbBytes); }
 TEST(Golden, Fracture) { expectStages(fracture(), kFracture); }
 TEST(Golden, SliceLayers) { expectStages(sliceLayers(), kSliceLayers); }
+TEST(Golden, NdfMipChain) { expectStages(ndfMipChain(), kNdfMipChain); }
 #endif
 
 } // namespace
