@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -26,6 +27,53 @@ constexpr float kPi = std::numbers::pi_v<float>;
 // Counter-based random numbers in [0, 1): a pure function of (pixel, sample, dimension).
 float hashUnit(uint32_t x, uint32_t y, uint32_t s, uint32_t d) {
   return float(counterHash(x, y, s, d) >> 8) * (1.0f / 16777216.0f);
+}
+
+// A lobe of a normal distribution in world space.
+struct WorldLobe {
+  Vector3f axis;
+  float sharpness, weight;
+};
+
+// The most lobes a footprint gathers: 4 texels of 2 levels, 8 lobes each.
+constexpr int kMaxFootprintLobes = 2 * 4 * 8;
+
+// Adds to `lobes` the normal distribution under a footprint of mip level `lod` > 0 around texture
+// coordinates `uv` (wrapping; v up): the texels of the two levels around `lod`, weighted as
+// trilinear filtering weighs them (Han et al. shade the 8 texels and interpolate; their lobes
+// together are that distribution). Below level 1 the finer side is the bilinear mapped normal
+// `mapped`, one sharp lobe. `frame` is (tangent, bitangent, normal).
+void addLobes(std::array<WorldLobe, kMaxFootprintLobes>& lobes, int& count, const NdfMipChain& chain, const Vector2f& uv, float lod,
+              float normalScale, const std::array<Vector3f, 3>& frame, const Vector3f& mapped) {
+  const int top = int(chain.levels.size()) - 1;
+  const int fine = std::min(int(std::floor(lod)), top), coarse = std::min(fine + 1, top);
+  const float f = fine == coarse ? 0.0f : lod - std::floor(lod);
+  const auto add = [&](int level, float weight) {
+    if (!(weight > 0)) return;
+    if (level == 0) {
+      if (mapped.squaredNorm() > 1e-12f) lobes[size_t(count++)] = {mapped.normalized(), kMaxVmfSharpness, weight};
+      return;
+    }
+    const NdfLevel& l = chain.levels[size_t(level)];
+    const float fx = (uv.x() - std::floor(uv.x())) * float(l.width) - 0.5f;
+    const float fy = (1 - (uv.y() - std::floor(uv.y()))) * float(l.height) - 0.5f;
+    const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+    const float sx = fx - float(x0), sy = fy - float(y0);
+    for (int k = 0; k < 4; ++k) {
+      const int dx = k & 1, dy = k >> 1;
+      const float w = weight * (dx ? sx : 1 - sx) * (dy ? sy : 1 - sy);
+      if (!(w > 0)) continue;
+      const int x = ((x0 + dx) % l.width + l.width) % l.width, y = ((y0 + dy) % l.height + l.height) % l.height;
+      for (const VmfLobe& lobe : l.texel(x, y)) {
+        if (!(lobe.weight > 0)) continue;
+        const Vector3f a = lobe.axis();
+        const Vector3f world = normalScale * a.x() * frame[0] + normalScale * a.y() * frame[1] + a.z() * frame[2];
+        if (world.squaredNorm() > 1e-12f) lobes[size_t(count++)] = {world.normalized(), lobe.sharpness(), w * lobe.weight};
+      }
+    }
+  };
+  add(fine, 1 - f);
+  add(coarse, f);
 }
 
 // An orthonormal basis around n.
@@ -67,7 +115,8 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
     return it->second;
   };
   for (const geometry::Material& m : mesh.materials)
-    maps_.push_back({pyramid(m.baseColorTexture, true), pyramid(m.metallicRoughnessTexture, false), pyramid(m.normalTexture, false)});
+    maps_.push_back({pyramid(m.baseColorTexture, true), pyramid(m.metallicRoughnessTexture, false),
+                     pyramid(m.normalTexture, false), {}});
   if (mesh.hasUvs()) {
     uvDensity_.resize(mesh.triangleCount());
     for (size_t t = 0; t < mesh.triangleCount(); ++t) {
@@ -80,6 +129,41 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
 }
 
 PreviewRenderer::~PreviewRenderer() = default;
+
+namespace {
+
+// Whether filtering a material's normal map can show: not on a rough dielectric (metallic 0,
+// roughness >= 0.7 everywhere), whose highlight is too broad and too weak (4 % reflectance) for
+// the spread of its normals to change it visibly.
+bool highlightNeedsFiltering(const geometry::Material& m, const MipPyramid& metallicRoughness) {
+  float metallic = m.metallicFactor, roughness = m.roughnessFactor;
+  if (!metallicRoughness.empty()) {
+    const Image& level = metallicRoughness.levels[0];
+    float minRoughness = 1, maxMetallic = 0;
+    for (int y = 0; y < level.height; ++y)
+      for (int x = 0; x < level.width; ++x)
+        minRoughness = std::min(minRoughness, level.at(x, y, 1)), maxMetallic = std::max(maxMetallic, level.at(x, y, 2));
+    metallic *= maxMetallic, roughness *= minRoughness;
+  }
+  return metallic > 0 || roughness < 0.7f;
+}
+
+} // namespace
+
+void PreviewRenderer::filterNormalMaps(const Context& ctx) const {
+  std::call_once(filtered_, [&] {
+    std::map<const Image*, std::shared_ptr<const NdfMipChain>> distributions;
+    for (size_t i = 0; i < maps_.size(); ++i) {
+      const geometry::Texture& t = mesh_.materials[i].normalTexture;
+      if (maps_[i].normal.empty() || t.image->channels < 3) continue;
+      if (!highlightNeedsFiltering(mesh_.materials[i], maps_[i].metallicRoughness)) continue;
+      auto it = distributions.find(t.image.get());
+      if (it == distributions.end())
+        it = distributions.emplace(t.image.get(), std::make_shared<const NdfMipChain>(filterNormalMap(*t.image, {}, ctx))).first;
+      maps_[i].normalDistribution = it->second;
+    }
+  });
+}
 
 Vector3f frontFor(const Vector3f& up) {
   const Vector3f u = up.normalized();
@@ -178,6 +262,10 @@ struct PreviewRenderer::Surface {
   const geometry::Material* material = nullptr;
   Vector4f base;     ///< base colour (linear) and alpha, textures applied
   float metallic = 0, roughness = 0;
+  /// Where a normal map is minified: the normal distribution under the sample's footprint, as
+  /// lobes in world space (those of the two nearest NDF levels, weighted), for the highlight.
+  std::array<WorldLobe, kMaxFootprintLobes> lobes;
+  int lobeCount = 0;
 };
 
 namespace {
@@ -205,6 +293,7 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
   if (!(o.fovYDegrees > 1 && o.fovYDegrees < 170)) throw Error("render: field of view must be in (1, 170) degrees");
   if (!(o.up.allFinite() && o.up.norm() > 0)) throw Error("render: the up direction must be a non-zero vector");
   if (!(o.margin > 0.01f && o.margin < 100)) throw Error("render: margin must be in (0.01, 100)");
+  if (o.filterNormalMaps) filterNormalMaps(ctx);
   const View view(o, mesh_, scene_.bounds());
   Image out(o.width, o.height, o.transparentBackground ? 4 : 3, PixelFormat::UInt8);
   parallelFor(0, o.height, ctx, [&](int y0, int y1) {
@@ -282,13 +371,14 @@ PreviewRenderer::Surface PreviewRenderer::surfaceAt(const View& view, const geom
     const Vector2f uv = w * mesh_.uvs[3 * t] + u * mesh_.uvs[3 * t + 1] + v * mesh_.uvs[3 * t + 2];
     const float cosTheta = std::max(std::abs(f.ng.dot(dir)), 0.05f);
     const float footprint = hit.distance * view.pixelSpread / std::sqrt(cosTheta);
-    auto lookup = [&](const MipPyramid& pyramid, const geometry::Texture& texture) -> Vector4f {
-      const Image& level0 = pyramid.levels[0];
+    auto lodOf = [&](const Image& level0, const geometry::Texture& texture) {
       const float texels = footprint * uvDensity_[t] * std::sqrt(float(level0.width) * float(level0.height)) *
                            std::sqrt(std::abs(texture.scale.x() * texture.scale.y()));
-      const float lod = std::log2(std::max(texels, 1e-8f)) + view.lodBias;
+      return std::log2(std::max(texels, 1e-8f)) + view.lodBias;
+    };
+    auto lookup = [&](const MipPyramid& pyramid, const geometry::Texture& texture) -> Vector4f {
       const Vector2f tuv = texture.apply(uv);
-      return sampleTrilinear(pyramid, tuv.x(), tuv.y(), lod);
+      return sampleTrilinear(pyramid, tuv.x(), tuv.y(), lodOf(pyramid.levels[0], texture));
     };
     if (!maps.baseColor.empty()) f.base = f.base.cwiseProduct(lookup(maps.baseColor, material.baseColorTexture));
     if (!maps.metallicRoughness.empty()) {
@@ -305,6 +395,12 @@ PreviewRenderer::Surface PreviewRenderer::surfaceAt(const View& view, const geom
         const Vector4f m = lookup(maps.normal, material.normalTexture);
         const Vector3f local(material.normalScale * (2 * m.x() - 1), material.normalScale * (2 * m.y() - 1), 2 * m.z() - 1);
         const Vector3f mapped = local.x() * tangent + local.y() * bitangent + local.z() * n;
+        if (view.o.filterNormalMaps && maps.normalDistribution) {
+          const float lod = lodOf(maps.normal.levels[0], material.normalTexture);
+          if (lod > 0)
+            addLobes(f.lobes, f.lobeCount, *maps.normalDistribution, material.normalTexture.apply(uv), lod,
+                     material.normalScale, {tangent, bitangent, n}, mapped);
+        }
         if (mapped.squaredNorm() > 1e-12f) n = mapped.normalized();
       }
     }
@@ -333,8 +429,22 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
       const Vector3f h = (view.light - dir).normalized();
       const float alpha = roughness * roughness;
       const float shininess = std::max(2.0f / (alpha * alpha) - 2.0f, 1.0f);
-      const float spec = (shininess + 8) / (8 * kPi) * std::pow(std::max(n.dot(h), 0.0f), shininess);
-      color += kKeyColor.cwiseProduct(0.32f * diffuse + 0.32f * spec * f0) * nl;
+      // Normalized Blinn-Phong at the normal, or over the footprint's normal distribution: each lobe
+      // convolved with it (s' = κs / (κ + s), Han et al. 2007, Eq. 7.20) at its own cosine.
+      const auto blinnPhong = [](const Vector3f& normal, const Vector3f& half, float exponent) {
+        return (exponent + 8) / (8 * kPi) * std::pow(std::max(normal.dot(half), 0.0f), exponent);
+      };
+      float specular = 0;
+      if (f.lobeCount == 0) {
+        specular = blinnPhong(n, h, shininess) * nl;
+      } else {
+        for (int j = 0; j < f.lobeCount; ++j) {
+          const WorldLobe& l = f.lobes[size_t(j)];
+          const float exponent = l.sharpness * shininess / (l.sharpness + shininess);
+          specular += l.weight * blinnPhong(l.axis, h, exponent) * std::max(0.0f, l.axis.dot(view.light));
+        }
+      }
+      color += kKeyColor.cwiseProduct(0.32f * diffuse * nl + 0.32f * specular * f0);
     }
   }
   // A weak fill light from the camera, never shadowed: faces in deep gaps (the cut faces of

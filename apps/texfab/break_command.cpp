@@ -102,7 +102,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   f.modelOutput(job.write);
   f.text("--preview", job.preview, "Also render the pieces, exploded, to this image");
   f.size("--preview-size", job.previewOptions.width, job.previewOptions.height, "Preview size", {1, 16384});
-  f.camera(job.previewOptions.azimuthDegrees, job.previewOptions.elevationDegrees);
+  f.camera(job.previewOptions);
   f.up(job.up);
   f.common(job.common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
 }

@@ -219,10 +219,15 @@ CLI::Option* Flags::up(UpChoice& axis) {
                 "stand the model on it and look at its front; a 3MF output builds along it");
 }
 
-void Flags::camera(float& azimuthDegrees, float& elevationDegrees) {
-  option("--azimuth", azimuthDegrees, "Camera angle around the up axis, degrees (0 = from the model's front)",
+void Flags::camera(render::RenderOptions& o) {
+  option("--azimuth", o.azimuthDegrees, "Camera angle around the up axis, degrees (0 = from the model's front)",
          {-3600, 3600});
-  option("--elevation", elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
+  option("--elevation", o.elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
+  app_->add_flag_function(
+      "--no-ndf-filtering", [&o](int64_t) { o.filterNormalMaps = false; },
+      "Shade normal maps seen from afar from their MIP-mapped normals (bumps then look flat and shiny) instead "
+      "of their filtered normal distributions (Han et al. 2007: about 3-5 s more for a 1024^2 normal map on a "
+      "glossy or metallic material)");
 }
 
 void Flags::modelOutput(geometry::MeshWriteOptions& o) {

@@ -26,6 +26,7 @@
 #include "core/files.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/up_axis.h"
+#include "render/preview_renderer.h"
 #include "synthesis/analyze_exemplar.h"
 
 #include <CLI/CLI.hpp>
@@ -172,8 +173,8 @@ public:
                     bool powerOfTwo = false, bool allowAuto = false);
   /// --up, the model's up axis for previews.
   CLI::Option* up(UpChoice& axis);
-  /// --azimuth and --elevation: where a preview's camera stands (render::RenderOptions).
-  void camera(float& azimuthDegrees, float& elevationDegrees);
+  /// --azimuth and --elevation, where a preview's camera stands, and --no-ndf-filtering.
+  void camera(render::RenderOptions& o);
   /// The common flags the command takes (Common::Threads | ...).
   void common(CommonFlags& flags, unsigned which);
   /// How a written model stores its geometry and textures: --draco, --texture-format,

@@ -91,7 +91,7 @@ Command addRenderCommand(CLI::App& root) {
       ->required();
   f.size("--size", o.width, o.height, "Image size", {1, 16384});
   f.up(job->up);
-  f.camera(o.azimuthDegrees, o.elevationDegrees);
+  f.camera(o);
   f.option("--turntable", job->turntable, "Render N views evenly around the model instead of one", {0, 3600})
       ->default_str("");
   f.option("--spp", o.samplesPerPixel, "Samples per pixel (antialiasing; rounded down to a square)", {1, 4096});

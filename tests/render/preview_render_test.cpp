@@ -4,6 +4,7 @@
 #include "core/mip_pyramid.h"
 #include "render/preview_renderer.h"
 #include "tests/geometry/test_meshes.h"
+#include "tests/render/test_normal_maps.h"
 
 #include <algorithm>
 #include <cmath>
@@ -159,6 +160,58 @@ TEST(PreviewRenderer, NormalMapsChangeShadingAndFlatMapsDoNot) {
   EXPECT_NEAR(flat, none, 0.01);
   EXPECT_LT(right, none - 0.03);
   EXPECT_GT(left, none + 0.01);
+}
+
+// A bumpy, glossy metal quad seen from afar (its normal map minified about 16x): highlights shaded
+// from the filtered normal distributions stay as rough as the bumps make them, and are closer to
+// the supersampled truth (1024 samples per pixel, full-resolution normals) than MIP-mapped normals,
+// at one sample per pixel.
+TEST(PreviewRenderer, FilteredNormalMapsAreCloserToTheSupersampledTruth) {
+  for (const test::TestMap& m : test::testMaps(128)) {
+    Mesh quad = texturedQuad(solid(0.9f, 0.9f, 0.9f));
+    quad.materials[0].metallicFactor = 1.0f;
+    quad.materials[0].roughnessFactor = 0.3f;
+    quad.materials[0].normalTexture.image = std::make_shared<Image>(m.map);
+    quad.materials[0].normalTexture.scale = {8, 8};
+    const auto render = [&](bool filter, int spp) {
+      RenderOptions o = frontView(64);
+      o.aoSamples = 0, o.shadows = false, o.samplesPerPixel = spp, o.filterNormalMaps = filter;
+      return PreviewRenderer(quad).render(o);
+    };
+    const Image truth = render(false, 1024);
+    const auto rms = [&](const Image& image) {
+      double sum = 0;
+      size_t n = 0;
+      for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+          if (image.at(x, y, 3) == 1 && truth.at(x, y, 3) == 1)
+            for (int c = 0; c < 3; ++c, ++n) sum += std::pow(image.at(x, y, c) - truth.at(x, y, c), 2);
+      return std::sqrt(sum / double(std::max<size_t>(n, 1)));
+    };
+    const double mip = rms(render(false, 1)), filtered = rms(render(true, 1));
+    std::printf("%-14s RMS against 1024 spp: MIP-mapped normals %.4f, filtered %.4f (%.1fx)\n", m.name.c_str(), mip,
+                filtered, mip / filtered);
+    EXPECT_LT(1.5 * filtered, mip) << m.name;
+  }
+}
+
+// A rough dielectric's weak, broad highlight cannot show its normals' spread: no filtering, the
+// same image; a glossy metal's does.
+TEST(PreviewRenderer, RoughDielectricsAreNotFiltered) {
+  Mesh quad = texturedQuad(solid(0.9f, 0.9f, 0.9f));
+  quad.materials[0].normalTexture.image = std::make_shared<Image>(test::testMaps(64)[0].map);
+  quad.materials[0].normalTexture.scale = {8, 8};
+  const auto differs = [&](float metallic, float roughness) {
+    quad.materials[0].metallicFactor = metallic, quad.materials[0].roughnessFactor = roughness;
+    RenderOptions o = frontView(32);
+    o.aoSamples = 0;
+    const Image filtered = PreviewRenderer(quad).render(o);
+    o.filterNormalMaps = false;
+    return filtered.pixels != PreviewRenderer(quad).render(o).pixels;
+  };
+  EXPECT_FALSE(differs(0.0f, 0.8f));
+  EXPECT_TRUE(differs(1.0f, 0.3f));
+  EXPECT_TRUE(differs(0.0f, 0.3f));
 }
 
 TEST(MipPyramid, LevelsAverageInLinearLight) {
