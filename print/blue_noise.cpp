@@ -174,4 +174,4 @@ BlueNoiseVolume blueNoiseVolume(int size, const Eigen::Vector3d& pitch) {
   return out;
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

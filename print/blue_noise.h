@@ -43,4 +43,4 @@ struct BlueNoiseVolume {
 /// 0.5 s of CPU at size 32.
 BlueNoiseVolume blueNoiseVolume(int size, const Eigen::Vector3d& pitch);
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -81,4 +81,4 @@ double deltaE2000(const Lab& p, const Lab& q) {
   return std::sqrt(l * l + c * c + h * h + rT * c * h);
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -25,4 +25,4 @@ std::array<double, 3> linearSrgbFromLabD50(const Lab& lab);
 /// CIEDE2000 (kL = kC = kH = 1): about 1 is the smallest difference a person notices side by side.
 double deltaE2000(const Lab& a, const Lab& b);
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -96,4 +96,4 @@ void LayerDitherer::diffuseRow(std::span<const print::VoxelSpan> row, const floa
   std::fill(nextError_.begin(), nextError_.end(), 0.0f);
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

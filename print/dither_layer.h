@@ -52,4 +52,4 @@ private:
   std::vector<float> thresholds_;         // blue noise: the thresholds of this row's cells of the array
 };
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -99,4 +99,4 @@ double visibleError(const DitherBox& box, std::span<const float> dithered, std::
   return std::sqrt(sum / double(diff.size()));
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -42,4 +42,4 @@ BlockColorError blockColorError(const DitherBox& box, std::span<const float> dit
 double visibleError(const DitherBox& box, std::span<const float> dithered, std::span<const float> reference,
                     bool vertical, int index, double sigmaMm = 0.1);
 
-} // namespace texfab::render
+} // namespace texfab::print

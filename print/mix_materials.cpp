@@ -179,4 +179,4 @@ int MaterialMixer::nearest(const float rgb[3]) const {
   return best;
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

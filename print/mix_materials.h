@@ -65,4 +65,4 @@ private:
   std::vector<float> table_;                   // kLattice^3 x opaque_.size() fractions
 };
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -215,4 +215,4 @@ std::vector<uint8_t> PngRowEncoder::finish() {
   return png;
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -55,4 +55,4 @@ private:
   uint32_t adlerA_ = 1, adlerB_ = 0;
 };
 
-} // namespace texfab::render
+} // namespace texfab::print

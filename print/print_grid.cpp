@@ -90,4 +90,4 @@ PrintGrid printGrid(const geometry::BoundingBox& box, const PrintGridOptions& o)
   return g;
 }
 
-} // namespace texfab::geometry
+} // namespace texfab::print

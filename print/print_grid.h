@@ -71,4 +71,4 @@ inline constexpr int kMaxPrintPixels = 1 << 20;
 /// kMaxPrintPixels per side.
 PrintGrid printGrid(const geometry::BoundingBox& box, const PrintGridOptions& options);
 
-} // namespace texfab::geometry
+} // namespace texfab::print

@@ -77,8 +77,9 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
   const PrintJobOptions& o = options_;
   if (o.colors != PrintColors::Model && !ex.color) throw Error("textured colours need an exemplar");
   PrintJobResult result;
-  nlohmann::ordered_json& source = result.source;
-  source["model"] = modelName;
+  PrintSource& source = result.source;
+  source.model = modelName;
+  source.colors = o.colors;
   geometry::Mesh surface;  // Surface: the model with its synthesized texture
   std::unique_ptr<VoxelColorSource> colors;
   const SolidVoxelColors* solid = nullptr;
@@ -89,17 +90,14 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
     const double height = std::abs((grid_.rotation * (box.max - box.min).cast<double>()).z());
     const double span = o.featureSize > 0 ? o.featureSize : height / 4;
     const double scale = o.textureScale > 0 ? o.textureScale : std::max(ex.color->width, ex.color->height) / span;
-    source["colors"] = {{"mode", "solid"}, {"method", synthesis::toString(o.solid.method)}, {"exemplar", ex.name},
-                        {"seed", o.seed}, {"contrast_gain", o.solid.contrastGain},
-                        {"refine_passes", o.solid.refinePasses}, {"texture_scale", scale}};
+    source.exemplar = ex.name, source.seed = o.seed, source.method = o.solid.method;
+    source.contrastGain = o.solid.contrastGain, source.refinePasses = o.solid.refinePasses, source.textureScale = scale;
     auto s = std::make_unique<SolidVoxelColors>(*ex.solid, *ex.color, *ex.color, *ex.color, o.solid, scale, grid_);
     solid = s.get();
     colors = std::move(s);
   } else {
     if (o.colors == PrintColors::Surface) surface = surfaceTextured(mesh_, ex, o, ctx);
-    source["colors"] = o.colors == PrintColors::Surface
-                           ? nlohmann::ordered_json{{"mode", "surface"}, {"exemplar", ex.name}, {"seed", o.seed}}
-                           : nlohmann::ordered_json{{"mode", "model"}};
+    if (o.colors == PrintColors::Surface) source.exemplar = ex.name, source.seed = o.seed;
     colors = std::make_unique<SurfaceVoxelColors>(o.colors == PrintColors::Surface ? surface : mesh_, grid_,
                                                   o.voxelize.shellMm);
   }
@@ -117,4 +115,4 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
   return result;
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -23,8 +23,6 @@
 
 namespace texfab::print {
 
-enum class PrintColors { Model, Solid, Surface };
-
 struct PrintJobOptions {
   print::PrintGridOptions grid;
   print::VoxelizeOptions voxelize;
@@ -53,7 +51,7 @@ struct PrintExemplar {
 
 struct PrintJobResult {
   SliceResult slice;
-  nlohmann::ordered_json source;   ///< the manifest's "print"."source": model and colours
+  PrintSource source;  ///< as the manifest records it
   int64_t voxelsRequested = 0, voxelsSynthesized = 0;  ///< Solid
 };
 
@@ -78,4 +76,4 @@ private:
   print::PrintGrid grid_;
 };
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -144,4 +144,4 @@ size_t findPrintMaterial(const std::vector<PrintMaterial>& materials, const std:
   throw Error("no material named '" + name + "' (materials: " + known + ")");
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

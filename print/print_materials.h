@@ -45,4 +45,4 @@ size_t findPrintMaterial(const std::vector<PrintMaterial>& materials, const std:
 /// "#RRGGBB".
 std::string hexColor(const Rgba8& color);
 
-} // namespace texfab::render
+} // namespace texfab::print

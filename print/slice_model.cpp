@@ -213,8 +213,23 @@ void SliceOptions::validate() const {
                       hexColor(materials[i].color) + ": Voxel Print tells materials apart by colour");
 }
 
-nlohmann::ordered_json slicePrintInfo(const print::PrintGrid& g, const SliceOptions& o, double shellMm,
-                                      const nlohmann::ordered_json& source) {
+namespace {
+
+nlohmann::ordered_json sourceJson(const PrintSource& s) {
+  nlohmann::ordered_json colors;
+  switch (s.colors) {
+  case PrintColors::Model: colors = {{"mode", "model"}}; break;
+  case PrintColors::Solid:
+    colors = {{"mode", "solid"}, {"method", synthesis::toString(s.method)}, {"exemplar", s.exemplar}, {"seed", s.seed},
+              {"contrast_gain", s.contrastGain}, {"refine_passes", s.refinePasses}, {"texture_scale", s.textureScale}};
+    break;
+  case PrintColors::Surface: colors = {{"mode", "surface"}, {"exemplar", s.exemplar}, {"seed", s.seed}}; break;
+  }
+  return {{"model", s.model}, {"colors", colors}};
+}
+
+// The manifest's "print" block.
+nlohmann::ordered_json printInfo(const print::PrintGrid& g, const SliceOptions& o, double shellMm, const PrintSource& source) {
   nlohmann::ordered_json materials = nlohmann::ordered_json::array();
   for (size_t i = 0; i < o.materials.size(); ++i)
     materials.push_back({{"index", i + 1}, {"name", o.materials[i].name}, {"color", hexColor(o.materials[i].color)},
@@ -238,9 +253,11 @@ nlohmann::ordered_json slicePrintInfo(const print::PrintGrid& g, const SliceOpti
   info["dither"] = ditherName(o.dither);
   if (o.dither == DitherMode::BlueNoise) info["blue_noise_period"] = o.blueNoiseSize;
   info["format"] = o.format == SliceFormat::Indexed ? "png-indexed" : "voxelprint";
-  info["source"] = source;
+  info["source"] = sourceJson(source);
   return info;
 }
+
+} // namespace
 
 uint64_t sliceMemoryBytes(const print::PrintGrid& g, const SliceOptions& o, int threads) {
   const int channels = o.dither == DitherMode::None || o.format == SliceFormat::VoxelPrint ? 4 : 1;
@@ -252,7 +269,7 @@ uint64_t sliceMemoryBytes(const print::PrintGrid& g, const SliceOptions& o, int 
 }
 
 SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource& colors, const SliceOptions& o,
-                       SliceWriter& writer, const nlohmann::ordered_json& source, const Context& ctx) {
+                       SliceWriter& writer, const PrintSource& source, const Context& ctx) {
   o.validate();
   const print::PrintGrid& g = voxelizer.grid();
   if (o.firstLayer >= g.layers)
@@ -314,7 +331,7 @@ SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource&
     if (mixer)
       for (int i = 0; i < n; ++i) tally.add(batch + i, sums[size_t(i)]);
   }
-  writer.commit(slicePrintInfo(g, o, voxelizer.options().shellMm, source), o.firstLayer, count, g.layers);
+  writer.commit(printInfo(g, o, voxelizer.options().shellMm, source), o.firstLayer, count, g.layers);
   SliceReport& r = result.report;
   r.layers = count;
   r.colorError = tally.finish();
@@ -333,4 +350,4 @@ SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource&
   return result;
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

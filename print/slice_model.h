@@ -84,11 +84,18 @@ struct SliceResult {
   std::optional<Image> preview;  ///< when SliceOptions::preview
 };
 
-/// The "print" block of the manifest: grid, materials and options (and `source`, a caller's
-/// description of the model and colour source). Equal inputs give equal blocks, so shards of one
-/// print can be checked against each other.
-nlohmann::ordered_json slicePrintInfo(const print::PrintGrid& grid, const SliceOptions& options, double shellMm,
-                                      const nlohmann::ordered_json& source);
+/// Where a print's colours come from, as its manifest records them ("print"."source").
+enum class PrintColors { Model, Solid, Surface };
+struct PrintSource {
+  std::string model;                        ///< the model's name (e.g. its file name)
+  PrintColors colors = PrintColors::Model;  ///< Model: the model's own materials
+  std::string exemplar;                     ///< Solid and Surface: its name
+  uint32_t seed = 0;                        ///< Solid and Surface
+  synthesis::SolidMethod method = synthesis::SolidMethod::Lazy;  ///< Solid
+  float contrastGain = 0;                   ///< Solid
+  int refinePasses = 0;                     ///< Solid
+  double textureScale = 0;                  ///< Solid: voxels per model unit used
+};
 
 /// Memory the job needs beyond its inputs, in bytes, at worst (a layer of noise), for `threads`
 /// layers in flight. Callers refuse prints whose single layers do not fit.
@@ -97,7 +104,10 @@ uint64_t sliceMemoryBytes(const print::PrintGrid& grid, const SliceOptions& opti
 /// Slices the layer range of `options` into `writer` and commits it with the manifest. Stages
 /// reported through ctx: "slice" (advancing per layer written). Throws texfab::Error on bad
 /// options or a failed write (nothing is committed then).
+/// The manifest's "print" block (grid, materials, options and `source`) is written from the
+/// arguments: equal inputs give equal blocks, so shards of one print can be checked against each
+/// other (mergeSliceFolders).
 SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource& colors, const SliceOptions& options,
-                       SliceWriter& writer, const nlohmann::ordered_json& source, const Context& ctx = {});
+                       SliceWriter& writer, const PrintSource& source, const Context& ctx = {});
 
-} // namespace texfab::render
+} // namespace texfab::print

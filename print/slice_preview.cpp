@@ -196,4 +196,4 @@ Image SlicePreview::compose() const {
   return canvas;
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -50,4 +50,4 @@ private:
   std::array<std::vector<float>, 4> thumbs_; // RGB sums per thumbnail pixel (+ count)
 };
 
-} // namespace texfab::render
+} // namespace texfab::print

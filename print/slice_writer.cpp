@@ -186,4 +186,4 @@ void mergeSliceFolders(std::span<const fs::path> shards, const fs::path& output,
   writer.commit(reference["print"], 0, total, total);
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -82,4 +82,4 @@ nlohmann::ordered_json readSliceManifest(const std::filesystem::path& folder);
 /// fault.
 void mergeSliceFolders(std::span<const std::filesystem::path> shards, const std::filesystem::path& output, bool force);
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -173,4 +173,4 @@ void SurfaceVoxelColors::colors(int layer, int y, int begin, int end, float* rgb
   }
 }
 
-} // namespace texfab::render
+} // namespace texfab::print

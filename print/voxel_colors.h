@@ -87,4 +87,4 @@ private:
   std::vector<float> lod_;             // per triangle: mip level of a voxel-sized footprint
 };
 
-} // namespace texfab::render
+} // namespace texfab::print

@@ -458,4 +458,4 @@ LayerSpans LayerVoxelizer::voxelize(int layer) const {
   return spans;
 }
 
-} // namespace texfab::geometry
+} // namespace texfab::print

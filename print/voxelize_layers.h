@@ -91,4 +91,4 @@ private:
   std::unique_ptr<Impl> impl_;
 };
 
-} // namespace texfab::geometry
+} // namespace texfab::print

@@ -125,10 +125,7 @@ void runSlice(SliceJob& job) {
              counted(int64_t(ce.blocks), "block") + " of 16³ voxels");
 
   nlohmann::json& report = run.report();
-  print::SliceOptions sliced = o.slice;
-  sliced.firstLayer = first;
-  sliced.layerCount = count;
-  report["print"] = nlohmann::json::parse(print::slicePrintInfo(grid, sliced, o.voxelize.shellMm, result.source).dump());
+  report["print"] = nlohmann::json::parse(print::readSliceManifest(job.output)["print"].dump());  // as the manifest has it
   report["layers"] = {{"first", first}, {"count", count}, {"total", grid.layers}};
   report["voxels"] = {{"inside", r.insideVoxels}, {"shell", r.shellVoxels}, {"per_layer", grid.voxelsPerLayer()}};
   if (o.colors == print::PrintColors::Solid)

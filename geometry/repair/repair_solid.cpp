@@ -13,6 +13,8 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <map>
 
@@ -147,10 +149,15 @@ void fillHoles(Mesh& mesh, SurfaceMesh& sm, const RepairSolidOptions& o, RepairS
   r.repairs.push_back("filled " + std::to_string(cycles.size()) + " holes with " + std::to_string(added) + " triangles");
 }
 
-void refuseSelfIntersections(const SurfaceMesh& sm) {
-  if (!PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm)) return;
+// On ctx.threads of TBB's threads (CGAL's parallel search runs on the current task arena).
+void refuseSelfIntersections(const SurfaceMesh& sm, const Context& ctx) {
   std::vector<std::pair<FI, FI>> pairs;
-  PMP::self_intersections<CGAL::Parallel_if_available_tag>(sm, std::back_inserter(pairs));
+  tbb::task_arena arena(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    if (PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm))
+      PMP::self_intersections<CGAL::Parallel_if_available_tag>(sm, std::back_inserter(pairs));
+  });
+  if (pairs.empty()) return;
   for (auto& [a, b] : pairs)
     if (b < a) std::swap(a, b);
   std::sort(pairs.begin(), pairs.end());
@@ -193,7 +200,7 @@ RepairSolidReport repairSolid(Mesh& mesh, const RepairSolidOptions& o, const Con
   fillHoles(mesh, sm, o, r);
   const Context inner = stage.inner();
   Stage check(inner, "self-intersections");
-  refuseSelfIntersections(sm);
+  refuseSelfIntersections(sm, check.inner());
   check.finish();
   Stage outward(inner, "orientation");
   orientOutward(mesh, sm, r);

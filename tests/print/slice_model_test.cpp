@@ -182,7 +182,9 @@ TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
       o.layerCount = count;
       o.batchLayers = batch;
       SliceWriter writer(out, false);
-      sliceModel(voxelizer, colors, o, writer, {{"model", "sphere"}}, Context{.threads = threads});
+      PrintSource source;
+      source.model = "sphere";
+      sliceModel(voxelizer, colors, o, writer, source, Context{.threads = threads});
     };
     run(dir / "full", 0, -1, 1, 16);
     const int n = grid.layers;
