@@ -16,9 +16,6 @@ namespace texfab::print {
 
 namespace {
 
-// Threads assumed for the memory estimate when a caller does not say (a large machine's layers in flight).
-constexpr int kEstimateThreads = 16;
-
 // The model coloured by surface synthesis (the texture job's surface mode).
 geometry::Mesh surfaceTextured(const geometry::Mesh& mesh, const PrintExemplar& ex, const PrintJobOptions& o,
                                const Context& ctx) {
@@ -63,13 +60,13 @@ PrintJob::PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Co
   grid_ = print::printGrid(geometry::boundingBox(mesh_), options_.grid);
 }
 
-double PrintJob::memoryBytes(int threads) const {
+double PrintJob::memoryBytes(const Context& ctx) const {
   // A batch's solid voxels are at most its print voxels; refinement's slab is the part that grows.
   const int64_t batchVoxels = int64_t(grid_.width) * grid_.height * options_.slice.batchLayers;
   const double refinement = options_.colors == PrintColors::Solid
                                 ? synthesis::refineSolidMemoryBytes(batchVoxels, options_.solid.refinePasses)
                                 : 0.0;
-  return double(sliceMemoryBytes(grid_, options_.slice, threads > 0 ? threads : kEstimateThreads)) + refinement;
+  return double(sliceMemoryBytes(grid_, options_.slice, ctx)) + refinement;
 }
 
 PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, SliceWriter& writer,

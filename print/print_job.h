@@ -63,8 +63,8 @@ public:
 
   const print::PrintGrid& grid() const { return grid_; }
   const geometry::Mesh& mesh() const { return mesh_; }
-  /// Memory the slicing needs at worst with `threads` layers in flight (0: a machine's worth).
-  double memoryBytes(int threads) const;
+  /// Memory the slicing needs at worst, with a layer in flight per thread of `ctx`.
+  double memoryBytes(const Context& ctx) const;
   /// Slices layers [first, first + count) (count -1: through the last) into `writer` and commits
   /// it. `modelName` goes to the manifest. Stages: "surface texture" (Surface), "voxelizer", "slice".
   PrintJobResult slice(const PrintExemplar& exemplar, int first, int count, SliceWriter& writer,

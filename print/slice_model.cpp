@@ -259,7 +259,8 @@ nlohmann::ordered_json printInfo(const print::PrintGrid& g, const SliceOptions& 
 
 } // namespace
 
-uint64_t sliceMemoryBytes(const print::PrintGrid& g, const SliceOptions& o, int threads) {
+uint64_t sliceMemoryBytes(const print::PrintGrid& g, const SliceOptions& o, const Context& ctx) {
+  const int threads = ctx.threads > 0 ? ctx.threads : tbb::this_task_arena::max_concurrency();
   const int channels = o.dither == DitherMode::None || o.format == SliceFormat::VoxelPrint ? 4 : 1;
   const uint64_t pixels = uint64_t(g.width) * uint64_t(g.height);
   // Per layer in flight, at worst: its PNG (noise: 9 bits per byte) and its spans (a span per

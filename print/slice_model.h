@@ -97,9 +97,9 @@ struct PrintSource {
   double textureScale = 0;                  ///< Solid: voxels per model unit used
 };
 
-/// Memory the job needs beyond its inputs, in bytes, at worst (a layer of noise), for `threads`
-/// layers in flight. Callers refuse prints whose single layers do not fit.
-uint64_t sliceMemoryBytes(const print::PrintGrid& grid, const SliceOptions& options, int threads);
+/// Memory the job needs beyond its inputs, in bytes, at worst (a layer of noise), with a layer in
+/// flight per thread of `ctx`. Callers refuse prints whose layers do not fit.
+uint64_t sliceMemoryBytes(const print::PrintGrid& grid, const SliceOptions& options, const Context& ctx);
 
 /// Slices the layer range of `options` into `writer` and commits it with the manifest. Stages
 /// reported through ctx: "slice" (advancing per layer written). Throws texfab::Error on bad

@@ -116,8 +116,8 @@ Sums chunkSums(const NormalField& f, const Footprint& p, int c, std::span<const 
   return s;
 }
 
-// The M-step: weights, axes and sharpness from the E-step's sums over `count` normals. Returns
-// each lobe's mean (r) for storage.
+// The M-step: weights, axes and sharpness from the E-step's sums over `count` normals; each lobe's
+// mean (r, what is stored) into `means`.
 void maximize(std::span<Lobe> lobes, const Sums& s, int count, std::span<Eigen::Vector3d> means) {
   for (size_t j = 0; j < lobes.size(); ++j) {
     Lobe& l = lobes[j];

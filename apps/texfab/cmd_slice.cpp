@@ -104,7 +104,7 @@ void runSlice(SliceJob& job) {
   if (!job.exemplar.empty()) exemplar.image = readImage(job.exemplar);
   const print::PrintGrid& grid = print.grid();
   const auto [first, count] = layerRange(job, grid.layers);
-  checkMemory(print.memoryBytes(job.common.threads),
+  checkMemory(print.memoryBytes(run.ctx()),
               "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
                   " voxels with its batch (lower --dpi or the size)");
   const Eigen::Vector3d size = grid.sizeMm();

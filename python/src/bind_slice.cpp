@@ -69,7 +69,7 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
     if (!layers.is_none() && (first < 0 || count < 1 || first + count > job.grid().layers))
       throw Error("layers: expected (A, B) with 0 <= A < B <= " + std::to_string(job.grid().layers) +
                   " (the print's layers)");
-    checkMemory(job.memoryBytes(threads), "one layer of " + std::to_string(job.grid().width) + " x " +
+    checkMemory(job.memoryBytes(call.ctx()), "one layer of " + std::to_string(job.grid().width) + " x " +
                                               std::to_string(job.grid().height) + " voxels with its batch");
     std::optional<synthesis::SolidAnalysis> solid;
     std::optional<synthesis::ExemplarAnalysis> surface;

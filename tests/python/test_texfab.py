@@ -218,4 +218,6 @@ except KeyboardInterrupt:
     print("interrupted", time.perf_counter() - start)
 """
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
-    assert out[0] == "interrupted" and float(out[1]) < 1.8, out
+    # The work polls every 50 ms; the margin is for a loaded machine (1.85 s seen with two builds
+    # beside the suite on 2 cores). The synthesis alone takes tens of seconds.
+    assert out[0] == "interrupted" and float(out[1]) < 2.5, out
