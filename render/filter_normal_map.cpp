@@ -2,13 +2,19 @@
 #include "render/filter_normal_map.h"
 
 #include "core/error.h"
+#include "core/files.h"
+#include "core/hash.h"
 #include "core/parallel.h"
+#include "synthesis/analysis_cache.h"
+#include "synthesis/binary_io.h"
 
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdint>
 #include <cmath>
+#include <fstream>
+#include <optional>
 #include <string>
 
 namespace texfab::render {
@@ -282,6 +288,73 @@ NdfMipChain filterNormalMap(const Image& map, const FilterNormalMapOptions& o, c
     stage.advance(level, levels - 1);
   }
   stage.finish(std::to_string(levels) + " levels");
+  return chain;
+}
+
+namespace {
+
+constexpr uint32_t kNdfMagic = 0x3046444e;  // "NDF0"
+constexpr uint32_t kNdfVersion = 1;
+
+uint64_t ndfKey(const Image& map, const FilterNormalMapOptions& o) {
+  Fnv1a h;
+  h.add(kNdfVersion);
+  h.add(map.width), h.add(map.height), h.add(map.channels);
+  h.add(map.pixels.data(), map.pixels.size() * sizeof(float));
+  h.add(o.lobes), h.add(o.iterations);
+  return h.h;
+}
+
+void writeNdf(const std::pair<uint64_t, const NdfMipChain*>& value, const std::filesystem::path& path) {
+  writeFileAtomically(path, [&](std::ostream& out) {
+    synthesis::BinaryWriter w{out};
+    w.value(kNdfMagic), w.value(kNdfVersion), w.value(value.first);
+    w.value(uint64_t(value.second->levels.size()));
+    for (const NdfLevel& l : value.second->levels) {
+      w.value(l.width), w.value(l.height), w.value(l.lobesPerTexel);
+      w.vec(l.lobes);
+    }
+  });
+}
+
+// The chain in a cache file, when it is one of `key` whose levels halve as filterNormalMap's do.
+std::optional<NdfMipChain> readNdf(const std::filesystem::path& path, uint64_t key, const Image& map, int lobes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  synthesis::BinaryReader r{in};
+  uint32_t magic = 0, version = 0;
+  uint64_t storedKey = 0, levels = 0;
+  r.value(magic), r.value(version), r.value(storedKey), r.value(levels);
+  if (!r.ok || magic != kNdfMagic || version != kNdfVersion || storedKey != key || levels > 64) return std::nullopt;
+  NdfMipChain chain;
+  int w = map.width, h = map.height;
+  for (uint64_t i = 0; i < levels; ++i, w = (w + 1) / 2, h = (h + 1) / 2) {
+    NdfLevel l;
+    r.value(l.width), r.value(l.height), r.value(l.lobesPerTexel);
+    if (!r.ok || l.width != w || l.height != h || l.lobesPerTexel != (i == 0 ? 1 : lobes)) return std::nullopt;
+    r.vec(l.lobes, size_t(w) * size_t(h) * size_t(l.lobesPerTexel));
+    if (!r.ok) return std::nullopt;
+    chain.levels.push_back(std::move(l));
+  }
+  // A complete chain ends at 1x1, and so does the file.
+  if (chain.levels.empty() || chain.levels.back().width != 1 || chain.levels.back().height != 1 ||
+      in.peek() != std::ifstream::traits_type::eof())
+    return std::nullopt;
+  return chain;
+}
+
+} // namespace
+
+NdfMipChain filterNormalMap(const Image& map, const FilterNormalMapOptions& o, const synthesis::AnalysisCacheSettings& cache,
+                            const Context& ctx, bool* cached) {
+  if (cached) *cached = false;
+  if (!cache.dir) return filterNormalMap(map, o, ctx);
+  const uint64_t key = ndfKey(map, o);
+  NdfMipChain chain = synthesis::loadOrCompute(
+      *cache.dir, key, ".ndf", [&](const std::filesystem::path& path, uint64_t k) { return readNdf(path, k, map, o.lobes); },
+      [&] { return filterNormalMap(map, o, ctx); },
+      [&](const NdfMipChain& c, const std::filesystem::path& path) { writeNdf({key, &c}, path); }, cached, ctx);
+  synthesis::pruneCache(*cache.dir, cache.maxBytes);
   return chain;
 }
 

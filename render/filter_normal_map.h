@@ -18,6 +18,7 @@
 
 #include "core/context.h"
 #include "core/image.h"
+#include "synthesis/analyze_exemplar.h"
 
 #include <Eigen/Core>
 
@@ -74,6 +75,12 @@ struct FilterNormalMapOptions {
 /// Throws texfab::Error for a map with fewer than 3 channels or options out of range.
 NdfMipChain filterNormalMap(const Image& normalMap, const FilterNormalMapOptions& options = {},
                             const Context& ctx = {});
+
+/// filterNormalMap through the analysis cache (`<key>.ndf` in cache.dir, keyed by the map's pixels
+/// and the options): read when present and valid, else fitted and stored, the cache then pruned.
+/// `cached` (optional) tells which.
+NdfMipChain filterNormalMap(const Image& normalMap, const FilterNormalMapOptions& options,
+                            const synthesis::AnalysisCacheSettings& cache, const Context& ctx, bool* cached = nullptr);
 
 /// The tangent-space normal of texel (x, y) of a normal map (decoded and normalized; +z when the
 /// texel encodes a zero vector).

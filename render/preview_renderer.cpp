@@ -150,7 +150,7 @@ bool highlightNeedsFiltering(const geometry::Material& m, const MipPyramid& meta
 
 } // namespace
 
-void PreviewRenderer::filterNormalMaps(const Context& ctx) const {
+void PreviewRenderer::filterNormalMaps(const RenderOptions& o, const Context& ctx) const {
   std::call_once(filtered_, [&] {
     std::map<const Image*, std::shared_ptr<const NdfMipChain>> distributions;
     for (size_t i = 0; i < maps_.size(); ++i) {
@@ -159,7 +159,7 @@ void PreviewRenderer::filterNormalMaps(const Context& ctx) const {
       if (!highlightNeedsFiltering(mesh_.materials[i], maps_[i].metallicRoughness)) continue;
       auto it = distributions.find(t.image.get());
       if (it == distributions.end())
-        it = distributions.emplace(t.image.get(), std::make_shared<const NdfMipChain>(filterNormalMap(*t.image, {}, ctx))).first;
+        it = distributions.emplace(t.image.get(), std::make_shared<const NdfMipChain>(filterNormalMap(*t.image, {}, o.normalMapCache, ctx))).first;
       maps_[i].normalDistribution = it->second;
     }
   });
@@ -293,7 +293,7 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
   if (!(o.fovYDegrees > 1 && o.fovYDegrees < 170)) throw Error("render: field of view must be in (1, 170) degrees");
   if (!(o.up.allFinite() && o.up.norm() > 0)) throw Error("render: the up direction must be a non-zero vector");
   if (!(o.margin > 0.01f && o.margin < 100)) throw Error("render: margin must be in (0.01, 100)");
-  if (o.filterNormalMaps) filterNormalMaps(ctx);
+  if (o.filterNormalMaps) filterNormalMaps(o, ctx);
   const View view(o, mesh_, scene_.bounds());
   Image out(o.width, o.height, o.transparentBackground ? 4 : 3, PixelFormat::UInt8);
   parallelFor(0, o.height, ctx, [&](int y0, int y1) {

@@ -43,6 +43,9 @@ struct RenderOptions {
   /// 2 cores, and not for rough dielectrics, where it cannot show), else from their MIP-mapped
   /// normals, whose bumps turn flat and shiny at a distance.
   bool filterNormalMaps = true;
+  /// Where fitted normal distributions are kept between runs (the analysis cache); none: fitted
+  /// every time.
+  synthesis::AnalysisCacheSettings normalMapCache;
 };
 
 /// The model's front for an up direction: +Z (glTF's forward) made orthogonal to `up`, or -Y when
@@ -71,7 +74,7 @@ private:
     MipPyramid baseColor, metallicRoughness, normal;
     std::shared_ptr<const NdfMipChain> normalDistribution;  ///< of `normal`, once a render asks
   };
-  void filterNormalMaps(const Context& ctx) const;
+  void filterNormalMaps(const RenderOptions& o, const Context& ctx) const;
   const geometry::Mesh& mesh_;
   geometry::EmbreeScene scene_;
   mutable std::vector<MaterialMaps> maps_;  ///< normalDistribution filled by the first render that filters

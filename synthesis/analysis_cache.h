@@ -17,7 +17,7 @@
 
 namespace texfab::synthesis {
 
-/// Removes the least recently used analyses (*.analysis, *.solid, *.tiles) of `cacheDir` until the rest
+/// Removes the least recently used analyses (*.analysis, *.solid, *.tiles, *.ndf) of `cacheDir` until the rest
 /// take at most `maxBytes`. Other files are left alone; errors are ignored (a cache is optional).
 void pruneCache(const std::filesystem::path& cacheDir, uint64_t maxBytes);
 

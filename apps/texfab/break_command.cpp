@@ -174,6 +174,7 @@ void runBreak(const std::string& command, BreakJob& job) {
     Stage stage(run.ctx(), "preview");
     render::RenderOptions view = job.previewOptions;
     view.up = geometry::upVector(upAxisFor(job.up, job.model));
+    view.normalMapCache = run.analysisCache();
     const geometry::Mesh merged = render::mergedPieces(model, job.explode > 0 ? job.explode : 0.4);
     writeImage(render::PreviewRenderer(merged).render(view, stage.inner()), preview);
     stage.finish(job.preview);

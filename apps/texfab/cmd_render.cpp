@@ -68,6 +68,7 @@ void runRender(RenderJob& job) {
   bvh.finish();
   render::RenderOptions options = job.options;
   options.up = geometry::upVector(upAxisFor(job.up, job.model));
+  options.normalMapCache = run.analysisCache();
   options.margin = job.options.margin / job.zoom;
   for (int i = 0; i < views; ++i) {
     Stage stage(run.ctx(), "render");

@@ -156,6 +156,7 @@ void runTexture(TextureJob& job) {
     Stage preview(run.ctx(), "preview");
     render::RenderOptions view = job.previewOptions;
     view.up = geometry::upVector(upAxisFor(job.up, job.model));
+    view.normalMapCache = run.analysisCache();
     writeImage(render::PreviewRenderer(result.mesh).render(view, preview.inner()), previewOut);
     preview.finish(job.preview);
   }

@@ -130,8 +130,8 @@ struct BrokenOutput {
   std::vector<PieceOutput> pieces;
 };
 
-// The analyses of the break job: the outer exemplar's (for its mode) and the interior's (default
-// the outer exemplar), as `texfab fracture` and `texfab cut` make them.
+// The break job with the command line's policies: its exemplars analysed as `texfab fracture` and
+// `texfab cut` analyse them (render::BreakExemplars).
 BrokenOutput breakModel(const py::object& meshLike, const py::object& planes, int pieces, const py::object& impact,
                         double roughness, double minVolume, const py::object& exemplar, const py::object& interior,
                         const std::string& mode, double textureScale, const py::object& resolution,

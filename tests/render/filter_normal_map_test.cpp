@@ -7,12 +7,14 @@
 #include "core/error.h"
 #include "core/hash.h"
 #include "tests/render/test_normal_maps.h"
+#include "tests/test_support.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
@@ -137,4 +139,31 @@ TEST(FilterNormalMap, RefusesWhatIsNotANormalMap) {
   EXPECT_THROW(filterNormalMap(Image(8, 8, 1)), Error);
   EXPECT_THROW(filterNormalMap(testMaps(64)[0].map, {.lobes = 9}), Error);
   EXPECT_THROW(filterNormalMap(testMaps(64)[0].map, {.iterations = 0}), Error);
+}
+
+TEST(FilterNormalMap, CachedChainsAreTheFittedOnesAndDamagedFilesAreRefitted) {
+  const Image map = testMaps(64)[1].map;
+  const test::TempDir dir("texfab-ndf-cache");
+  const synthesis::AnalysisCacheSettings cache{dir.path(), uint64_t(1) << 30};
+  const NdfMipChain fitted = filterNormalMap(map);
+  const auto equal = [&](const NdfMipChain& c) {
+    if (c.levels.size() != fitted.levels.size()) return false;
+    for (size_t l = 0; l < c.levels.size(); ++l)
+      if (c.levels[l].lobes.size() != fitted.levels[l].lobes.size() ||
+          std::memcmp(c.levels[l].lobes.data(), fitted.levels[l].lobes.data(), c.levels[l].lobes.size() * sizeof(VmfLobe)))
+        return false;
+    return true;
+  };
+  bool cached = true;
+  EXPECT_TRUE(equal(filterNormalMap(map, {}, cache, {}, &cached)));
+  EXPECT_FALSE(cached);
+  EXPECT_TRUE(equal(filterNormalMap(map, {}, cache, {}, &cached)));
+  EXPECT_TRUE(cached);
+  // Other options are another file; a truncated file is refitted, never trusted.
+  filterNormalMap(map, {.lobes = 2}, cache, {}, &cached);
+  EXPECT_FALSE(cached);
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    std::filesystem::resize_file(e.path(), std::filesystem::file_size(e.path()) / 2);
+  EXPECT_TRUE(equal(filterNormalMap(map, {}, cache, {}, &cached)));
+  EXPECT_FALSE(cached);
 }
