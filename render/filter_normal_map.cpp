@@ -53,8 +53,10 @@ double vmfNorm(double kappa) {
   return kappa / (2 * kPi * (1 - expNonPositive(-2 * kappa)));
 }
 
-// A lobe during EM: axis μ, sharpness κ, weight α, and α·norm(κ) for the E-step.
+// A lobe during EM: its mean r (what is stored), axis μ, sharpness κ, weight α, and α·norm(κ) for
+// the E-step.
 struct Lobe {
+  Eigen::Vector3d mean = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   double kappa = 0, weight = 0, scale = 0;
   void setScale() { scale = weight * vmfNorm(kappa); }
@@ -122,9 +124,8 @@ Sums chunkSums(const NormalField& f, const Footprint& p, int c, std::span<const 
   return s;
 }
 
-// The M-step: weights, axes and sharpness from the E-step's sums over `count` normals; each lobe's
-// mean (r, what is stored) into `means`.
-void maximize(std::span<Lobe> lobes, const Sums& s, int count, std::span<Eigen::Vector3d> means) {
+// The M-step: means, weights, axes and sharpness from the E-step's sums over `count` normals.
+void maximize(std::span<Lobe> lobes, const Sums& s, int count) {
   for (size_t j = 0; j < lobes.size(); ++j) {
     Lobe& l = lobes[j];
     l.weight = s.z[j] / double(count);
@@ -132,9 +133,9 @@ void maximize(std::span<Lobe> lobes, const Sums& s, int count, std::span<Eigen::
       l.weight = 0, l.scale = 0;
       continue;
     }
-    means[j] = s.zn[j] / s.z[j];
-    const double length = means[j].norm();
-    if (length > 0) l.axis = means[j] / length;
+    l.mean = s.zn[j] / s.z[j];
+    const double length = l.mean.norm();
+    if (length > 0) l.axis = l.mean / length;
     l.kappa = sharpnessOf(length);
     l.setScale();
   }
@@ -176,12 +177,8 @@ std::vector<Lobe> initialLobes(const NdfMipChain& chain, int level, int x, int y
 struct LevelFit {
   int lobeCount = 0;
   std::vector<Lobe> lobes;
-  std::vector<Eigen::Vector3d> means;
   std::vector<int> active;
   std::span<Lobe> of(int t) { return {lobes.data() + size_t(t) * size_t(lobeCount), size_t(active[size_t(t)])}; }
-  std::span<Eigen::Vector3d> meansOf(int t) {
-    return {means.data() + size_t(t) * size_t(lobeCount), size_t(active[size_t(t)])};
-  }
 };
 
 // Fits every texel of `level` by `iterations` of EM over the level-0 normals it covers. A texel
@@ -192,9 +189,7 @@ void fitLevel(const NormalField& f, NdfMipChain& chain, int level, int iteration
   NdfLevel& out = chain.levels[size_t(level)];
   const int texels = out.width * out.height, lobeCount = out.lobesPerTexel;
   const auto footprintOf = [&](int t) { return footprint(f, level, t % out.width, t / out.width); };
-  LevelFit fit{lobeCount, std::vector<Lobe>(size_t(texels) * size_t(lobeCount)),
-               std::vector<Eigen::Vector3d>(size_t(texels) * size_t(lobeCount), Eigen::Vector3d::UnitZ()),
-               std::vector<int>(size_t(texels))};
+  LevelFit fit{lobeCount, std::vector<Lobe>(size_t(texels) * size_t(lobeCount)), std::vector<int>(size_t(texels))};
   std::vector<int> firstChunk(size_t(texels) + 1, 0);
   parallelFor(0, texels, ctx, [&](int b, int e) {
     for (int t = b; t < e; ++t) {
@@ -208,7 +203,7 @@ void fitLevel(const NormalField& f, NdfMipChain& chain, int level, int iteration
   const auto step = [&](int t, std::span<const Sums> chunkSums) {
     Sums total;
     for (const Sums& s : chunkSums) total.add(s, lobeCount);
-    maximize(fit.of(t), total, footprintOf(t).count(), fit.meansOf(t));
+    maximize(fit.of(t), total, footprintOf(t).count());
   };
   if (chunks == texels) {
     parallelFor(0, texels, ctx, [&](int b, int e) {
@@ -236,9 +231,8 @@ void fitLevel(const NormalField& f, NdfMipChain& chain, int level, int iteration
   }
   for (int t = 0; t < texels; ++t) {
     const std::span<Lobe> lobes = fit.of(t);
-    const std::span<Eigen::Vector3d> means = fit.meansOf(t);
     for (size_t j = 0; j < lobes.size(); ++j)
-      out.lobes[size_t(t) * size_t(lobeCount) + j] = {float(lobes[j].weight), means[j].cast<float>()};
+      out.lobes[size_t(t) * size_t(lobeCount) + j] = {float(lobes[j].weight), lobes[j].mean.cast<float>()};
   }
 }
 
@@ -354,7 +348,7 @@ NdfMipChain filterNormalMap(const Image& map, const FilterNormalMapOptions& o, c
       *cache.dir, key, ".ndf", [&](const std::filesystem::path& path, uint64_t k) { return readNdf(path, k, map, o.lobes); },
       [&] { return filterNormalMap(map, o, ctx); },
       [&](const NdfMipChain& c, const std::filesystem::path& path) { writeNdf({key, &c}, path); }, cached, ctx);
-  synthesis::pruneCache(*cache.dir, cache.maxBytes);
+  synthesis::pruneCache(cache);
   return chain;
 }
 
@@ -368,8 +362,7 @@ double shadeBlinnPhong(std::span<const VmfLobe> lobes, const Eigen::Vector3f& li
   double sum = 0;
   for (const VmfLobe& l : lobes) {
     if (!(l.weight > 0)) continue;
-    const double kappa = l.sharpness();
-    sum += l.weight * blinnPhong(l.axis(), light, half, kappa * s / (kappa + s));
+    sum += l.weight * blinnPhong(l.axis(), light, half, convolvedExponent(double(l.sharpness()), s));
   }
   return sum;
 }

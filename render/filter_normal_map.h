@@ -18,7 +18,7 @@
 
 #include "core/context.h"
 #include "core/image.h"
-#include "synthesis/analyze_exemplar.h"
+#include "synthesis/analysis_cache.h"
 
 #include <Eigen/Core>
 
@@ -96,6 +96,13 @@ double blinnPhong(const Eigen::Vector3f& normal, const Eigen::Vector3f& light, c
 /// tangent space.
 double shadeBlinnPhong(std::span<const VmfLobe> lobes, const Eigen::Vector3f& light, const Eigen::Vector3f& half,
                        double exponent);
+
+/// The exponent of a Blinn-Phong lobe of exponent s convolved with a vMF lobe of sharpness κ:
+/// s' = κs / (κ + s) [Han et al. 2007, Eq. 7.20] (0 for a uniform lobe, κ = 0).
+template <class T>
+T convolvedExponent(T sharpness, T exponent) {
+  return sharpness * exponent / (sharpness + exponent);
+}
 
 /// Toksvig's filtering from a texel's mean normal `mean` (|mean| ≤ 1): the exponent
 /// s' = |m| s / (|m| + s (1 - |m|)) at the normalized mean.

@@ -440,7 +440,7 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
       } else {
         for (int j = 0; j < f.lobeCount; ++j) {
           const WorldLobe& l = f.lobes[size_t(j)];
-          const float exponent = l.sharpness * shininess / (l.sharpness + shininess);
+          const float exponent = convolvedExponent(l.sharpness, shininess);
           specular += l.weight * blinnPhong(l.axis, h, exponent) * std::max(0.0f, l.axis.dot(view.light));
         }
       }

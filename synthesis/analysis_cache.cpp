@@ -12,6 +12,10 @@ void touchCacheFile(const fs::path& path) {
   fs::last_write_time(path, fs::file_time_type::clock::now(), ec);
 }
 
+void pruneCache(const AnalysisCacheSettings& cache) {
+  if (cache.dir) pruneCache(*cache.dir, cache.maxBytes);
+}
+
 void pruneCache(const fs::path& cacheDir, uint64_t maxBytes) {
   struct Entry {
     fs::file_time_type used;

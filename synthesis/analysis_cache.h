@@ -17,9 +17,19 @@
 
 namespace texfab::synthesis {
 
+/// Where analyses are kept between runs.
+struct AnalysisCacheSettings {
+  /// The cache folder (defaultCacheDir() for the usual one); nullopt: computed every time.
+  std::optional<std::filesystem::path> dir;
+  /// After each analysis the least recently used files go until the rest take at most this.
+  uint64_t maxBytes = uint64_t(1) << 30;
+};
+
 /// Removes the least recently used analyses (*.analysis, *.solid, *.tiles, *.ndf) of `cacheDir` until the rest
 /// take at most `maxBytes`. Other files are left alone; errors are ignored (a cache is optional).
 void pruneCache(const std::filesystem::path& cacheDir, uint64_t maxBytes);
+/// The same for `cache`'s folder and bound; nothing without a folder.
+void pruneCache(const AnalysisCacheSettings& cache);
 
 /// Marks a cache file as just used.
 void touchCacheFile(const std::filesystem::path& path);

@@ -1,20 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "synthesis/analyze_exemplar.h"
 
-#include "synthesis/analysis_cache.h"
-
 #include <memory>
 #include <string>
 
 namespace texfab::synthesis {
-
-namespace {
-
-void prune(const AnalysisCacheSettings& cache) {
-  if (cache.dir) pruneCache(*cache.dir, cache.maxBytes);
-}
-
-} // namespace
 
 ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options,
                                  const AnalysisCacheSettings& cache, const Context& ctx, bool* cached) {
@@ -22,7 +12,7 @@ ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& o
   bool fromCache = false;
   ExemplarAnalysis a = cache.dir ? analyzeExemplarCached(exemplar, options, *cache.dir, stage.inner(), &fromCache)
                                  : analyzeExemplar(exemplar, options, stage.inner());
-  prune(cache);
+  pruneCache(cache);
   stage.finish(fromCache ? "(cached)" : std::to_string(a.levels.size()) + " levels");
   if (cached) *cached = fromCache;
   return a;
@@ -35,7 +25,7 @@ SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, co
   bool fromCache = false;
   SolidAnalysis a = cache.dir ? analyzeSolidCached(ex, ey, ez, options, *cache.dir, stage.inner(), &fromCache)
                               : analyzeSolid(ex, ey, ez, options, stage.inner());
-  prune(cache);
+  pruneCache(cache);
   stage.finish(fromCache ? "(cached)"
                          : std::to_string(a.levels.size()) + " levels" + (a.shared ? ", candidates shared" : ""));
   if (cached) *cached = fromCache;
@@ -45,7 +35,7 @@ SolidAnalysis analyzeSolid(const Image& ex, const Image& ey, const Image& ez, co
     a.tiles = std::make_shared<const SolidTileSet>(
         cache.dir ? buildSolidTilesCached(a, tiles, *cache.dir, build.inner(), &tilesCached)
                   : buildSolidTiles(a, tiles, build.inner()));
-    prune(cache);
+    pruneCache(cache);
     build.finish(tilesCached ? "(cached)" : std::to_string(a.tiles->layout.side) + "^3 voxels per tile");
   }
   return a;

@@ -6,24 +6,13 @@
 
 #include "core/context.h"
 #include "core/image.h"
+#include "synthesis/analysis_cache.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_solid.h"
 
-#include <cstdint>
-#include <filesystem>
-#include <optional>
-
 namespace texfab::synthesis {
-
-/// Where analyses are kept between runs.
-struct AnalysisCacheSettings {
-  /// The cache folder (defaultCacheDir() for the usual one); nullopt: computed every time.
-  std::optional<std::filesystem::path> dir;
-  /// After each analysis the least recently used files go until the rest take at most this.
-  uint64_t maxBytes = uint64_t(1) << 30;
-};
 
 /// The 2-D analysis of `exemplar`. `cached` (optional) tells whether it was read from the cache.
 ExemplarAnalysis analyzeExemplar(const Image& exemplar, const AnalysisOptions& options,

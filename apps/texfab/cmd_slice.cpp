@@ -125,7 +125,8 @@ void runSlice(SliceJob& job) {
              counted(int64_t(ce.blocks), "block") + " of 16³ voxels");
 
   nlohmann::json& report = run.report();
-  report["print"] = nlohmann::json::parse(print::readSliceManifest(job.output)["print"].dump());  // as the manifest has it
+  if (run.reporting())  // the print block as the manifest has it
+    report["print"] = nlohmann::json::parse(print::readSliceManifest(job.output)["print"].dump());
   report["layers"] = {{"first", first}, {"count", count}, {"total", grid.layers}};
   report["voxels"] = {{"inside", r.insideVoxels}, {"shell", r.shellVoxels}, {"per_layer", grid.voxelsPerLayer()}};
   if (o.colors == print::PrintColors::Solid)

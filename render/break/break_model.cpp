@@ -114,26 +114,28 @@ void BreakModelOptions::shareTextureSettings(uint32_t seed, const synthesis::Sol
 void BreakExemplars::analyze(const BreakModelOptions& o, const std::function<synthesis::ExemplarWrap(const Image&)>& wrapOf,
                              const synthesis::SolidTileOptions& tiles, const synthesis::AnalysisCacheSettings& cache,
                              const Context& ctx) {
-  const auto solidOf = [&](const Image& image) {
+  const auto solidOf = [&](const Image& image, synthesis::ExemplarWrap wrap) {
     synthesis::validateSolidExemplars(image, image, image);
     synthesis::SolidAnalysisOptions options;
-    options.wrap = wrapOf(image);
+    options.wrap = wrap;
     return synthesis::analyzeSolid(image, image, image, options, o.interior.solid.method, tiles, cache, ctx);
   };
+  // Each image's wrap is chosen once, though the outer one may need two analyses.
+  const std::optional<synthesis::ExemplarWrap> outerWrap = outer ? std::optional(wrapOf(*outer)) : std::nullopt;
   if (outer) {
     outerView.color = &*outer;
     if (o.outer.mode == TextureMode::Surface) {
       synthesis::AnalysisOptions options;
-      options.wrap = wrapOf(*outer);
+      options.wrap = *outerWrap;
       outerView.analysis = &surface.emplace(synthesis::analyzeExemplar(*outer, options, cache, ctx));
     } else {
-      outerView.solidAnalysis = &outerSolid.emplace(solidOf(*outer));
+      outerView.solidAnalysis = &outerSolid.emplace(solidOf(*outer, *outerWrap));
     }
   }
   if (interior) {
-    interiorView = {&*interior, &interiorSolid.emplace(solidOf(*interior))};
+    interiorView = {&*interior, &interiorSolid.emplace(solidOf(*interior, wrapOf(*interior)))};
   } else if (outer) {
-    if (!outerSolid) outerSolid.emplace(solidOf(*outer));
+    if (!outerSolid) outerSolid.emplace(solidOf(*outer, *outerWrap));
     interiorView = {&*outer, &*outerSolid};
   }
 }

@@ -61,7 +61,7 @@ struct BreakExemplars {
   BreakExemplars& operator=(const BreakExemplars&) = delete;
 
   /// Analyses what `options` needs (synthesis::analyzeExemplar and analyzeSolid: "analysis" and
-  /// "tiles" stages through `cache`). `wrapOf(image)` chooses each image's wrap.
+  /// "tiles" stages through `cache`). `wrapOf(image)` chooses each image's wrap, once per image.
   void analyze(const BreakModelOptions& options, const std::function<synthesis::ExemplarWrap(const Image&)>& wrapOf,
                const synthesis::SolidTileOptions& tiles, const synthesis::AnalysisCacheSettings& cache,
                const Context& ctx);

@@ -20,6 +20,7 @@
 #include "render/break/break_model.h"
 #include "render/filter_normal_map.h"
 #include "render/texture_mesh.h"
+#include "tests/render/test_normal_maps.h"
 #include "tests/test_support.h"
 #endif
 
@@ -405,19 +406,9 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
 /// and MIP level (render/filter_normal_map.h, default options): every lobe of every level.
 inline Stages ndfMipChain() {
   const Image brick = readImage(bundled("exemplars/brick.png"));
-  const int w = brick.width, h = brick.height;
-  const auto height = [&](int x, int y) {
-    x = (x + w) % w, y = (y + h) % h;
+  const Image map = test::normalMap(brick.width, 8, [&](int x, int y) {
     return 0.2126 * brick.at(x, y, 0) + 0.7152 * brick.at(x, y, 1) + 0.0722 * brick.at(x, y, 2);
-  };
-  Image map(w, h, 3);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const double dx = 4 * (height(x + 1, y) - height(x - 1, y)), dy = 4 * (height(x, y + 1) - height(x, y - 1));
-      const double length = std::sqrt(dx * dx + dy * dy + 1);
-      map.at(x, y, 0) = float((1 - dx / length) / 2), map.at(x, y, 1) = float((1 - dy / length) / 2);
-      map.at(x, y, 2) = float((1 + 1 / length) / 2);
-    }
+  });
   const render::NdfMipChain chain = render::filterNormalMap(map, {}, Context{.threads = 2});
   uint64_t lobes = 0xcbf29ce484222325ull;
   for (const render::NdfLevel& l : chain.levels) lobes = hashOf(l.lobes, lobes);
