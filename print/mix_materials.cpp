@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Based on: D. Shaked, N. Arad, A. Fitzhugh, I. Sobel. Color Diffusion: Error-Diffusion for Color
-//   Halftones. HP Labs HPL-96-128R1, 1999 (minimal brightness variation).
+//   Halftones. HP Labs HPL-96-128R1, 1999 (minimal brightness variation); CIE 15:2004 (CIELAB).
 #include "print/mix_materials.h"
 
 #include "core/error.h"
 #include "core/mip_pyramid.h"
+#include "print/color_difference.h"
 
 #include <algorithm>
 #include <bit>
@@ -15,8 +16,14 @@ namespace texfab::print {
 
 namespace {
 
-constexpr double kBrightnessWeight = 0.02;  // lambda: how much faint noise may cost in colour accuracy
-constexpr int kMaxSupport = 4;              // materials a colour in 3-D needs at most
+// lambda: how much faint noise may cost in colour accuracy. LinearRgb: against |M f - c|^2 with Y
+// in [0, 1]. Perceptual: against ΔE2000^2 with L* in [0, 100]; smaller than the same balance would
+// give (0.02), since CIEDE2000 discounts chroma by S_C and the term would then pull colours inside
+// the gamut off exact (0.002 keeps them within 0.02 of linear light, as LinearRgb's does).
+constexpr double kBrightnessWeight = 0.02;
+constexpr double kLightnessWeight = 0.002;
+constexpr int kGaussNewtonPasses = 4;  // Perceptual: linearizations of CIELAB, the first at the target
+constexpr int kMaxSupport = 4;         // materials a colour in 3-D needs at most
 
 double luminance(const std::array<float, 3>& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
@@ -44,14 +51,13 @@ bool solve(std::array<std::array<double, kMaxSupport + 1>, kMaxSupport + 1>& a, 
   return true;
 }
 
-// The mix of `colors` for target c: the best over supports of 1-4 materials of the problem
-// restricted to the support with sum f = 1 (its KKT system), keeping solutions with f >= 0.
-// Supports are tried smallest first, then by mask, and a later one must be strictly better.
-std::vector<double> bestMix(const std::vector<std::array<float, 3>>& colors, const std::array<float, 3>& c) {
+// The mix of `colors` for target c, with `spread` the cost of each material's noise: the best over
+// supports of 1-4 materials of  minimize |M f - c|^2 + sum_i f_i spread_i  restricted to the
+// support with sum f = 1 (its KKT system), keeping solutions with f >= 0. Supports are tried
+// smallest first, then by mask, and a later one must be strictly better.
+std::vector<double> bestMix(const std::vector<std::array<double, 3>>& colors, const std::array<double, 3>& c,
+                            const std::vector<double>& spread) {
   const int n = int(colors.size());
-  const double yc = luminance(c);
-  std::vector<double> spread(static_cast<size_t>(n), 0.0);
-  for (int i = 0; i < n; ++i) spread[size_t(i)] = kBrightnessWeight * std::pow(luminance(colors[size_t(i)]) - yc, 2);
   std::vector<double> best(size_t(n), 0.0);
   double bestCost = std::numeric_limits<double>::infinity();
   for (int support = 1; support <= std::min(n, kMaxSupport); ++support)
@@ -66,11 +72,11 @@ std::vector<double> bestMix(const std::vector<std::array<float, 3>>& colors, con
         const auto& mr = colors[size_t(idx[r])];
         for (int s = 0; s < k; ++s) {
           const auto& ms = colors[size_t(idx[s])];
-          a[size_t(r)][size_t(s)] = 2.0 * (double(mr[0]) * ms[0] + double(mr[1]) * ms[1] + double(mr[2]) * ms[2]);
+          a[size_t(r)][size_t(s)] = 2.0 * (mr[0] * ms[0] + mr[1] * ms[1] + mr[2] * ms[2]);
         }
         a[size_t(r)][size_t(k)] = 1.0;
         a[size_t(k)][size_t(r)] = 1.0;
-        b[size_t(r)] = 2.0 * (double(mr[0]) * c[0] + double(mr[1]) * c[1] + double(mr[2]) * c[2]) - spread[size_t(idx[r])];
+        b[size_t(r)] = 2.0 * (mr[0] * c[0] + mr[1] * c[1] + mr[2] * c[2]) - spread[size_t(idx[r])];
       }
       b[size_t(k)] = 1.0;
       if (!solve(a, b, k + 1)) continue;
@@ -93,9 +99,92 @@ std::vector<double> bestMix(const std::vector<std::array<float, 3>>& colors, con
   return best;
 }
 
+// The problem of one lattice colour: the materials' colours and the target, in the space the error
+// is measured in, and each material's noise cost. Perceptual: CIELAB linearized at the current mix
+// p (J_p) and weighted by CIEDE2000's local metric at the target (W), so that
+// |A f - b| = ΔE2000(Lab(c), Lab(p) + J_p (M f - p)) to first order.
+struct MixProblem {
+  std::vector<std::array<double, 3>> colors;
+  std::array<double, 3> target{};
+  std::vector<double> spread;
+};
+
+using Mat3 = std::array<double, 9>;
+std::array<double, 3> times(const Mat3& m, const std::array<double, 3>& v) {
+  return {m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
+          m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
+}
+
+MixProblem mixProblem(const std::vector<std::array<float, 3>>& materials, const std::array<double, 3>& c,
+                      const std::array<double, 3>& p, MixSpace space) {
+  MixProblem out;
+  if (space == MixSpace::LinearRgb) {
+    const double yc = luminance({float(c[0]), float(c[1]), float(c[2])});
+    for (const auto& m : materials) {
+      out.colors.push_back({m[0], m[1], m[2]});
+      out.spread.push_back(kBrightnessWeight * std::pow(luminance(m) - yc, 2));
+    }
+    out.target = c;
+    return out;
+  }
+  const Lab labC = labFromLinearSrgb(c), labP = labFromLinearSrgb(p);
+  const Mat3 w = deltaE2000Metric(labC), j = labJacobian(p);
+  Mat3 wj{};
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k)
+      for (int q = 0; q < 3; ++q) wj[size_t(3 * r + k)] += w[size_t(3 * r + q)] * j[size_t(3 * q + k)];
+  for (const auto& m : materials) {
+    const std::array<double, 3> md{m[0], m[1], m[2]};
+    out.colors.push_back(times(wj, md));
+    out.spread.push_back(kLightnessWeight * std::pow(labFromLinearSrgb(md)[0] - labC[0], 2));
+  }
+  // W (J_p p - (Lab(p) - Lab(c))): the target the linearized mix is measured against.
+  const std::array<double, 3> jp = times(j, p);
+  out.target = times(w, {jp[0] - (labP[0] - labC[0]), jp[1] - (labP[1] - labC[1]), jp[2] - (labP[2] - labC[2])});
+  return out;
+}
+
+// The mix for target c. LinearRgb: one solve. Perceptual: Gauss-Newton, CIELAB relinearized at
+// each mix found, started at the target; a linearization can overshoot far outside the gamut, so
+// every pass's mix and the linear-RGB mix are candidates, and the one with the least true cost,
+// ΔE2000(c, M f)^2 + sum_i f_i spread_i, is kept (the first on ties).
+std::vector<double> mixFor(const std::vector<std::array<float, 3>>& materials, const std::array<double, 3>& c,
+                           MixSpace space) {
+  const auto mixed = [&](const std::vector<double>& f) {
+    std::array<double, 3> p{0, 0, 0};
+    for (size_t i = 0; i < materials.size(); ++i)
+      for (size_t ch = 0; ch < 3; ++ch) p[ch] += f[i] * materials[i][ch];
+    return p;
+  };
+  const MixProblem rgb = mixProblem(materials, c, c, MixSpace::LinearRgb);
+  std::vector<double> best = bestMix(rgb.colors, rgb.target, rgb.spread);
+  if (space == MixSpace::LinearRgb) return best;
+  const Lab want = labFromLinearSrgb(c);
+  std::vector<double> spread;  // the perceptual problem's, the same at every linearization
+  double bestCost = std::numeric_limits<double>::infinity();
+  std::array<double, 3> p = c;
+  std::vector<double> f;
+  for (int pass = 0; pass < kGaussNewtonPasses; ++pass) {
+    const MixProblem problem = mixProblem(materials, c, p, space);
+    spread = problem.spread;
+    if (pass == 0) {  // the linear-RGB mix, as the perceptual cost sees it
+      bestCost = std::pow(deltaE2000(want, labFromLinearSrgb(mixed(best))), 2);
+      for (size_t i = 0; i < best.size(); ++i) bestCost += best[i] * spread[i];
+    }
+    std::vector<double> next = bestMix(problem.colors, problem.target, problem.spread);
+    if (next == f) break;
+    f = std::move(next);
+    p = mixed(f);
+    double cost = std::pow(deltaE2000(want, labFromLinearSrgb(p)), 2);
+    for (size_t i = 0; i < f.size(); ++i) cost += f[i] * spread[i];
+    if (cost < bestCost) bestCost = cost, best = f;
+  }
+  return best;
+}
+
 } // namespace
 
-MaterialMixer::MaterialMixer(const std::vector<PrintMaterial>& materials) {
+MaterialMixer::MaterialMixer(const std::vector<PrintMaterial>& materials, const MaterialMixerOptions& options) {
   validatePrintMaterials(materials, "materials");
   for (const PrintMaterial& m : materials)
     linear_.push_back({srgbToLinear(m.color[0] / 255.0f), srgbToLinear(m.color[1] / 255.0f), srgbToLinear(m.color[2] / 255.0f)});
@@ -112,8 +201,12 @@ MaterialMixer::MaterialMixer(const std::vector<PrintMaterial>& materials) {
   for (int b = 0; b < kLattice; ++b)
     for (int g = 0; g < kLattice; ++g)
       for (int r = 0; r < kLattice; ++r) {
-        const std::array<float, 3> c{float(r) / (kLattice - 1), float(g) / (kLattice - 1), float(b) / (kLattice - 1)};
-        const std::vector<double> f = bestMix(colors, c);
+        std::array<double, 3> c{double(float(r) / (kLattice - 1)), double(float(g) / (kLattice - 1)),
+                                double(float(b) / (kLattice - 1))};
+        if (options.profile)  // the colour the printer reproduces for c (may lie outside [0, 1])
+          c = linearSrgbFromLabD50(options.profile->reproduced(
+              {double(linearToSrgb(float(c[0]))), double(linearToSrgb(float(c[1]))), double(linearToSrgb(float(c[2])))}));
+        const std::vector<double> f = mixFor(colors, c, options.space);
         const size_t at = (size_t(r) + size_t(kLattice) * (size_t(g) + size_t(kLattice) * size_t(b))) * n;
         for (size_t i = 0; i < n; ++i) table_[at + i] = float(f[i]);
       }

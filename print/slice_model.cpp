@@ -7,6 +7,7 @@
 #include "core/mip_pyramid.h"
 #include "core/parallel.h"
 #include "print/color_difference.h"
+#include "print/icc_profile.h"
 #include "print/png_row_encoder.h"
 #include "print/slice_preview.h"
 
@@ -14,6 +15,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 namespace texfab::print {
 
@@ -211,6 +214,7 @@ void SliceOptions::validate() const {
         if (hexColor(materials[i].color) == hexColor(materials[j].color))
           throw Error("materials " + materials[j].name + " and " + materials[i].name + " have the same colour " +
                       hexColor(materials[i].color) + ": Voxel Print tells materials apart by colour");
+  if (!iccProfile.empty()) checkMaterialsInGamut(materials, IccProfile(iccProfile), iccProfile.string());
 }
 
 namespace {
@@ -251,6 +255,14 @@ nlohmann::ordered_json printInfo(const print::PrintGrid& g, const SliceOptions& 
   info["core_material"] = o.materials[findPrintMaterial(o.materials, o.coreMaterial)].name;
   info["shell_mm"] = shellMm;
   info["dither"] = ditherName(o.dither);
+  if (o.dither != DitherMode::None) info["mix"] = o.mixSpace == MixSpace::Perceptual ? "cielab" : "linear-rgb";
+  if (!o.iccProfile.empty()) {  // named, described and fingerprinted: shards must share the profile
+    std::ifstream in(o.iccProfile, std::ios::binary);
+    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    info["icc_profile"] = {{"file", o.iccProfile.filename().string()},
+                           {"description", IccProfile(o.iccProfile).description()},
+                           {"sha256", sha256Hex(bytes)}};
+  }
   if (o.dither == DitherMode::BlueNoise) info["blue_noise_period"] = o.blueNoiseSize;
   info["format"] = o.format == SliceFormat::Indexed ? "png-indexed" : "voxelprint";
   info["source"] = sourceJson(source);
@@ -282,7 +294,10 @@ SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource&
   const Clock::time_point start = Clock::now();
   std::optional<MaterialMixer> mixer;
   std::optional<BlueNoiseVolume> noise;
-  if (o.dither != DitherMode::None) mixer.emplace(o.materials);
+  if (o.dither != DitherMode::None) {
+    const std::optional<IccProfile> profile = o.iccProfile.empty() ? std::nullopt : std::optional(IccProfile(o.iccProfile));
+    mixer.emplace(o.materials, MaterialMixerOptions{o.mixSpace, profile ? &*profile : nullptr});
+  }
   std::optional<SlicePreview> preview;
   if (o.preview) preview.emplace(g, o.firstLayer, count);
   PrintColorTally tally(g.width, g.height);

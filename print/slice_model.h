@@ -19,6 +19,7 @@
 #include "core/image.h"
 #include "print/blue_noise.h"
 #include "print/dither_layer.h"
+#include "print/mix_materials.h"
 #include "print/print_materials.h"
 #include "print/slice_writer.h"
 #include "print/voxel_colors.h"
@@ -27,6 +28,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,6 +53,13 @@ struct SliceOptions {
   int blueNoiseSize = 32;  ///< period of the threshold array in voxels; 16, 24, 32, ... 64
   int batchLayers = 64;    ///< layers per batch; 1-4096. Larger batches synthesize fewer, larger requests
   bool preview = false;    ///< also render SliceResult::preview
+  /// How dithered modes choose a colour's mix of materials: by the smallest CIELAB error
+  /// (Perceptual) or linear-RGB error (LinearRgb, the former choice), see mix_materials.h.
+  MixSpace mixSpace = MixSpace::Perceptual;
+  /// The printer's ICC output profile (empty: none): dithered mixes aim at the colour it says the
+  /// printer reproduces for each requested colour (IccProfile). validate() refuses a file that is
+  /// not a usable profile and materials outside its gamut.
+  std::filesystem::path iccProfile;
 
   void validate() const;
 };
@@ -59,7 +68,8 @@ struct SliceOptions {
 /// The colour a print shows against the colour asked for, as a person sees it: over blocks of
 /// 16^3 voxels at least half of which are opaque shell voxels, the mean requested colour against
 /// the mean of the materials the dither chose (both in linear light, as the eye mixes them), as
-/// CIEDE2000. Measured in dithered modes only.
+/// CIEDE2000. Measured in dithered modes only. With an ICC profile the request is still the
+/// requested colour, not the profile's reproduction of it.
 struct PrintColorError {
   size_t blocks = 0;
   double mean = 0, p95 = 0, max = 0;  ///< ΔE2000 over the blocks

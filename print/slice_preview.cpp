@@ -20,12 +20,17 @@ float linear(uint8_t v) { return srgbToLinear(float(v) / 255.0f); }
 int ceilDiv(int a, int b) { return (a + b - 1) / b; }
 
 // Gaussian blur of the covered pixels (normalized by coverage, so the ground does not bleed in),
-// sigma in pixels: colour as the eye sees the dither at a reading distance.
-void blurCovered(Image& image, const std::vector<float>& cover, double sigma) {
-  if (sigma < 0.3) return;
-  const int radius = int(std::ceil(3 * sigma));
-  std::vector<float> kernel(size_t(2 * radius + 1));
-  for (int i = -radius; i <= radius; ++i) kernel[size_t(i + radius)] = float(std::exp(-0.5 * i * i / (sigma * sigma)));
+// sigmas in pixels along x and y: colour as the eye sees the dither at a reading distance.
+void blurCovered(Image& image, const std::vector<float>& cover, double sigmaX, double sigmaY) {
+  if (sigmaX < 0.3 && sigmaY < 0.3) return;
+  const auto kernelOf = [](double sigma) {
+    const int radius = sigma < 0.3 ? 0 : int(std::ceil(3 * sigma));
+    std::vector<float> kernel(size_t(2 * radius + 1), 1.0f);
+    for (int i = -radius; i <= radius && radius > 0; ++i)
+      kernel[size_t(i + radius)] = float(std::exp(-0.5 * i * i / (sigma * sigma)));
+    return kernel;
+  };
+  const std::vector<float> kernels[2] = {kernelOf(sigmaX), kernelOf(sigmaY)};
   const int w = image.width, h = image.height;
   std::vector<float> planes[4];  // r, g, b weighted by cover, and cover
   for (int c = 0; c < 4; ++c) {
@@ -34,6 +39,9 @@ void blurCovered(Image& image, const std::vector<float>& cover, double sigma) {
   }
   for (int pass = 0; pass < 2; ++pass)
     for (std::vector<float>& plane : planes) {
+      const std::vector<float>& kernel = kernels[pass];
+      const int radius = int(kernel.size() / 2);
+      if (radius == 0) continue;
       std::vector<float> out(plane.size(), 0.0f);
       for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -73,6 +81,7 @@ SlicePreview::SlicePreview(const print::PrintGrid& grid, int firstLayer, int lay
   thumbWidth_ = ceilDiv(grid.width, thumbStep_);
   thumbHeight_ = ceilDiv(grid.height, thumbStep_);
   for (auto& t : thumbs_) t.assign(size_t(thumbWidth_) * size_t(thumbHeight_) * 4, 0.0f);
+  for (auto& t : raw_) t.assign(size_t(thumbWidth_) * size_t(thumbHeight_) * 4, 0.0f);
 }
 
 void SlicePreview::addRow(int layer, int r, std::span<const print::VoxelSpan> spans, const uint8_t* rgba) {
@@ -98,9 +107,15 @@ void SlicePreview::addRow(int layer, int r, std::span<const print::VoxelSpan> sp
     if (shown_[size_t(k)] == layer)
       for (const print::VoxelSpan& s : spans)
         for (int x = s.begin; x < s.end; ++x) {
-          float* t = &thumbs_[size_t(k)][4 * (size_t(r / thumbStep_) * size_t(thumbWidth_) + size_t(x / thumbStep_))];
+          const size_t at = 4 * (size_t(r / thumbStep_) * size_t(thumbWidth_) + size_t(x / thumbStep_));
+          float* t = &thumbs_[size_t(k)][at];
           for (int c = 0; c < 3; ++c) t[c] += linear(rgba[4 * x + c]);
           t[3] += 1;
+          if (r % thumbStep_ == 0 && x % thumbStep_ == 0) {  // the raw panel: one voxel per pixel
+            float* p = &raw_[size_t(k)][at];
+            for (int c = 0; c < 3; ++c) p[c] = linear(rgba[4 * x + c]);
+            p[3] = 1;
+          }
         }
   if (r == grid_.height - 1) {  // the front row, reduced to stored columns
     for (int col = 0; col < frontColumns_; ++col) {
@@ -145,7 +160,7 @@ Image SlicePreview::view(const std::vector<Sample>& samples, int columns, double
       for (int k = 0; k < 3; ++k) out.at(px, py, k) = n ? rgb[k] / float(n) : kGround[k];
       if (n) depth[size_t(py) * size_t(w) + size_t(px)] = d / float(n);
     }
-  blurCovered(out, covered, kEyeMm / mmPerPixel);
+  blurCovered(out, covered, kEyeMm / mmPerPixel, kEyeMm / mmPerPixel);
   for (size_t i = 0; i < covered.size(); ++i)
     for (int k = 0; k < 3; ++k) out.pixels[3 * i + size_t(k)] = out.pixels[3 * i + size_t(k)] * covered[i] + kGround[k] * (1 - covered[i]);
   // Shade by the slope: normal (dd/dx, -1, dd/dz) lit from the upper left, in front.
@@ -167,29 +182,49 @@ Image SlicePreview::view(const std::vector<Sample>& samples, int columns, double
   return out;
 }
 
+Image SlicePreview::shownLayer(int k, bool seen) const {
+  const float full = float(thumbStep_) * float(thumbStep_);
+  const size_t pixels = size_t(thumbWidth_) * size_t(thumbHeight_);
+  Image out(thumbWidth_, thumbHeight_, 3, PixelFormat::Float);
+  std::vector<float> cover(pixels);
+  for (size_t i = 0; i < pixels; ++i) {
+    const float* p = &(seen ? thumbs_ : raw_)[size_t(k)][4 * i];
+    cover[i] = seen ? std::min(1.0f, p[3] / full) : p[3];
+    for (size_t c = 0; c < 3; ++c) out.pixels[3 * i + c] = p[3] > 0 ? (seen ? p[c] / p[3] : p[c]) : 0.0f;
+  }
+  // As seen: the materials' linear colours low-passed by the eye's Gaussian at the print's pitch.
+  if (seen) blurCovered(out, cover, kEyeMm / (thumbStep_ * grid_.pitchMm.x()), kEyeMm / (thumbStep_ * grid_.pitchMm.y()));
+  for (size_t i = 0; i < pixels; ++i)
+    for (size_t c = 0; c < 3; ++c) out.pixels[3 * i + c] = out.pixels[3 * i + c] * cover[i] + kGround[c] * (1 - cover[i]);
+  return out;
+}
+
 Image SlicePreview::compose() const {
   const Image front = view(front_, frontColumns_, frontStep_ * grid_.pitchMm.x());
   const Image side = view(side_, sideColumns_, sideStep_ * grid_.pitchMm.y());
-  // Thumbnails: four layers at one scale, side by side under the views.
+  // Thumbnails: four layers at one scale, side by side under the views: as dithered, and below
+  // them as seen.
   const int total = std::max(front.width + side.width + kMargin, 4 * thumbWidth_ + 3 * kMargin);
   const double thumbScale = double(total - 3 * kMargin) / 4.0 / (thumbWidth_ * thumbStep_ * grid_.pitchMm.x());
   const int tw = std::max(1, int(thumbWidth_ * thumbStep_ * grid_.pitchMm.x() * thumbScale));
   const int th = std::max(1, int(thumbHeight_ * thumbStep_ * grid_.pitchMm.y() * thumbScale));
-  Image canvas(total + 2 * kMargin, std::max(front.height, side.height) + th + 3 * kMargin, 3, PixelFormat::Float);
+  const int thumbTop = 2 * kMargin + std::max(front.height, side.height);
+  Image canvas(total + 2 * kMargin, thumbTop + 2 * th + 2 * kMargin, 3, PixelFormat::Float);
   for (size_t i = 0; i < canvas.pixels.size(); ++i) canvas.pixels[i] = 0.18f;
   blit(canvas, front, kMargin, kMargin);
   blit(canvas, side, 2 * kMargin + front.width, kMargin);
-  const float full = float(thumbStep_) * float(thumbStep_);
   for (int k = 0; k < 4; ++k) {
-    Image thumb(tw, th, 3, PixelFormat::Float);
-    for (int y = 0; y < th; ++y)
-      for (int x = 0; x < tw; ++x) {
-        const int sx = std::min(thumbWidth_ - 1, x * thumbWidth_ / tw), sy = std::min(thumbHeight_ - 1, y * thumbHeight_ / th);
-        const float* t = &thumbs_[size_t(k)][4 * (size_t(sy) * size_t(thumbWidth_) + size_t(sx))];
-        const float cover = std::min(1.0f, t[3] / full);
-        for (int c = 0; c < 3; ++c) thumb.at(x, y, c) = t[3] > 0 ? t[c] / t[3] * cover + kGround[c] * (1 - cover) : kGround[c];
-      }
-    blit(canvas, thumb, kMargin + k * (tw + kMargin), 2 * kMargin + std::max(front.height, side.height));
+    const int x0 = kMargin + k * (tw + kMargin);
+    for (int seen = 0; seen < 2; ++seen) {
+      const Image panel = shownLayer(k, seen == 1);
+      Image thumb(tw, th, 3, PixelFormat::Float);
+      for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x) {
+          const int sx = std::min(thumbWidth_ - 1, x * thumbWidth_ / tw), sy = std::min(thumbHeight_ - 1, y * thumbHeight_ / th);
+          for (int c = 0; c < 3; ++c) thumb.at(x, y, c) = panel.at(sx, sy, c);
+        }
+      blit(canvas, thumb, x0, thumbTop + seen * (th + kMargin));
+    }
   }
   for (float& v : canvas.pixels) v = linearToSrgb(std::clamp(v, 0.0f, 1.0f));  // written as an 8-bit sRGB image
   canvas.format = PixelFormat::UInt8;

@@ -3,7 +3,9 @@
 // A picture of a slice run for a person to check before printing: the print seen from the front
 // (looking along +y) and from the side (along +x), each pixel the mean colour of the voxels it
 // covers (as the eye averages the dither at a normal viewing distance) shaded by the surface's
-// slope, and four layers side by side below, all at print scale (square millimetres).
+// slope, and four layers side by side below: as dithered (one voxel per pixel, the materials) and,
+// under them, as the eye sees the mixed print (the materials' colours low-passed by a Gaussian of
+// 0.1 mm, about one arc minute at 30 cm), all at print scale (square millimetres).
 // Collected while the layers are rendered, in memory proportional to the picture, not the print.
 
 #include "core/image.h"
@@ -26,8 +28,14 @@ public:
   /// may run on different threads): its inside spans and the RGBA8 of all its voxels.
   void addRow(int layer, int r, std::span<const print::VoxelSpan> spans, const uint8_t* rgba);
 
-  /// The picture: front and side views above, four layers below; linear RGB on a grey ground.
+  /// The picture: front and side views above, four layers below (dithered, then as seen); sRGB
+  /// (8 bits) on a grey ground.
   Image compose() const;
+
+  /// Shown layer k (0-3) at one pixel per `thumbStep` voxels, linear RGB on the ground: as
+  /// dithered (a voxel per pixel) or, `seen`, as the eye sees the mixed print (the materials'
+  /// linear colours low-passed by a Gaussian of 0.1 mm at the print's pitch).
+  Image shownLayer(int k, bool seen) const;
 
   /// The layers shown below the views.
   const std::array<int, 4>& shownLayers() const { return shown_; }
@@ -48,6 +56,7 @@ private:
   std::array<int, 4> shown_{};
   int thumbStep_ = 1, thumbWidth_ = 0, thumbHeight_ = 0;
   std::array<std::vector<float>, 4> thumbs_; // RGB sums per thumbnail pixel (+ count)
+  std::array<std::vector<float>, 4> raw_;    // RGB of a thumbnail pixel's first voxel (+ 1 if inside)
 };
 
 } // namespace texfab::print

@@ -11,8 +11,8 @@ packages=(
   libnanoflann-dev
   # meshes: glTF, Draco, 3MF, Embree, halfedge structures, CGAL (and its data set)
   libtinygltf-dev libdraco-dev draco lib3mf-dev libzip-dev libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
-  # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest)
-  zlib1g-dev libssl-dev
+  # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest), LittleCMS (ICC profiles)
+  zlib1g-dev libssl-dev liblcms2-dev
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
   # which Debian's blender package does not pull in)
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy prusa-slicer

@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct SliceJob {
-  std::string model, output, exemplar, materials, preview, layers, shard;
+  std::string model, output, exemplar, materials, iccProfile, preview, layers, shard;
   std::string core = "white";
   print::PrintJobOptions print;
   print::PrintColors mode = print::PrintColors::Solid;  ///< with --exemplar: Solid or Surface
@@ -89,6 +89,7 @@ void runSlice(SliceJob& job) {
   if (o.textureScale != 0 && o.featureSize != 0) throw UsageError("give --texture-scale or --feature-size, not both");
   if (!job.materials.empty()) o.slice.materials = print::readPrintMaterials(job.materials);
   o.slice.coreMaterial = job.core;
+  o.slice.iccProfile = job.iccProfile;
   o.slice.preview = !job.preview.empty();
   o.colors = job.exemplar.empty() ? print::PrintColors::Model : job.mode;
   o.solid.method = job.solid.method;
@@ -170,6 +171,13 @@ Command addSliceCommand(CLI::App& root) {
   f.text("--core", job->core, "Material of the core (default: white)");
   f.text("--materials", job->materials,
          "Printer materials (JSON: name, color #RRGGBB, opacity); default: Vero cyan, magenta, yellow, black, white, clear");
+  f.text("--icc-profile", job->iccProfile,
+         "The printer's ICC output profile: mixes aim at the colour it says the printer reproduces for each "
+         "requested colour (perceptual intent); materials must lie inside its gamut");
+  f.choice("--mix", o.slice.mixSpace,
+           Names<print::MixSpace>{{"cielab", print::MixSpace::Perceptual}, {"linear-rgb", print::MixSpace::LinearRgb}},
+           "How a colour's mix of materials is chosen: cielab (the smallest perceptual error, default) or linear-rgb "
+           "(the smallest error in linear RGB)");
   f.choice("--dither", o.slice.dither,
            Names<print::DitherMode>{{"blue-noise", print::DitherMode::BlueNoise},
                                      {"floyd-steinberg", print::DitherMode::FloydSteinberg},
@@ -191,7 +199,9 @@ Command addSliceCommand(CLI::App& root) {
   wrapFlag(f, job->wrap);
   solidFidelityFlags(f, job->solid, o.solid.contrastGain, o.solid.refinePasses, " (--mode solid)");
   f.option("--resolution", o.resolution, "Atlas size for --mode surface", {64, 16384});
-  f.text("--preview", job->preview, "Also write a picture of the print (front, side, four layers) to this PNG");
+  f.text("--preview", job->preview,
+         "Also write a picture of the print to this PNG: front and side, four layers as dithered and, below them, "
+         "as the eye sees the mixed print");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");
   f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSlice(*job); }};

@@ -21,9 +21,9 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
                  const std::string& mode, const std::string& up, double heightMm, double unitMm,
                  const std::pair<double, double>& dpi, double layerMm, double shellMm, const py::object& layers,
                  const std::string& dither, const std::string& format, const std::string& core,
-                 const py::object& materials, double textureScale, double featureSize, uint32_t seed,
-                 const std::string& wrap, const std::string& method, int tileSide, float contrastGain, int refine,
-                 int resolution, bool force, int threads, const std::string& backend, const py::object& cacheDir,
+                 const py::object& materials, const py::object& iccProfile, double textureScale, double featureSize,
+                 uint32_t seed, const std::string& wrap, const std::string& method, int tileSide, float contrastGain,
+                 int refine, int resolution, bool force, int threads, const std::string& backend, const py::object& cacheDir,
                  const py::object& progress) {
   Call call(threads, backend, cacheDir, progress);
   print::PrintJobOptions o;
@@ -41,6 +41,7 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
                                              {"voxelprint", print::SliceFormat::VoxelPrint}});
   o.slice.coreMaterial = core;
   if (!materials.is_none()) o.slice.materials = print::readPrintMaterials(toPath(materials));
+  if (!iccProfile.is_none()) o.slice.iccProfile = toPath(iccProfile);
   const bool textured = !exemplarLike.is_none();
   o.colors = !textured ? print::PrintColors::Model
              : choose<print::PrintColors>(mode, "mode", {{"solid", print::PrintColors::Solid}, {"surface", print::PrintColors::Surface}});
@@ -119,7 +120,8 @@ void bindSlice(py::module_& m) {
         py::arg("unit_mm") = o.grid.mmPerUnit, py::arg("dpi") = std::pair(o.grid.dpiX, o.grid.dpiY),
         py::arg("layer_mm") = o.grid.layerMm, py::arg("shell_mm") = o.voxelize.shellMm,
         py::arg("layers") = py::none(), py::arg("dither") = "blue-noise", py::arg("format") = "png",
-        py::arg("core") = o.slice.coreMaterial, py::arg("materials") = py::none(), py::arg("texture_scale") = 0.0,
+        py::arg("core") = o.slice.coreMaterial, py::arg("materials") = py::none(),
+        py::arg("icc_profile") = py::none(), py::arg("texture_scale") = 0.0,
         py::arg("feature_size") = 0.0, py::arg("seed") = o.seed, py::arg("wrap") = "auto",
         py::arg("solid_method") = "lazy", py::arg("tile_size") = 32, py::arg("contrast_gain") = so.contrastGain,
         py::arg("refine") = so.refinePasses, py::arg("resolution") = o.resolution, py::arg("force") = false,
@@ -127,7 +129,8 @@ void bindSlice(py::module_& m) {
         py::arg("progress") = py::none(),
         "Slices a closed model into one PNG per print layer and the manifest slices.json in `output` (a new or "
         "empty folder, or force=True), coloured from its own materials or the exemplar's texture and dithered to "
-        "the printer's materials; layers=(A, B) writes layers A..B-1 only, byte for byte as in a full run. Returns "
+        "the printer's materials (aiming at the colours icc_profile, the printer's ICC output profile, says it "
+        "reproduces, when given); layers=(A, B) writes layers A..B-1 only, byte for byte as in a full run. Returns "
         "the manifest. Equal to `texfab slice`");
   m.def("_print_grid", &printGrid, py::arg("mesh"), py::kw_only(), py::arg("up") = "y",
         py::arg("height_mm") = o.grid.heightMm, py::arg("unit_mm") = o.grid.mmPerUnit,

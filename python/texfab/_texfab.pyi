@@ -131,13 +131,15 @@ def slice(mesh: Union[Mesh, PathLike], output: PathLike, *, exemplar: Optional[I
           dpi: tuple[float, float] = (600.0, 300.0), layer_mm: float = 0.027, shell_mm: float = 1.0,
           layers: Optional[tuple[int, int]] = None, dither: Literal["blue-noise", "floyd-steinberg", "none"] = "blue-noise",
           format: Literal["png", "voxelprint"] = "png", core: str = "white",
-          materials: Optional[PathLike] = None, texture_scale: float = 0.0, feature_size: float = 0.0,
+          materials: Optional[PathLike] = None, icc_profile: Optional[PathLike] = None,
+          texture_scale: float = 0.0, feature_size: float = 0.0,
           seed: int = 1, wrap: Wrap = "auto", solid_method: SolidMethod = "lazy", tile_size: int = 32,
           contrast_gain: float = 2.0, refine: int = 0, resolution: int = 2048, force: bool = False,
           threads: int = 0, backend: Backend = "cpu", cache_dir: CacheDir = None,
           progress: Optional[Progress] = None) -> dict:
     """Writes the folder `texfab slice` writes (slice_NNNNN.png and slices.json); returns the manifest.
-    `layers`: (A, B), layers A..B-1 only, byte for byte as in a full run."""
+    `layers`: (A, B), layers A..B-1 only, byte for byte as in a full run. `icc_profile`: the printer's
+    ICC output profile; mixes aim at the colours it says the printer reproduces."""
 
 def _print_grid(mesh: Union[Mesh, PathLike], *, up: Up = "y", height_mm: float = 50.0, unit_mm: float = 0.0,
                 dpi: tuple[float, float] = (600.0, 300.0), layer_mm: float = 0.027) -> dict: ...

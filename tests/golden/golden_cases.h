@@ -68,7 +68,7 @@ inline constexpr Stage kFracture[] = {
     {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "b8fcb69e829cd12f"},
     {"encode", "7e0c5e10245e66af"}};
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
-inline constexpr Stage kSliceLayers[] = {{"layers", "34bc73eff57a75de"}, {"manifest", "c712e58ed7a70a0a"}};
+inline constexpr Stage kSliceLayers[] = {{"layers", "3cb3555426f2c619"}, {"manifest", "3bbd5e24e47c0ff3"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {

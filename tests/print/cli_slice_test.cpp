@@ -7,6 +7,7 @@
 #include "print/slice_writer.h"
 #include "tests/geometry/solid_meshes.h"
 #include "tests/golden/golden_cases.h"
+#include "tests/print/icc_test_profiles.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>
@@ -209,6 +210,41 @@ TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
   expectRefused(dir, quoted(dir / "open.off") + " -q", "not closed");
   // A layer larger than this machine's memory.
   expectRefused(dir, model + " --height 250 --dpi 100000 --layer 10", "more than this machine's");
+}
+
+// --icc-profile: the manifest names the profile; a file that is not a usable printer profile and
+// materials outside the profile's gamut are refused, one line each, before any output.
+TEST(CliSlice, IccProfileIsUsedOrRefused) {
+  TempDir dir;
+  const std::string model = quoted(sphereModel(dir)) + kSmall;
+  texfab::test::writeRgbProfile(dir / "narrow.icc", 0.3, cmsSigOutputClass);
+  std::ofstream(dir / "muted.json") << R"([{"name": "C", "color": "#5AA0B4"}, {"name": "M", "color": "#B46E96"},
+    {"name": "Y", "color": "#C8BE78"}, {"name": "K", "color": "#3C3C3C"}, {"name": "W", "color": "#E6E6E6"}])";
+  const std::string muted = " --materials " + quoted(dir / "muted.json") + " --core W";
+  const auto run = slice(model + muted + " --icc-profile " + quoted(dir / "narrow.icc") + " -o " + quoted(dir / "out") +
+                         " --report " + quoted(dir / "r.json"));
+  ASSERT_EQ(run.status, 0) << run.err;
+  const nlohmann::json m = nlohmann::json::parse(readText(dir / "out" / "slices.json"));
+  EXPECT_EQ(m["print"]["icc_profile"]["file"], "narrow.icc");
+  EXPECT_EQ(m["print"]["icc_profile"]["description"], "texfab test RGB");
+  const std::string profile = readText(dir / "narrow.icc");
+  EXPECT_EQ(m["print"]["icc_profile"]["sha256"], texfab::print::sha256Hex(std::vector<uint8_t>(profile.begin(), profile.end())));
+  EXPECT_EQ(m["print"]["mix"], "cielab");
+  EXPECT_EQ(nlohmann::json::parse(readText(dir / "r.json"))["print"]["icc_profile"]["file"], "narrow.icc");
+  const auto rgb = slice(model + " --mix linear-rgb -o " + quoted(dir / "rgb"));
+  ASSERT_EQ(rgb.status, 0) << rgb.err;
+  EXPECT_EQ(nlohmann::json::parse(readText(dir / "rgb" / "slices.json"))["print"]["mix"], "linear-rgb");
+
+  std::ofstream(dir / "garbage.icc") << "not a profile at all, but long enough to be read as a header by mistake.....";
+  expectRefused(dir, model + " --icc-profile " + quoted(dir / "garbage.icc"), "not an ICC profile");
+  expectRefused(dir, model + " --icc-profile " + quoted(dir / "missing.icc"), "cannot open ICC profile");
+  texfab::test::writeRgbProfile(dir / "scanner.icc", 0.0, cmsSigInputClass);
+  expectRefused(dir, model + " --icc-profile " + quoted(dir / "scanner.icc"), "class 'input'");
+  texfab::test::writeLabProfile(dir / "lab.icc");
+  expectRefused(dir, model + " --icc-profile " + quoted(dir / "lab.icc"), "lab.icc");
+  // The default (pure CMYK) materials lie outside the narrow printer's gamut.
+  expectRefused(dir, model + " --icc-profile " + quoted(dir / "narrow.icc"), "material 'VeroCyan'");
+  expectRefused(dir, model + " --mix sideways", "--mix", 1);
 }
 
 TEST(CliSlice, ExistingOutputNeedsForce) {
