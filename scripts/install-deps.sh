@@ -9,8 +9,10 @@ packages=(
   # images, threads, maths, command line, reports
   libopenimageio-dev openimageio-tools libtbb-dev libeigen3-dev nlohmann-json3-dev libcli11-dev
   libnanoflann-dev
-  # meshes: glTF, Draco, 3MF, Embree, halfedge structures, CGAL (and its data set)
+  # meshes: glTF, Draco, 3MF, Embree, halfedge structures, CGAL (and its data set), OpenVDB (a
+  # surface that cannot bound a solid rebuilt from its volume)
   libtinygltf-dev libdraco-dev draco lib3mf-dev libzip-dev libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
+  libopenvdb-dev
   # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest), LittleCMS (ICC profiles)
   zlib1g-dev libssl-dev liblcms2-dev
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,

@@ -4,8 +4,10 @@
 #include "geometry/repair/repair_solid.h"
 
 #include "core/error.h"
+#include "core/text.h"
 #include "geometry/cgal_surface_mesh.h"
 #include "geometry/mesh_connectivity.h"
+#include "geometry/repair/remesh_volume.h"
 
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
@@ -149,23 +151,24 @@ void fillHoles(Mesh& mesh, SurfaceMesh& sm, const RepairSolidOptions& o, RepairS
   r.repairs.push_back("filled " + std::to_string(cycles.size()) + " holes with " + std::to_string(added) + " triangles");
 }
 
-// On ctx.threads of TBB's threads (CGAL's parallel search runs on the current task arena).
-void refuseSelfIntersections(const SurfaceMesh& sm, const Context& ctx) {
+// A one-line description of the mesh's self-intersections, or "" when it has none. On
+// ctx.threads of TBB's threads (CGAL's parallel search runs on the current task arena).
+std::string selfIntersections(const SurfaceMesh& sm, const Context& ctx) {
   std::vector<std::pair<FI, FI>> pairs;
   tbb::task_arena arena(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     if (PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm))
       PMP::self_intersections<CGAL::Parallel_if_available_tag>(sm, std::back_inserter(pairs));
   });
-  if (pairs.empty()) return;
+  if (pairs.empty()) return {};
   for (auto& [a, b] : pairs)
     if (b < a) std::swap(a, b);
   std::sort(pairs.begin(), pairs.end());
   const auto [a, b] = pairs.front();
-  throw Error("the model intersects itself (" + std::to_string(pairs.size()) + " pairs of triangles, e.g. " +
-              (a == b ? "triangle " + std::to_string(size_t(a)) + " is degenerate"
-                      : "triangles " + std::to_string(size_t(a)) + " and " + std::to_string(size_t(b))) +
-              "): cutting needs a solid; repair it in a mesh editor");
+  return "the model intersects itself (" + std::to_string(pairs.size()) + " pairs of triangles, e.g. " +
+         (a == b ? "triangle " + std::to_string(size_t(a)) + " is degenerate"
+                 : "triangles " + std::to_string(size_t(a)) + " and " + std::to_string(size_t(b))) +
+         ")";
 }
 
 void orientOutward(Mesh& mesh, SurfaceMesh& sm, RepairSolidReport& r) {
@@ -181,6 +184,49 @@ void orientOutward(Mesh& mesh, SurfaceMesh& sm, RepairSolidReport& r) {
   if (flipped) r.repairs.push_back("turned " + std::to_string(flipped) + " triangles to face outward");
 }
 
+// Orients and closes the surface as it is; returns "" when it bounds a solid, else the fault.
+std::string closeSurface(Mesh& mesh, SurfaceMesh& sm, const RepairSolidOptions& o, RepairSolidReport& r,
+                         const Context& ctx) {
+  const MeshConnectivity topology = computeConnectivity(mesh);
+  if (topology.nonManifoldEdges)
+    return "the model is not a manifold (" + std::to_string(topology.nonManifoldEdges) +
+           " edges are shared by three or more triangles)";
+  if (topology.inconsistentEdges || !toSurfaceMesh(mesh, sm)) {
+    orientConsistently(mesh, r);
+    if (!toSurfaceMesh(mesh, sm)) return "the model is not a manifold and could not be oriented";
+  }
+  fillHoles(mesh, sm, o, r);
+  Stage check(ctx, "self-intersections");
+  std::string fault = selfIntersections(sm, check.inner());
+  check.finish();
+  return fault;
+}
+
+// The last resort: the volume the surface encloses, meshed anew.
+void rebuildFromVolume(Mesh& mesh, SurfaceMesh& sm, const std::string& fault, const RepairSolidOptions& o,
+                       RepairSolidReport& r, const Context& ctx) {
+  if (o.remesh.resolution == 0) throw Error(fault + ": cutting needs a solid; repair it in a mesh editor");
+  Stage stage(ctx, "volume remesh");
+  const double voxel = double((boundingBox(mesh).max - boundingBox(mesh).min).maxCoeff()) / o.remesh.resolution;
+  Mesh rebuilt;
+  try {
+    rebuilt = remeshVolume(mesh, o.remesh, stage.inner());
+  } catch (const Error& e) {
+    throw Error(fault + ", and its volume could not be rebuilt (" + e.what() + "): repair it in a mesh editor");
+  }
+  std::vector<Material> materials = std::move(mesh.materials);
+  mesh = std::move(rebuilt);
+  if (!materials.empty()) mesh.materials = {std::move(materials.front())};
+  r.holeTriangles = 0;
+  RepairSolidReport again;
+  const std::string left = closeSurface(mesh, sm, o, again, stage.inner());
+  if (!left.empty()) throw Error(fault + ", and the rebuilt volume is not a solid either: repair it in a mesh editor");
+  stage.finish(std::to_string(mesh.triangles.size()) + " triangles");
+  r.repairs.push_back(fault + ": rebuilt as the volume it encloses (" + std::to_string(mesh.triangles.size()) +
+                      " triangles, voxels of " + figure(voxel) +
+                      " units); its own UVs and materials are not kept");
+}
+
 } // namespace
 
 RepairSolidReport repairSolid(Mesh& mesh, const RepairSolidOptions& o, const Context& ctx) {
@@ -188,20 +234,10 @@ RepairSolidReport repairSolid(Mesh& mesh, const RepairSolidOptions& o, const Con
   Stage stage(ctx, "repair");
   RepairSolidReport r;
   weldAndClean(mesh, r);
-  const MeshConnectivity topology = computeConnectivity(mesh);
-  if (topology.nonManifoldEdges)
-    throw Error("the model is not a manifold: " + std::to_string(topology.nonManifoldEdges) +
-                " edges are shared by three or more triangles; cutting needs a solid");
   SurfaceMesh sm;
-  if (topology.inconsistentEdges || !toSurfaceMesh(mesh, sm)) {
-    orientConsistently(mesh, r);
-    if (!toSurfaceMesh(mesh, sm)) throw Error("the model is not a manifold and could not be repaired");
-  }
-  fillHoles(mesh, sm, o, r);
   const Context inner = stage.inner();
-  Stage check(inner, "self-intersections");
-  refuseSelfIntersections(sm, check.inner());
-  check.finish();
+  if (const std::string fault = closeSurface(mesh, sm, o, r, inner); !fault.empty())
+    rebuildFromVolume(mesh, sm, fault, o, r, inner);
   Stage outward(inner, "orientation");
   orientOutward(mesh, sm, r);
   outward.finish();

@@ -4,11 +4,14 @@
 // outward, without self-intersections; or says why it cannot. What can be repaired is, and each
 // repair is reported in a line: repeated vertices welded, triangles with a repeated corner
 // removed, inconsistent orientation made consistent (vertices shared by separate fans split),
-// holes filled, components turned outward. Non-manifold edges, degenerate triangles and
-// self-intersections are refused (they need a person's judgement: which surface is meant).
+// holes filled, components turned outward. A surface that still cannot bound a solid (non-manifold
+// edges, self-intersections, overlapping shells) is rebuilt as the volume it encloses
+// (remeshVolume), which keeps its shape down to a voxel but not its UVs; holes larger than
+// maxHoleEdges are refused (which surface is meant needs a person's judgement).
 
 #include "core/context.h"
 #include "geometry/mesh.h"
+#include "geometry/repair/remesh_volume.h"
 
 #include <string>
 #include <vector>
@@ -20,6 +23,8 @@ struct RepairSolidOptions {
   /// every open mesh.
   size_t maxHoleEdges = 1000;
   uint32_t holeTag = 1;  ///< faceTags value of hole-filling triangles (cut faces: they show the interior)
+  /// The last stage's grid; resolution 0 = refuse such surfaces instead.
+  RemeshVolumeOptions remesh;
 };
 
 struct RepairSolidReport {
@@ -27,8 +32,9 @@ struct RepairSolidReport {
   size_t holeTriangles = 0;          ///< triangles added by hole filling (appended, tagged holeTag)
 };
 
-/// Repairs `mesh` in place (triangles keep their order; filled holes are appended) or throws
-/// texfab::Error with a one-line message naming the fault ("the model intersects itself: ...").
+/// Repairs `mesh` in place (triangles keep their order and filled holes are appended, unless the
+/// surface is rebuilt) or throws texfab::Error with a one-line message naming the fault ("the
+/// model is open: a hole of ...").
 RepairSolidReport repairSolid(Mesh& mesh, const RepairSolidOptions& options = {}, const Context& ctx = {});
 
 } // namespace texfab::geometry

@@ -328,20 +328,60 @@ TEST(RepairSolid, WeldsFillsReorientsAndTurnsOutward) {
   EXPECT_TRUE(repairSolid(solid).repairs.empty());
 }
 
-TEST(RepairSolid, RefusesSelfIntersectionsAndNonManifoldEdges) {
-  Mesh twoCubes = cube();
+// Two cubes that overlap, as one self-intersecting mesh.
+Mesh overlappingCubes() {
+  Mesh m = cube();
   const Mesh other = cube();
-  const uint32_t base = uint32_t(twoCubes.positions.size());
-  for (const auto& p : other.positions) twoCubes.positions.push_back(p + Eigen::Vector3f(0.5f, 0.3f, 0.2f));
-  for (auto t : other.triangles) twoCubes.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-  twoCubes.uvs.clear(), twoCubes.normals.clear(), twoCubes.faceMaterials.clear(), twoCubes.faceTags.clear();
-  const std::string crossing = errorOf([&] { repairSolid(twoCubes); });
+  const uint32_t base = uint32_t(m.positions.size());
+  for (const auto& p : other.positions) m.positions.push_back(p + Eigen::Vector3f(0.5f, 0.3f, 0.2f));
+  for (auto t : other.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  m.uvs.clear(), m.normals.clear(), m.faceMaterials.clear(), m.faceTags.clear();
+  return m;
+}
+
+// A cube with a fin: one triangle on one of its edges, which three triangles then share.
+Mesh finnedCube() {
+  Mesh m = cube();
+  m.uvs.clear(), m.normals.clear(), m.faceMaterials.clear(), m.faceTags.clear();
+  m.positions.push_back({0, 3, 0});
+  m.triangles.push_back({m.triangles[0][0], m.triangles[0][1], uint32_t(m.positions.size() - 1)});
+  return m;
+}
+
+TEST(RepairSolid, RebuildsSurfacesThatCannotBoundASolidFromTheirVolume) {
+  // The union of the two cubes: 2 * 8 - 1.5 * 1.7 * 1.8.
+  const double unionVolume = 16 - 1.5 * 1.7 * 1.8;
+  RepairSolidOptions coarse;  // voxels of 3.5 / 96 units
+  coarse.remesh.resolution = 96;
+  Mesh one = overlappingCubes(), two = overlappingCubes();
+  const RepairSolidReport r = repairSolid(one, coarse, Context{.threads = 1});
+  ASSERT_EQ(r.repairs.size(), 1u);
+  EXPECT_NE(r.repairs[0].find("intersects itself"), std::string::npos) << r.repairs[0];
+  EXPECT_NE(r.repairs[0].find("rebuilt as the volume it encloses"), std::string::npos) << r.repairs[0];
+  const MeshConnectivity t = computeConnectivity(one);
+  EXPECT_TRUE(t.closed && t.manifold && t.oriented);
+  EXPECT_NEAR(measureSolid(one).volume, unionVolume, 0.01 * unionVolume);
+  Mesh again = one;
+  EXPECT_TRUE(repairSolid(again).repairs.empty());  // a solid: no self-intersections left
+  repairSolid(two, coarse, Context{.threads = 2});
+  EXPECT_EQ(one.positions, two.positions);
+  EXPECT_EQ(one.triangles, two.triangles);
+
+  Mesh fin = finnedCube();
+  const RepairSolidReport f = repairSolid(fin, coarse);
+  ASSERT_EQ(f.repairs.size(), 1u);
+  EXPECT_NE(f.repairs[0].find("not a manifold"), std::string::npos) << f.repairs[0];
+  EXPECT_NEAR(measureSolid(fin).volume, 8.0, 0.08);
+}
+
+TEST(RepairSolid, RefusesWhatItMayNotRebuildAndLargeHoles) {
+  RepairSolidOptions refuse;
+  refuse.remesh.resolution = 0;
+  Mesh twoCubes = overlappingCubes();
+  const std::string crossing = errorOf([&] { repairSolid(twoCubes, refuse); });
   EXPECT_NE(crossing.find("intersects itself"), std::string::npos) << crossing;
-  Mesh fin = cube();
-  fin.uvs.clear(), fin.normals.clear(), fin.faceMaterials.clear(), fin.faceTags.clear();
-  fin.positions.push_back({0, 3, 0});
-  fin.triangles.push_back({fin.triangles[0][0], fin.triangles[0][1], uint32_t(fin.positions.size() - 1)});
-  const std::string nonManifold = errorOf([&] { repairSolid(fin); });
+  Mesh fin = finnedCube();
+  const std::string nonManifold = errorOf([&] { repairSolid(fin, refuse); });
   EXPECT_NE(nonManifold.find("not a manifold"), std::string::npos) << nonManifold;
   Mesh open = makeSphere(40, 20);
   open.triangles.resize(open.triangles.size() / 2);  // a hemisphere: one hole of 40 edges
