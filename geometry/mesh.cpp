@@ -41,6 +41,16 @@ BoundingBox boundingBox(const Mesh& mesh) {
   return box;
 }
 
+double surfaceArea(const Mesh& mesh) {
+  double area = 0;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const Eigen::Vector3d a = mesh.corner(t, 0).cast<double>(), b = mesh.corner(t, 1).cast<double>(),
+                          c = mesh.corner(t, 2).cast<double>();
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  return area;
+}
+
 void validateMesh(const Mesh& mesh, const std::string& name) {
   const size_t t = mesh.triangles.size();
   if (t == 0) throw Error(name + ": the model has no triangles");

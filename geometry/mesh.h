@@ -89,6 +89,9 @@ struct BoundingBox {
 };
 BoundingBox boundingBox(const Mesh& mesh);
 
+/// Sum of the triangles' areas, in double precision.
+double surfaceArea(const Mesh& mesh);
+
 /// Throws texfab::Error (message prefixed by `name`) unless the mesh is well formed: at least one
 /// triangle, finite coordinates, indices in range, attribute arrays of the right sizes, material
 /// ids in range (an empty material list allows id 0 only).

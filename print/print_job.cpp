@@ -16,6 +16,11 @@ namespace texfab::print {
 
 namespace {
 
+// Exemplar pixels per model unit (textureScale 0 was resolved by PrintJob).
+double exemplarScale(const PrintJobOptions& o, const Image& exemplar) {
+  return o.featureSize > 0 ? std::max(exemplar.width, exemplar.height) / o.featureSize : o.textureScale;
+}
+
 // The model coloured by surface synthesis (the texture job's surface mode).
 geometry::Mesh surfaceTextured(const geometry::Mesh& mesh, const PrintExemplar& ex, const PrintJobOptions& o,
                                const Context& ctx) {
@@ -24,7 +29,7 @@ geometry::Mesh surfaceTextured(const geometry::Mesh& mesh, const PrintExemplar& 
   t.atlas.pack.width = t.atlas.pack.height = o.resolution;
   t.surface.seed = o.seed;
   t.measure = false;
-  t.textureScale = o.featureSize > 0 ? std::max(ex.color->width, ex.color->height) / o.featureSize : o.textureScale;
+  t.textureScale = exemplarScale(o, *ex.color);
   render::TextureExemplar texture;
   texture.color = ex.color;
   texture.analysis = ex.surface;
@@ -54,6 +59,9 @@ PrintJob::PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Co
   // Wound one way, outward, as texture and fracture do (a flipped triangle is no hole).
   if (const std::string repair = geometry::describeRepair(geometry::orientMesh(mesh_)); !repair.empty())
     ctx.warn(repair);
+  // The scale of the model as given (texture's), not of its closed copy.
+  if (options_.colors != PrintColors::Model && options_.textureScale == 0 && options_.featureSize == 0)
+    options_.textureScale = render::autoTextureScale(mesh_);
   if (const geometry::CloseHolesReport holes = geometry::closeHoles(mesh_); holes.holes > 0)
     ctx.warn("closed " + counted(int64_t(holes.holes), "hole") + " (" +
              counted(int64_t(holes.boundaryEdges), "boundary edge") + ") with fans of triangles");
@@ -82,11 +90,7 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
   const SolidVoxelColors* solid = nullptr;
   if (o.colors == PrintColors::Solid) {
     if (!ex.solid) throw Error("solid colours need the exemplar's solid analysis");
-    // Default: one exemplar spans a quarter of the print's height (model units along the up axis).
-    const geometry::BoundingBox box = geometry::boundingBox(mesh_);
-    const double height = std::abs((grid_.rotation * (box.max - box.min).cast<double>()).z());
-    const double span = o.featureSize > 0 ? o.featureSize : height / 4;
-    const double scale = o.textureScale > 0 ? o.textureScale : std::max(ex.color->width, ex.color->height) / span;
+    const double scale = exemplarScale(o, *ex.color);
     source.exemplar = ex.name, source.seed = o.seed, source.method = o.solid.method;
     source.contrastGain = o.solid.contrastGain, source.refinePasses = o.solid.refinePasses, source.textureScale = scale;
     auto s = std::make_unique<SolidVoxelColors>(*ex.solid, *ex.color, *ex.color, *ex.color, o.solid, scale, grid_);

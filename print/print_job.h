@@ -30,8 +30,8 @@ struct PrintJobOptions {
   /// Model: the model's own materials; Solid: the solid texture (texfab texture --mode solid);
   /// Surface: a texture synthesized over the surface first.
   PrintColors colors = PrintColors::Model;
-  /// Exemplar pixels per model unit; 0 = auto: Solid, an exemplar spans a quarter of the print's
-  /// height (or featureSize, model units one exemplar spans); Surface, the atlas density.
+  /// Exemplar pixels (voxels) per model unit, or featureSize, model units one exemplar spans;
+  /// both 0 = render::autoTextureScale, as texfab texture's, so the print shows the GLB's pattern.
   double textureScale = 0;
   double featureSize = 0;
   uint32_t seed = 1;

@@ -82,19 +82,23 @@ void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
   requireSize(ex.height, *ex.color, "height");
 }
 
+double autoTextureScale(const geometry::Mesh& mesh) {
+  const double area = geometry::surfaceArea(mesh);
+  if (!(area > 0) || !std::isfinite(area)) throw Error("the model has no surface area to scale a texture to");
+  return kAutoScaleAtlasSide * std::sqrt(kAutoScaleCoverage / area);
+}
+
+double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& o) {
+  return o.textureScale > 0 ? o.textureScale : autoTextureScale(mesh);
+}
+
 // Charts keep their surface area in UV space, so a W x H atlas has at most sqrt(W H / area) texels
 // per model unit.
 int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& o, const Image& exemplar) {
-  if (o.textureScale <= 0) return 1;
-  double area = 0;
-  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-    const Eigen::Vector3d a = mesh.corner(t, 0).cast<double>(), b = mesh.corner(t, 1).cast<double>(),
-                          c = mesh.corner(t, 2).cast<double>();
-    area += 0.5 * (b - a).cross(c - a).norm();
-  }
+  const double area = geometry::surfaceArea(mesh);
   if (!(area > 0)) return 1;
   const double fewestPixelsPerTexel =
-      o.textureScale / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area);
+      textureScaleFor(mesh, o) / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area);
   const int side = std::min(exemplar.width, exemplar.height);
   int factor = 1;
   while (2 * factor <= fewestPixelsPerTexel && side / (2 * factor) >= kMinAnalysedSide) factor *= 2;
@@ -161,13 +165,13 @@ void TextureJob::buildAtlas(const geometry::MeshOrientation& orientation) {
 // Scale: exemplar pixels per model unit, and per texel.
 void TextureJob::checkScale() {
   const Atlas& atlas = r_.atlas.atlas;
-  r_.textureScale = o_.textureScale > 0 ? o_.textureScale : atlas.texelsPerUnit;
+  r_.textureScale = textureScaleFor(mesh_, o_);
   pixelsPerTexel_ = r_.textureScale / atlas.texelsPerUnit;
   const int exemplarSide = std::min(exemplar_.width, exemplar_.height);
   if (pixelsPerTexel_ > exemplarSide / 2.0)
     throw Error("the scale puts " + figure(pixelsPerTexel_) + " exemplar pixels in one texel (the exemplar is " +
-                std::to_string(exemplarSide) + " pixels): features would be smaller than a texel; lower the scale "
-                "or raise the resolution");
+                std::to_string(exemplarSide) + " pixels): features would be smaller than a texel; lower "
+                "--texture-scale or raise --resolution");
   if (pixelsPerTexel_ > 2.0)
     warn("the exemplar is minified " + figure(pixelsPerTexel_) +
          "x (exemplar pixels per texel): its finest detail is lost; raise --resolution to keep it");

@@ -35,8 +35,7 @@ enum class TextureMode { Surface, Solid };
 
 struct TextureMeshOptions {
   TextureMode mode = TextureMode::Surface;
-  /// Exemplar pixels per model unit (solid mode: voxels per model unit); 0 = the atlas density,
-  /// one exemplar pixel per texel.
+  /// Exemplar pixels per model unit (solid mode: voxels per model unit); 0 = autoTextureScale.
   double textureScale = 0;
   atlas::GenerateAtlasOptions atlas;
   geometry::TangentFieldOptions field;        ///< orientation of the texture (surface mode)
@@ -89,11 +88,24 @@ void checkCompanionMaps(const TextureExemplar& exemplar, TextureMode mode);
 /// (synthesis::refineSolidMemoryBytes).
 double textureMeshMemoryBytes(const TextureMeshOptions& options);
 
+/// The scale at textureScale 0: the texel density of a kAutoScaleAtlasSide² atlas whose charts
+/// cover kAutoScaleCoverage of it, kAutoScaleAtlasSide * sqrt(kAutoScaleCoverage / area) exemplar
+/// pixels per model unit (about one exemplar pixel per texel at texfab texture's default
+/// resolution). It depends on the model's surface area alone, not on the atlas nor on the
+/// orientation: a higher resolution only sharpens the same pattern, and texture, fracture, cut and
+/// slice give one model the same pattern size. Throws texfab::Error for a model without area.
+inline constexpr int kAutoScaleAtlasSide = 2048;
+inline constexpr double kAutoScaleCoverage = 0.7;
+double autoTextureScale(const geometry::Mesh& mesh);
+
+/// options.textureScale, or autoTextureScale(mesh) where it is 0.
+double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& options);
+
 /// The factor (a power of two) by which the exemplar and its maps are best analysed and synthesized
 /// smaller: where options.textureScale puts at least that many exemplar pixels in every texel,
 /// whatever the atlas, detail finer than a texel would cost analysis time and memory for nothing.
-/// 1 at the auto scale (0), and never below kMinAnalysedSide pixels a side. Callers downsample the
-/// exemplar and its maps by it and divide the scale by it.
+/// Never below kMinAnalysedSide pixels a side. Callers downsample the exemplar and its maps by it
+/// and use textureScaleFor(mesh, options) divided by it as the scale.
 inline constexpr int kMinAnalysedSide = 32;
 int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& options, const Image& exemplar);
 

@@ -83,7 +83,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
            "Outer texture with --exemplar: solid (the material's interior, continuous into the cuts) or surface");
   f.text("--interior", job.interior, "Exemplar of the cut faces' solid texture (default: the --exemplar)");
   f.option("--texture-scale,--scale", o.interior.textureScale,
-           "Exemplar pixels (voxels) per model unit of both textures (0 = auto: the atlas density)", {0, 1e9})
+           "Exemplar pixels (voxels) per model unit of both textures (0 = auto, as texfab texture's)", {0, 1e9})
       ->default_str("0 (auto)");
   f.size("--resolution", o.outer.atlas.pack.width, o.outer.atlas.pack.height, "Outer atlas size (with --exemplar)",
          {atlas::PackChartsOptions::kMinSide, atlas::PackChartsOptions::kMaxSide}, true);

@@ -14,6 +14,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/repair/orient_mesh.h"
 #include "geometry/tangent_field.h"
+#include "render/texture_mesh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -151,7 +152,7 @@ void runAtlas(AtlasJob& job) {
   const geometry::TangentField field = geometry::computeTangentField(mesh, job.field);
   fieldStage.finish(counted(int64_t(field.singularTriangles.size()), "singularity", "singularities"));
   Stage jacobianStage(run.ctx(), "jacobians");
-  const double textureScale = job.textureScale > 0 ? job.textureScale : result.atlas.texelsPerUnit;
+  const double textureScale = job.textureScale > 0 ? job.textureScale : render::autoTextureScale(mesh);
   const auto jacobians = atlas::computeJacobians(mesh, result.atlas, result.fields, field, textureScale, run.ctx());
   jacobianStage.finish();
   Stage indirectionStage(run.ctx(), "indirection");
@@ -200,7 +201,7 @@ Command addAtlasCommand(CLI::App& root) {
            {{"direction", geometry::TangentFieldKind::Direction}, {"curvature", geometry::TangentFieldKind::Curvature}},
            "Tangent field: direction, or curvature (minimum principal direction)");
   f.option("--texture-scale", job->textureScale,
-           "Exemplar pixels per model unit for the Jacobians (default: the atlas density, one per texel)", positive())
+           "Exemplar pixels per model unit for the Jacobians (default: as texfab texture's)", positive())
       ->default_str("auto");
   f.option("--indirection-radius", job->indirection.radius, "Texels from chart borders with indirection entries",
            {1, 64});

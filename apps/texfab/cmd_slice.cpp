@@ -192,8 +192,8 @@ Command addSliceCommand(CLI::App& root) {
            "With --exemplar: solid (the solid texture of texfab texture --mode solid) or surface (synthesize over the "
            "surface first)");
   f.option("--texture-scale", o.textureScale,
-           "Exemplar pixels per model unit, as texfab texture's (0 = auto: an exemplar spans a quarter of the model's "
-           "height)", {0, 1e9});
+           "Exemplar pixels per model unit (0 = auto, as texfab texture's: the print shows the textured model's "
+           "pattern)", {0, 1e9});
   f.option("--feature-size", o.featureSize, "Model units one exemplar spans (instead of --texture-scale)", {0, 1e9});
   f.option("--seed", o.seed, "Random seed of the synthesis");
   wrapFlag(f, job->wrap);

@@ -131,6 +131,7 @@ void runTexture(TextureJob& job) {
   const WrapChoice wrap =
       chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
   if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
+  o.textureScale = render::textureScaleFor(in.mesh, o);
   const int downsampling = downsampleForAnalysis(o, in, run);
   bool cached = false;
   std::optional<synthesis::ExemplarAnalysis> analysis;
@@ -195,8 +196,9 @@ Command addTextureCommand(CLI::App& root) {
   f.choice("--mode", o.mode, {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}},
            "surface (synthesis over the surface) or solid (a 3-D material, seamless)");
   f.option("--texture-scale,--scale", o.textureScale,
-           "Exemplar pixels per model unit (0 = auto: the atlas density, one per texel); a scale that puts 2 or more "
-           "exemplar pixels in every texel synthesizes from a copy of the exemplar 2, 4, ... times smaller",
+           "Exemplar pixels per model unit (0 = auto: 2048*sqrt(0.7/area), one per texel of a 2048² atlas, whatever "
+           "--resolution, so a higher resolution only sharpens); a scale that puts 2 or more exemplar pixels in every "
+           "texel synthesizes from a copy of the exemplar 2, 4, ... times smaller",
            {0, kUnbounded})->default_str("0 (auto)");
   f.option("--feature-size", job->featureSize, "Model units one exemplar spans (instead of --texture-scale)", positive())
       ->default_str("");

@@ -88,6 +88,7 @@ TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplar
   // where the scale puts several exemplar pixels in every texel.
   const synthesis::ExemplarWrap exemplarWrap = chooseWrap(wrap, in.exemplar);
   o.textureScale = featureSize > 0 ? std::max(in.exemplar.width, in.exemplar.height) / featureSize : textureScale;
+  o.textureScale = render::textureScaleFor(mesh, o);
   const int factor = render::analysisDownsampling(mesh, o, in.exemplar);
   if (factor > 1) {
     for (std::optional<Image>* map : {&in.normal, &in.roughness, &in.height})

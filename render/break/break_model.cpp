@@ -163,7 +163,7 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
       if (r.outer) io.atlas.pack.texelsPerUnit = r.outer->atlas.atlas.texelsPerUnit;
       else io.atlas.pack.width = io.atlas.pack.height = 2048;
     }
-    if (io.textureScale == 0 && r.outer) io.textureScale = r.outer->textureScale;
+    if (io.textureScale == 0) io.textureScale = r.outer ? r.outer->textureScale : autoTextureScale(model);
     if (r.outer && o.outer.mode == TextureMode::Solid) io.solid = o.outer.solid;  // continuous across the crack edges
     Stage stage(ctx, "interior");
     std::vector<geometry::Mesh> meshes;
@@ -180,7 +180,9 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
     applyInterior(r.pieces, faces, *r.interior, interiorIndex);
     materials.push_back(interiorMaterial("interior", r.interior->baseColor));
   } else {
-    r.interiorScale = o.interior.textureScale > 0 ? o.interior.textureScale : r.outer ? r.outer->textureScale : 0;
+    r.interiorScale = o.interior.textureScale > 0 ? o.interior.textureScale
+                      : r.outer                  ? r.outer->textureScale
+                                                 : autoTextureScale(model);
     r.interiorSolid = o.interior.solid;
   }
   for (Piece& p : r.pieces) p.mesh.materials = materials;

@@ -32,7 +32,7 @@ struct BreakModelOptions {
   geometry::RepairSolidOptions repair;
   TextureMeshOptions outer;          ///< the outer texture, when an outer exemplar is given
   /// The cut faces' atlas and solid texture. Its textureScale 0 = the outer texture's scale when
-  /// the job textures the outside, else the cut faces' atlas density.
+  /// the job textures the outside, else autoTextureScale of the model.
   CutFaceTextureOptions interior;
 
   /// One seed and one solid schedule for every texture of the job (the outer texture's surface or

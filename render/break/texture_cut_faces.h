@@ -28,7 +28,7 @@ struct CutFaceTextureOptions {
   atlas::GenerateAtlasOptions atlas;       ///< resolution and gutter of the cut faces' atlas
   synthesis::SolidSynthesisOptions solid;  ///< seed and schedule, as the texture job's solid mode
   /// Voxels of the solid texture per model unit; 0 = the atlas density (one voxel per texel).
-  /// Give the outer texture's scale to make the cut faces continue it.
+  /// breakModel gives the outer texture's scale (autoTextureScale of the model without one).
   double textureScale = 0;
 };
 

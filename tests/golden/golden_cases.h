@@ -58,17 +58,17 @@ inline constexpr Stage kSolidClampTiles[] = {
 inline constexpr Stage kAtlasTexelUvs[] = {{"atlas", "66752b2be1750fd4"}};
 inline constexpr Stage kSurfaceTexture[] = {{"analysis", "ec0cf9cad759bed8"},
                                             {"atlas", "427d4aeff5f1272e"},
-                                            {"fields", "37143214d25b59bb"},
-                                            {"synthesis", "3153ae9f5a2e5c79"},
-                                            {"bake", "3adea9d1a4d51a97"}};
+                                            {"fields", "73a4517303db2e27"},
+                                            {"synthesis", "4b0bda9761edb9f7"},
+                                            {"bake", "bc2955c075666386"}};
 inline constexpr Stage kSolidTexture[] = {
-    {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "9daa397972e6428e"}};
-inline constexpr Stage kGlbBytes[] = {{"bake", "3adea9d1a4d51a97"}, {"encode", "b4cb60ad089f5722"}};
+    {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "cf7a367a6c5f78a3"}};
+inline constexpr Stage kGlbBytes[] = {{"bake", "bc2955c075666386"}, {"encode", "ed15f9c6704d96de"}};
 inline constexpr Stage kFracture[] = {
-    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "b8fcb69e829cd12f"},
-    {"encode", "7e0c5e10245e66af"}};
+    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "2204730aed24a223"},
+    {"encode", "9b841400b37fd63e"}};
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
-inline constexpr Stage kSliceLayers[] = {{"layers", "3cb3555426f2c619"}, {"manifest", "3bbd5e24e47c0ff3"}};
+inline constexpr Stage kSliceLayers[] = {{"layers", "07a3de686f0056f6"}, {"manifest", "460eb9549cde402a"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {

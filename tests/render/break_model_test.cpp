@@ -52,14 +52,23 @@ BreakModelOptions fractureOptions(int pieces, int resolution = 256) {
   return o;
 }
 
+// fractureOptions at the density of the model's atlas (the default scale, a 2048² atlas's, would
+// minify the exemplar in these small atlases).
+BreakModelOptions atAtlasDensity(BreakModelOptions o, const geometry::Mesh& model) {
+  o.interior.textureScale = autoTextureScale(model) * o.outer.atlas.pack.width / kAutoScaleAtlasSide;
+  return o;
+}
+
 InteriorExemplar interior() { return {&marble().image, &marble().solid}; }
 
 BrokenModel fracturedSphere(int pieces, bool texturedOutside, const Context& ctx = {}, uint32_t seed = 1) {
   TextureExemplar outer;
   if (texturedOutside) outer.color = &marble().image, outer.solidAnalysis = &marble().solid;
-  BreakModelOptions o = fractureOptions(pieces);
+  const geometry::Mesh sphere = makeSphere(32, 16);
+  BreakModelOptions o = atAtlasDensity(fractureOptions(pieces), sphere);
   o.fracture->seed = seed;
-  return breakModel(makeSphere(32, 16), outer, interior(), o, ctx);
+  o.outer.textureScale = o.interior.textureScale;
+  return breakModel(sphere, outer, interior(), o, ctx);
 }
 
 // Mean difference of horizontally adjacent chart texels of the interior atlas: its noise level.
