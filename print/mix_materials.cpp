@@ -7,6 +7,9 @@
 #include "core/mip_pyramid.h"
 #include "print/color_difference.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -197,19 +200,25 @@ MaterialMixer::MaterialMixer(const std::vector<PrintMaterial>& materials, const 
   std::vector<std::array<float, 3>> colors;
   for (int i : opaque_) colors.push_back(linear_[size_t(i)]);
   const size_t n = opaque_.size();
-  table_.resize(size_t(kLattice) * kLattice * kLattice * n);
+  constexpr size_t kEntries = size_t(kLattice) * kLattice * kLattice;
+  std::vector<std::array<double, 3>> targets(kEntries);
   for (int b = 0; b < kLattice; ++b)
     for (int g = 0; g < kLattice; ++g)
       for (int r = 0; r < kLattice; ++r) {
-        std::array<double, 3> c{double(float(r) / (kLattice - 1)), double(float(g) / (kLattice - 1)),
-                                double(float(b) / (kLattice - 1))};
+        std::array<double, 3>& c = targets[size_t(r) + size_t(kLattice) * (size_t(g) + size_t(kLattice) * size_t(b))];
+        c = {double(float(r) / (kLattice - 1)), double(float(g) / (kLattice - 1)), double(float(b) / (kLattice - 1))};
         if (options.profile)  // the colour the printer reproduces for c (may lie outside [0, 1])
           c = linearSrgbFromLabD50(options.profile->reproduced(
               {double(linearToSrgb(float(c[0]))), double(linearToSrgb(float(c[1]))), double(linearToSrgb(float(c[2])))}));
-        const std::vector<double> f = mixFor(colors, c, options.space);
-        const size_t at = (size_t(r) + size_t(kLattice) * (size_t(g) + size_t(kLattice) * size_t(b))) * n;
-        for (size_t i = 0; i < n; ++i) table_[at + i] = float(f[i]);
       }
+  // Each entry alone: the table is the same on any number of threads.
+  table_.resize(kEntries * n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, kEntries, 64), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t e = range.begin(); e != range.end(); ++e) {
+      const std::vector<double> f = mixFor(colors, targets[e], options.space);
+      for (size_t i = 0; i < n; ++i) table_[e * n + i] = float(f[i]);
+    }
+  });
 }
 
 void MaterialMixer::fractions(const float rgb[3], float* out) const {
