@@ -58,17 +58,17 @@ inline constexpr Stage kSolidClampTiles[] = {
 inline constexpr Stage kAtlasTexelUvs[] = {{"atlas", "66752b2be1750fd4"}};
 inline constexpr Stage kSurfaceTexture[] = {{"analysis", "ec0cf9cad759bed8"},
                                             {"atlas", "427d4aeff5f1272e"},
-                                            {"fields", "73a4517303db2e27"},
-                                            {"synthesis", "4b0bda9761edb9f7"},
-                                            {"bake", "bc2955c075666386"}};
+                                            {"fields", "389e0a7c229b0a0c"},
+                                            {"synthesis", "6fab6e5feafcd789"},
+                                            {"bake", "42430333584d8224"}};
 inline constexpr Stage kSolidTexture[] = {
-    {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "cf7a367a6c5f78a3"}};
-inline constexpr Stage kGlbBytes[] = {{"bake", "bc2955c075666386"}, {"encode", "ed15f9c6704d96de"}};
+    {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "c008a90264b61740"}};
+inline constexpr Stage kGlbBytes[] = {{"bake", "42430333584d8224"}, {"encode", "dcf64f875ac17e39"}};
 inline constexpr Stage kFracture[] = {
-    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "2204730aed24a223"},
-    {"encode", "9b841400b37fd63e"}};
+    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "0ef4d4fba85e697a"},
+    {"encode", "3bc6ad3f64202c3a"}};
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
-inline constexpr Stage kSliceLayers[] = {{"layers", "07a3de686f0056f6"}, {"manifest", "460eb9549cde402a"}};
+inline constexpr Stage kSliceLayers[] = {{"layers", "f5a4ceac04d174ac"}, {"manifest", "c283acca78a4fa0d"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {
@@ -310,6 +310,9 @@ inline render::TextureMeshResult textureElephant(render::TextureMode mode, Backe
   render::TextureMeshOptions options;
   options.mode = mode;
   options.atlas.pack.width = options.atlas.pack.height = 256;
+  // The 256^2 atlas's own density: the default (a 2048^2 atlas's) would minify 8x, and in solid mode
+  // point-sample one voxel in eight, each with its own dependency chain.
+  options.textureScale = render::autoTextureScale(mesh) * 256 / render::kAutoScaleAtlasSide;
   options.measure = false;
   options.surface.seed = options.solid.seed = 5;
   return render::textureMesh(mesh, ex, options, Context{.backend = backend});
@@ -358,6 +361,7 @@ inline Stages fracture(Backend backend = Backend::Cpu) {
   options.fracture.emplace().pieces = 3;
   options.fracture->seed = 2;
   options.interior.atlas.pack.width = options.interior.atlas.pack.height = 128;
+  options.interior.textureScale = render::autoTextureScale(mesh) * 128 / render::kAutoScaleAtlasSide;  // see textureElephant
   options.shareTextureSettings(2, {});
   const render::BrokenModel model =
       render::breakModel(mesh, {}, {&marble32(), &solidAnalysis32()}, options, Context{.threads = 2, .backend = backend});
@@ -386,6 +390,7 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
   options.grid = {.heightMm = 6, .dpiX = 127, .dpiY = 127, .layerMm = 0.2, .up = geometry::UpAxis::Y};
   options.voxelize.shellMm = 0.6;
   options.colors = print::PrintColors::Solid;
+  options.textureScale = 120;  // about one voxel per print voxel (see textureElephant)
   const Context ctx{.threads = 2, .backend = backend};
   const print::PrintJob job(geometry::readMesh(bundled("meshes/elephant.off")), options, ctx);
   const test::TempDir dir("texfab-golden");

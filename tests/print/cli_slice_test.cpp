@@ -112,8 +112,11 @@ TEST(CliSlice, ReportsTheColourAsPrinted) {
   nlohmann::json error[2];
   for (int threads : {1, 2}) {
     const std::string name = "t" + std::to_string(threads);
+    // --texture-scale: about one solid voxel per print voxel; the default (texture's) would sample
+    // one in 16 on this 8 mm print, each with its own dependency chain.
     const texfab::test::CliResult run =
         slice(quoted(elephant) + " -e " + quoted(marble) + " -o " + quoted(dir / name) + " --height 8 --dpi 300" +
+              " --texture-scale 120" +
               " --layer 0.05 --shell 1.5 -q --threads " + std::to_string(threads) + " --cache-dir " +
               quoted(dir / "cache") + " --report " + quoted(dir / (name + ".json")));
     ASSERT_EQ(run.status, 0) << run.err;

@@ -93,7 +93,9 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
   // Solid mode, a small exemplar (the solid precomputation grows with its size).
   const texfab::Image small = texfab::crop(texfab::readImage(kExemplar), 0, 0, 32, 32);
   texfab::writeImage(small, d / "small.png");
-  ASSERT_EQ(0, texture(Args() << kModel << "-e" << d / "small.png" << "--mode solid --resolution 256 -q --cache-dir"
+  // At the 256² atlas's density (the default, a 2048² atlas's, would sample one voxel in eight).
+  ASSERT_EQ(0, texture(Args() << kModel << "-e" << d / "small.png"
+                              << "--mode solid --resolution 256 --texture-scale 192 -q --cache-dir"
                               << d / "cache" << "-o" << d / "solid.glb" << "--report" << d / "solid.json").status);
   expectValidGltf(d / "solid.glb");
   const nlohmann::json r = readJson(d / "solid.json");
