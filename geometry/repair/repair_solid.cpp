@@ -207,7 +207,8 @@ void rebuildFromVolume(Mesh& mesh, SurfaceMesh& sm, const std::string& fault, co
                        RepairSolidReport& r, const Context& ctx) {
   if (o.remesh.resolution == 0) throw Error(fault + ": cutting needs a solid; repair it in a mesh editor");
   Stage stage(ctx, "volume remesh");
-  const double voxel = double((boundingBox(mesh).max - boundingBox(mesh).min).maxCoeff()) / o.remesh.resolution;
+  const BoundingBox box = boundingBox(mesh);
+  const double voxel = double((box.max - box.min).maxCoeff()) / o.remesh.resolution;
   Mesh rebuilt;
   try {
     rebuilt = remeshVolume(mesh, o.remesh, stage.inner());

@@ -155,6 +155,10 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
   size_t count = 0;
   for (const auto& f : faces) count += f.size();
   std::vector<geometry::Material> materials = solid.materials;
+  // The cut faces' solid texture: the scale given, else the outer texture's, else the model's default.
+  r.interiorScale = o.interior.textureScale > 0 ? o.interior.textureScale
+                    : r.outer                  ? r.outer->textureScale
+                                               : autoTextureScale(model);
   if (count) {
     if (!interior.color || !interior.analysis) throw Error("the cut faces need an interior exemplar (--interior or --exemplar)");
     CutFaceTextureOptions io = o.interior;
@@ -163,7 +167,7 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
       if (r.outer) io.atlas.pack.texelsPerUnit = r.outer->atlas.atlas.texelsPerUnit;
       else io.atlas.pack.width = io.atlas.pack.height = 2048;
     }
-    if (io.textureScale == 0) io.textureScale = r.outer ? r.outer->textureScale : autoTextureScale(model);
+    io.textureScale = r.interiorScale;
     if (r.outer && o.outer.mode == TextureMode::Solid) io.solid = o.outer.solid;  // continuous across the crack edges
     Stage stage(ctx, "interior");
     std::vector<geometry::Mesh> meshes;
@@ -175,14 +179,10 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
       r.notes.push_back("the cut faces get " + std::to_string(int(std::lround(inner))) + " texels per unit, the outer "
                         "surface " + std::to_string(int(std::lround(r.outer->atlas.atlas.texelsPerUnit))) +
                         ": a larger interior atlas shows them as sharply");
-    r.interiorScale = r.interior->textureScale;
     r.interiorSolid = io.solid;
     applyInterior(r.pieces, faces, *r.interior, interiorIndex);
     materials.push_back(interiorMaterial("interior", r.interior->baseColor));
   } else {
-    r.interiorScale = o.interior.textureScale > 0 ? o.interior.textureScale
-                      : r.outer                  ? r.outer->textureScale
-                                                 : autoTextureScale(model);
     r.interiorSolid = o.interior.solid;
   }
   for (Piece& p : r.pieces) p.mesh.materials = materials;
