@@ -62,6 +62,7 @@ void BM_SliceBunny(benchmark::State& state) {
     print::SliceWriter writer(out, true);
     const print::PrintJobResult r = job.slice({&exemplar, &analysis, nullptr, "marble.png"}, 0, -1, writer,
                                                model.filename().string(), ctx);
+    writer.publish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const print::SliceReport& s = r.slice.report;
     state.counters["seconds"] = seconds;

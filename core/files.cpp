@@ -9,12 +9,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <mutex>
 #include <set>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 namespace texfab {
@@ -129,6 +131,17 @@ OutputSet::~OutputSet() {
   for (const Staging& s : stagings_) discardTemporary(s.staging);
 }
 
+std::string withOutputNames(std::string message) {
+  static constexpr std::string_view kStaging = ".texfab-output.tmp-";  // temporaryPathFor(folder / "texfab-output")
+  for (size_t at = message.find(kStaging); at != std::string::npos; at = message.find(kStaging, at)) {
+    size_t end = at + kStaging.size();
+    while (end < message.size() && (std::isdigit(static_cast<unsigned char>(message[end])) || message[end] == '-')) ++end;
+    if (end < message.size() && message[end] == '/') message.erase(at, end + 1 - at);
+    else at = end;
+  }
+  return message;
+}
+
 const OutputSet::Staging& OutputSet::stagingFor(const fs::path& folder) {
   std::error_code ec;
   const fs::path key = fs::weakly_canonical(folder, ec);
@@ -179,6 +192,7 @@ fs::path OutputSet::addFolder(const fs::path& path) {
 
 void OutputSet::commit(const Context& ctx) {
   ctx.checkCancelled();
+  for (const auto& step : steps_) step();
   // Side files first, then the reserved outputs in order: a model never points at missing files.
   for (const Staging& s : stagings_) {
     std::vector<fs::path> entries;

@@ -27,6 +27,11 @@ void commitFile(const std::filesystem::path& tmp, const std::filesystem::path& p
 /// Removes a temporary (a file or a folder) and forgets it; never throws.
 void discardTemporary(const std::filesystem::path& tmp);
 
+/// `message` with OutputSet's staging folders taken out of the paths it names, so that an error in
+/// writing a staged output names the output as the user gave it ("out/a.glb", not
+/// "out/.texfab-output.tmp-41-0/a.glb").
+std::string withOutputNames(std::string message);
+
 /// Removes every registered temporary. For a signal handler's thread, just before the process exits.
 void removeRegisteredTemporaries();
 
@@ -60,8 +65,11 @@ public:
   /// Reserves a new output folder `path`, which must not exist or be empty; returns the staged
   /// folder to fill.
   std::filesystem::path addFolder(const std::filesystem::path& path);
-  /// Moves every staged file into place (side files first, reserved outputs last, in the order
-  /// they were added). Throws Cancelled first if `ctx` has been cancelled.
+  /// Runs `step` at commit, before the staged files move: an output staged by its own writer (a
+  /// slice folder) that must appear with the others, or not at all.
+  void atCommit(std::function<void()> step) { steps_.push_back(std::move(step)); }
+  /// Moves every staged file into place (the atCommit steps, then side files, then reserved outputs
+  /// in the order they were added). Throws Cancelled first if `ctx` has been cancelled.
   void commit(const Context& ctx);
 
 private:
@@ -73,6 +81,7 @@ private:
   std::filesystem::path reserve(const std::filesystem::path& path);
   std::vector<Staging> stagings_;
   std::vector<std::filesystem::path> outputs_;  ///< the reserved final paths, in order
+  std::vector<std::function<void()>> steps_;
   bool committed_ = false;
 };
 

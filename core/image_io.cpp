@@ -9,6 +9,7 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -26,6 +27,16 @@ std::string lower(std::string s) {
 
 uint32_t readBigEndian32(const uint8_t* p) {
   return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+// Every image texfab reads is synthesis data (an exemplar, a companion map, coordinates) or is
+// compared with it: a pixel that is not a number would spread through every neighbourhood it meets.
+Image finiteOnly(Image image, const std::string& name) {
+  const auto bad = std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); });
+  if (bad > 0)
+    throw Error(name + ": " + std::to_string(bad) + " pixel value" + (bad > 1 ? "s are" : " is") +
+                " not a finite number (NaN or infinity)");
+  return image;
 }
 
 Image readPatFile(const fs::path& path) {
@@ -129,13 +140,13 @@ Image readImage(const fs::path& path) {
   if (!fs::exists(path, ec)) throw Error(name + ": no such file");
   if (fs::is_directory(path, ec)) throw Error(name + ": is a directory, not an image");
   if (lower(path.extension().string()) == ".pat") return readPatFile(path);
-  return oiio().read(name, physicalMemoryBytes() / 2);
+  return finiteOnly(oiio().read(name, physicalMemoryBytes() / 2), name);
 }
 
 Image decodeImage(std::span<const uint8_t> bytes, const std::string& name) {
   const std::optional<ImageCodec> codec = imageCodecOf(bytes);
   if (!codec) throw Error(name + ": not a PNG, JPEG or WebP image");
-  return oiio().decode(bytes, std::string("memory") + extensionOf(*codec), name, physicalMemoryBytes() / 2);
+  return finiteOnly(oiio().decode(bytes, std::string("memory") + extensionOf(*codec), name, physicalMemoryBytes() / 2), name);
 }
 
 void checkImageWritable(const fs::path& path) {

@@ -20,7 +20,8 @@ namespace texfab {
 inline constexpr int kMaxImageSide = 65536;
 
 /// Reads an image. Grey, grey+alpha, RGB and RGBA are kept as 1, 2, 3, 4 channels; more channels
-/// are kept as they are. `format` is set from the file's precision.
+/// are kept as they are. `format` is set from the file's precision. Refuses an image holding a
+/// value that is not a finite number (a float image's NaN or infinity).
 Image readImage(const std::filesystem::path& path);
 
 /// Decodes a PNG, JPEG or WebP image held in memory (e.g. embedded in a model file); `name` is

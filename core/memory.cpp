@@ -14,12 +14,19 @@ uint64_t physicalMemoryBytes() {
   return pages > 0 && pageSize > 0 ? uint64_t(pages) * uint64_t(pageSize) : uint64_t(8) << 30;
 }
 
-void checkMemory(double bytes, const std::string& what) {
-  const double available = double(physicalMemoryBytes());
-  if (bytes <= 0.8 * available) return;
-  char text[160];
-  std::snprintf(text, sizeof text, " needs about %.1f GiB of memory, more than this machine's %.1f GiB allow", bytes / 1073741824.0,
-                available / 1073741824.0);
+void checkMemory(double bytes, const std::string& what, uint64_t limit) {
+  const double machine = double(physicalMemoryBytes());
+  const double allowed = limit > 0 ? double(limit) : kDefaultMemoryShare * machine;
+  if (bytes <= allowed) return;
+  constexpr double kGiB = 1073741824.0;
+  char text[200];
+  if (limit > 0)
+    std::snprintf(text, sizeof text, " needs about %.2f GiB of memory, more than the %.2f GiB allowed (--max-memory)",
+                  bytes / kGiB, allowed / kGiB);
+  else
+    std::snprintf(text, sizeof text,
+                  " needs about %.1f GiB of memory, more than the %.1f GiB allowed (%.0f %% of this machine's %.1f GiB)",
+                  bytes / kGiB, allowed / kGiB, kDefaultMemoryShare * 100, machine / kGiB);
   throw Error(what + text);
 }
 

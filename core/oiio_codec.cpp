@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
+#include <string_view>
 
 namespace texfab::detail {
 namespace {
@@ -110,11 +112,42 @@ Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t maxBytes) {
   return image;
 }
 
+// The extension of the format a file's first bytes name, or null (TGA, for one, has no signature).
+const char* extensionBySignature(const std::string& file) {
+  unsigned char b[12] = {};
+  if (FILE* f = std::fopen(file.c_str(), "rb")) {
+    const size_t n = std::fread(b, 1, sizeof b, f);
+    std::fclose(f);
+    if (n < sizeof b) return nullptr;
+  }
+  auto starts = [&](std::string_view magic) { return std::memcmp(b, magic.data(), magic.size()) == 0; };
+  if (starts("\x89PNG")) return "png";
+  if (starts("\xff\xd8\xff")) return "jpg";
+  if (starts("RIFF") && std::memcmp(b + 8, "WEBP", 4) == 0) return "webp";
+  if (starts(std::string_view("II*\0", 4)) || starts(std::string_view("MM\0*", 4))) return "tif";
+  if (starts("\x76\x2f\x31\x01")) return "exr";
+  if (starts("#?")) return "hdr";
+  if (starts("BM")) return "bmp";
+  if (starts("GIF8")) return "gif";
+  return nullptr;
+}
+
+// The reader of the file's extension, else the one its signature names (a JPEG saved as .png).
+// Not OIIO's own fallback (try_all_readers, off in this module), which tries every reader it has:
+// some take seconds to refuse a corrupt file of a few hundred bytes.
 Image read(const std::string& name, uint64_t maxBytes) {
   const OIIO::ImageSpec config = readConfig();
   const QuietStderr quiet;
   auto in = OIIO::ImageInput::open(name, &config);
-  if (!in) throw Error(name + ": cannot read image: " + oneLine(OIIO::geterror()));
+  if (!in) {
+    const std::string why = OIIO::geterror();
+    if (const char* extension = extensionBySignature(name)) {
+      in = OIIO::ImageInput::create(extension, false, &config);
+      OIIO::ImageSpec spec;
+      if (in && !in->open(name, spec, config)) in.reset();
+    }
+    if (!in) throw Error(name + ": cannot read image: " + oneLine(why));
+  }
   return decode(*in, name, maxBytes);
 }
 
@@ -126,8 +159,14 @@ Image decodeBytes(std::span<const uint8_t> bytes, const std::string& pseudoName,
   void* proxyPointer = &proxy;
   config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
   const QuietStderr quiet;
-  auto in = OIIO::ImageInput::open(pseudoName, &config, &proxy);
-  if (!in) throw Error(name + ": cannot decode image: " + oneLine(OIIO::geterror()));
+  // The reader of the format the bytes' signature named, and no other: OIIO's open() would try
+  // every reader it has on bytes its first choice refuses (LibRaw's alone costs ~30 ms).
+  auto in = OIIO::ImageInput::create(pseudoName, false, &config, &proxy);
+  OIIO::ImageSpec spec;
+  if (!in || !in->open(pseudoName, spec, config)) {
+    const std::string why = in ? in->geterror() : OIIO::geterror();
+    throw Error(name + ": cannot decode image: " + oneLine(why));
+  }
   return decode(*in, name, maxBytes);
 }
 
@@ -176,5 +215,6 @@ constexpr OiioCodec kCodec{read, decodeBytes, canWrite, write, encode};
 } // namespace texfab::detail
 
 extern "C" __attribute__((visibility("default"))) const texfab::detail::OiioCodec* texfab_oiio_codec() {
+  OIIO::attribute("try_all_readers", 0);  // see read()
   return &texfab::detail::kCodec;
 }

@@ -53,16 +53,20 @@ IccProfile::IccProfile(const std::filesystem::path& path) : state_(std::make_uni
   s.device = cmsOpenProfileFromFileTHR(s.context, name.c_str(), "r");
   if (!s.device)
     throw Error(name + ": not an ICC profile" + (s.lastError.empty() ? std::string() : " (" + s.lastError + ")"));
-  const cmsProfileClassSignature cls = cmsGetDeviceClass(s.device);
+  // Signatures as the integers a file holds: LittleCMS passes any value through its enum types.
+  const uint32_t cls = cmsGetDeviceClass(s.device);
   if (cls != cmsSigOutputClass && cls != cmsSigDisplayClass && cls != cmsSigColorSpaceClass)
     throw Error(name + ": an ICC profile of class '" +
                 (cls == cmsSigInputClass ? std::string("input") : cls == cmsSigLinkClass ? "device link"
                  : cls == cmsSigAbstractClass ? "abstract" : cls == cmsSigNamedColorClass ? "named colour" : "other") +
                 "', not an output, display or colour-space profile of a printer");
-  const cmsColorSpaceSignature space = cmsGetColorSpace(s.device);
+  const uint32_t space = cmsGetColorSpace(s.device);
   if (space == cmsSigLabData || space == cmsSigXYZData)
     throw Error(name + ": an ICC profile of the connection space itself, not of a device");
-  s.channels = size_t(cmsChannelsOf(space));
+  // Every signature LittleCMS knows is below 2^31 (four ASCII letters); others are no colour space.
+  const cmsInt32Number channels = space < 0x80000000u ? cmsChannelsOfColorSpace(cmsColorSpaceSignature(space)) : -1;
+  if (channels <= 0) throw Error(name + ": an ICC profile of an unknown colour space");
+  s.channels = size_t(channels);
   const cmsUInt32Number deviceFormat = cmsFormatterForColorspaceOfProfile(s.device, 2, FALSE);  // 16 bits: clamped
   s.srgb = cmsCreate_sRGBProfileTHR(s.context);
   s.lab = cmsCreateLab4ProfileTHR(s.context, nullptr);  // D50

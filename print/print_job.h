@@ -65,8 +65,8 @@ public:
   const geometry::Mesh& mesh() const { return mesh_; }
   /// Memory the slicing needs at worst, with a layer in flight per thread of `ctx`.
   double memoryBytes(const Context& ctx) const;
-  /// Slices layers [first, first + count) (count -1: through the last) into `writer` and commits
-  /// it. `modelName` goes to the manifest. Stages: "surface texture" (Surface), "voxelizer", "slice".
+  /// Slices layers [first, first + count) (count -1: through the last) into `writer` and seals it
+  /// (the caller publishes it: SliceWriter::publish). `modelName` goes to the manifest. Stages: "surface texture" (Surface), "voxelizer", "slice".
   PrintJobResult slice(const PrintExemplar& exemplar, int first, int count, SliceWriter& writer,
                        const std::string& modelName, const Context& ctx = {}) const;
 

@@ -347,7 +347,7 @@ SliceResult sliceModel(const print::LayerVoxelizer& voxelizer, VoxelColorSource&
     if (mixer)
       for (int i = 0; i < n; ++i) tally.add(batch + i, sums[size_t(i)]);
   }
-  writer.commit(printInfo(g, o, voxelizer.options().shellMm, source), o.firstLayer, count, g.layers);
+  writer.seal(printInfo(g, o, voxelizer.options().shellMm, source), o.firstLayer, count, g.layers);
   SliceReport& r = result.report;
   r.layers = count;
   r.colorError = tally.finish();

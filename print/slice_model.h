@@ -111,7 +111,8 @@ struct PrintSource {
 /// flight per thread of `ctx`. Callers refuse prints whose layers do not fit.
 uint64_t sliceMemoryBytes(const print::PrintGrid& grid, const SliceOptions& options, const Context& ctx);
 
-/// Slices the layer range of `options` into `writer` and commits it with the manifest. Stages
+/// Slices the layer range of `options` into `writer` and seals it with the manifest (the caller
+/// publishes it: SliceWriter::publish). Stages
 /// reported through ctx: "slice" (advancing per layer written). Throws texfab::Error on bad
 /// options or a failed write (nothing is committed then).
 /// The manifest's "print" block (grid, materials, options and `source`) is written from the

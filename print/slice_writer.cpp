@@ -45,6 +45,40 @@ nlohmann::ordered_json manifestOf(const nlohmann::ordered_json& print, int first
   return m;
 }
 
+bool isString(const nlohmann::ordered_json& m, const char* key) { return m.contains(key) && m[key].is_string(); }
+bool isInteger(const nlohmann::ordered_json& m, const char* key) { return m.contains(key) && m[key].is_number_integer(); }
+
+// Throws unless `m` has every field that readers of manifests use, of its type, with a layer range
+// inside the print: what a manifest's reader may take for granted.
+void checkManifest(const nlohmann::ordered_json& m, const std::string& where) {
+  if (!m.is_object() || !isString(m, "format") || m["format"] != "texfab-slices")
+    throw Error(where + ": not a texfab slice manifest");
+  if (!m.contains("print") || !m["print"].is_object()) throw Error(where + ": no \"print\" block");
+  const nlohmann::ordered_json* layers = m.contains("layers") ? &m["layers"] : nullptr;
+  if (!layers || !layers->is_object() || !isInteger(*layers, "first") || !isInteger(*layers, "count") ||
+      !isInteger(*layers, "total"))
+    throw Error(where + ": \"layers\" must hold the integers first, count and total");
+  const int64_t first = (*layers)["first"], count = (*layers)["count"], total = (*layers)["total"];
+  if (first < 0 || count < 0 || total < 0 || total > int64_t(1) << 30 || first > total - count)
+    throw Error(where + ": layers " + std::to_string(first) + " + " + std::to_string(count) + " lie outside the print's " +
+                std::to_string(total));
+  if (!m.contains("files") || !m["files"].is_array()) throw Error(where + ": no \"files\" list");
+  const nlohmann::ordered_json& files = m["files"];
+  if (int64_t(files.size()) != count)
+    throw Error(where + ": " + std::to_string(files.size()) + " files for " + std::to_string(count) + " layers");
+  for (size_t i = 0; i < files.size(); ++i) {
+    const auto& f = files[i];
+    if (!f.is_object() || !isInteger(f, "layer") || !isString(f, "file") || !f.contains("bytes") ||
+        !f["bytes"].is_number_unsigned() || !isString(f, "sha256"))
+      throw Error(where + ": a file entry needs layer, file, bytes and sha256: " + f.dump());
+    const std::string name = f["file"];
+    if (f["layer"] != first + int64_t(i) || name.empty() || name == "." || name == ".." ||
+        name.find('/') != std::string::npos)
+      throw Error(where + ": file entry " + std::to_string(i) + " is not layer " + std::to_string(first + int64_t(i)) +
+                  " in a file of the folder: " + f.dump());
+  }
+}
+
 } // namespace
 
 std::string sliceFileName(int layer, int totalLayers) {
@@ -65,7 +99,7 @@ std::string sha256Hex(std::span<const uint8_t> bytes) {
   return out;
 }
 
-SliceWriter::SliceWriter(fs::path folder, bool force) : folder_(std::move(folder)), force_(force) {
+SliceWriter::SliceWriter(fs::path folder, bool force) : folder_(std::move(folder)) {
   if (folder_.filename().empty()) folder_ = folder_.parent_path();  // "out/" names "out"
   std::error_code ec;
   if (fs::exists(folder_, ec)) {
@@ -113,7 +147,7 @@ void SliceWriter::addLayerFile(const fs::path& source, const SliceFile& file) {
   files_.push_back(file);
 }
 
-void SliceWriter::commit(const nlohmann::ordered_json& print, int firstLayer, int layerCount, int totalLayers) {
+void SliceWriter::seal(const nlohmann::ordered_json& print, int firstLayer, int layerCount, int totalLayers) {
   std::sort(files_.begin(), files_.end(), [](const SliceFile& a, const SliceFile& b) { return a.layer < b.layer; });
   if (int(files_.size()) != layerCount)
     throw Error("internal: " + std::to_string(files_.size()) + " layers written, " + std::to_string(layerCount) + " expected");
@@ -121,6 +155,11 @@ void SliceWriter::commit(const nlohmann::ordered_json& print, int firstLayer, in
     if (files_[size_t(i)].layer != firstLayer + i) throw Error("internal: layer " + std::to_string(firstLayer + i) + " missing");
   const std::string text = manifestOf(print, firstLayer, layerCount, totalLayers, files_).dump(2) + "\n";
   writeFile(kManifest, {reinterpret_cast<const uint8_t*>(text.data()), text.size()});
+  sealed_ = true;
+}
+
+void SliceWriter::publish() {
+  if (!sealed_) throw Error("internal: " + folder_.string() + " published before its manifest was written");
   std::error_code ec;
   fs::path replaced;
   if (fs::exists(folder_, ec)) {
@@ -147,8 +186,7 @@ nlohmann::ordered_json readSliceManifest(const fs::path& folder) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(path.string() + ": not valid JSON (" + e.what() + ")");
   }
-  if (m.value("format", "") != "texfab-slices" || !m.contains("print") || !m.contains("layers") || !m.contains("files"))
-    throw Error(path.string() + ": not a texfab slice manifest");
+  checkManifest(m, path.string());
   return m;
 }
 
@@ -179,7 +217,7 @@ void mergeSliceFolders(std::span<const fs::path> shards, const fs::path& output,
     for (const auto& f : entry.second["files"]) {
       const SliceFile file{f.value("layer", -1), f.value("file", ""), f.value("bytes", uint64_t(0)), f.value("sha256", "")};
       const fs::path source = entry.first / file.file;
-      if (file.file.find('/') != std::string::npos || sha256Hex(readBytes(source)) != file.sha256)
+      if (sha256Hex(readBytes(source)) != file.sha256)
         throw Error(source.string() + ": does not match its checksum in the manifest");
       writer.addLayerFile(source, file);
     }

@@ -59,15 +59,24 @@ public:
   /// The temporary folder (files written there appear in the output at commit).
   const std::filesystem::path& staging() const { return staging_; }
 
-  /// Writes the manifest from `print` and `layers` with the recorded files (sorted by layer) and
-  /// renames the temporary folder onto the output.
-  void commit(const nlohmann::ordered_json& print, int firstLayer, int layerCount, int totalLayers);
+  /// Completes the temporary folder: the manifest from `print` and `layers` with the recorded files
+  /// (sorted by layer). Throws texfab::Error when a layer of the range is missing.
+  void seal(const nlohmann::ordered_json& print, int firstLayer, int layerCount, int totalLayers);
+  /// Renames the sealed temporary folder onto the output (replacing it with `force`). A command
+  /// with other outputs does this when it commits them (OutputSet::atCommit), so a job stopped
+  /// after its layers leaves no folder either.
+  void publish();
+  /// seal(), then publish().
+  void commit(const nlohmann::ordered_json& print, int firstLayer, int layerCount, int totalLayers) {
+    seal(print, firstLayer, layerCount, totalLayers);
+    publish();
+  }
 
   const std::vector<SliceFile>& files() const { return files_; }
 
 private:
   std::filesystem::path folder_, staging_;
-  bool force_ = false, committed_ = false;
+  bool sealed_ = false, committed_ = false;
   std::mutex mutex_;
   std::vector<SliceFile> files_;
 };

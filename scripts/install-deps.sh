@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what texfab needs to build and test on Debian 12, skipping what is already installed.
 # Debian packages only (plus npm packages for the real clients some tests run).
+# Usage: scripts/install-deps.sh [--fuzz]   (--fuzz: also clang, libFuzzer and llvm-symbolizer for
+# scripts/fuzz.sh and scripts/sanitize.sh)
 set -euo pipefail
 
 packages=(
@@ -30,6 +32,9 @@ packages=(
   # test data: GIMP's patterns (marble, granite, brick, wood, ...)
   gimp-data
 )
+if [ "${1:-}" = "--fuzz" ]; then
+  packages+=(clang libclang-rt-14-dev llvm-14)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

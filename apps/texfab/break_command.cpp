@@ -104,7 +104,7 @@ void addBreakOptions(Flags& f, BreakJob& job) {
   f.size("--preview-size", job.previewOptions.width, job.previewOptions.height, "Preview size", {1, 16384});
   f.camera(job.previewOptions);
   f.up(job.up);
-  f.common(job.common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
+  f.common(job.common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
 }
 
 void runBreak(const std::string& command, BreakJob& job) {
@@ -139,7 +139,7 @@ void runBreak(const std::string& command, BreakJob& job) {
     interiorCost.atlas.pack.height = outer ? int(1.5 * o.outer.atlas.pack.height) : 2048;
   }
   interiorCost.solid = o.interior.solid;
-  checkMemory(render::textureMeshMemoryBytes(interiorCost) +
+  run.checkMemory(render::textureMeshMemoryBytes(interiorCost) +
                   (job.exemplar.empty() ? 0.0 : render::textureMeshMemoryBytes(o.outer)),
               "the atlases of the outer and the cut faces");
   const fs::path out = run.output(job.output);

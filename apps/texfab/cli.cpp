@@ -203,6 +203,13 @@ void Flags::common(CommonFlags& c, unsigned which) {
     option("--device", c.device, "Vulkan device index (texfab info --devices lists them)", Range{0, 1024})
         ->default_str("$TEXFAB_VULKAN_DEVICE, else the best");
   }
+  if (which & Common::Memory) {
+    CLI::Option* o = app_->add_option_function<std::string>(
+        "--max-memory", [&c](const std::string& text) { c.maxMemory = parseBytes("--max-memory", text); },
+        "Refuse work whose memory estimate exceeds this (e.g. 4G), before it starts");
+    o->type_name("BYTES");
+    o->default_str("80% of RAM");
+  }
   if (which & Common::Quiet) flag("-q,--quiet", c.quiet, "No progress output (warnings and errors are still printed)");
 }
 

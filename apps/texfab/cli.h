@@ -22,6 +22,7 @@
 // run.finish().
 
 #include "core/context.h"
+#include "core/memory.h"
 #include "core/error.h"
 #include "core/files.h"
 #include "geometry/io/mesh_io.h"
@@ -98,6 +99,7 @@ enum : unsigned {
   Report = 4,   ///< --report FILE
   Cache = 8,    ///< --cache-dir, --no-cache, --cache-size
   Backend = 16, ///< --backend cpu|vulkan|auto, --device N
+  Memory = 32,  ///< --max-memory BYTES
 };
 }
 
@@ -110,6 +112,7 @@ struct CommonFlags {
   uint64_t cacheBytes = uint64_t(1) << 30;
   texfab::Backend backend = texfab::Backend::Cpu;
   int device = -1;  ///< -1: $TEXFAB_VULKAN_DEVICE, else the best device
+  uint64_t maxMemory = 0;  ///< bytes the job may plan to use; 0: kDefaultMemoryShare of the machine's
 };
 
 /// --up: the model's up axis, or none (auto) for its file's convention.
@@ -212,6 +215,8 @@ public:
   bool reporting() const { return !reportPath_.empty(); }
   /// A line of information on stderr (not with --quiet).
   void note(const std::string& message) const;
+  /// Refuses work whose memory estimate `bytes` exceeds --max-memory (texfab::checkMemory).
+  void checkMemory(double bytes, const std::string& what) const { texfab::checkMemory(bytes, what, common_.maxMemory); }
   /// The analysis cache: --cache-dir (no folder with --no-cache) kept within --cache-size.
   synthesis::AnalysisCacheSettings analysisCache() const;
   /// Writes the report (timings and peak memory added) and commits every output.

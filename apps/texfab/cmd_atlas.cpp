@@ -125,7 +125,7 @@ void runAtlas(AtlasJob& job) {
   Run run("atlas", job.common);
   checkPrintSize(job.write, job.output);
   const atlas::PackChartsOptions& pack = job.options.pack;
-  checkMemory(atlas::atlasMemoryBytes(pack.width, pack.height),
+  run.checkMemory(atlas::atlasMemoryBytes(pack.width, pack.height),
               "a " + std::to_string(pack.width) + "x" + std::to_string(pack.height) + " atlas");
   const fs::path out = run.output(job.output);
   const fs::path debug = job.debugImages.empty() ? fs::path() : run.outputs().addFolder(job.debugImages);
@@ -209,7 +209,7 @@ Command addAtlasCommand(CLI::App& root) {
          "Write chart ids, normals, Jacobian magnitude/anisotropy, a checkerboard and checker.glb into this new folder");
   f.modelOutput(job->write);
   f.printSize(job->write);
-  f.common(job->common, Common::Threads | Common::Report | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Quiet);
   return {f.app(), [job] { runAtlas(*job); }};
 }
 

@@ -98,6 +98,7 @@ void runSlice(SliceJob& job) {
   if (!job.preview.empty()) checkImageWritable(job.preview);
   const fs::path preview = job.preview.empty() ? fs::path() : run.output(job.preview);
   print::SliceWriter writer(job.output, job.force);  // refuses a non-empty output before any work
+  run.outputs().atCommit([&writer] { writer.publish(); });
 
   Stage load(run.ctx(), "load");
   const print::PrintJob print(geometry::readMesh(job.model, run.ctx()), o, run.ctx());
@@ -105,7 +106,7 @@ void runSlice(SliceJob& job) {
   if (!job.exemplar.empty()) exemplar.image = readImage(job.exemplar);
   const print::PrintGrid& grid = print.grid();
   const auto [first, count] = layerRange(job, grid.layers);
-  checkMemory(print.memoryBytes(run.ctx()),
+  run.checkMemory(print.memoryBytes(run.ctx()),
               "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
                   " voxels with its batch (lower --dpi or the size)");
   const Eigen::Vector3d size = grid.sizeMm();
@@ -127,7 +128,7 @@ void runSlice(SliceJob& job) {
 
   nlohmann::json& report = run.report();
   if (run.reporting())  // the print block as the manifest has it
-    report["print"] = nlohmann::json::parse(print::readSliceManifest(job.output)["print"].dump());
+    report["print"] = nlohmann::json::parse(print::readSliceManifest(writer.staging())["print"].dump());
   report["layers"] = {{"first", first}, {"count", count}, {"total", grid.layers}};
   report["voxels"] = {{"inside", r.insideVoxels}, {"shell", r.shellVoxels}, {"per_layer", grid.voxelsPerLayer()}};
   if (o.colors == print::PrintColors::Solid)
@@ -203,7 +204,7 @@ Command addSliceCommand(CLI::App& root) {
          "Also write a picture of the print to this PNG: front and side, four layers as dithered and, below them, "
          "as the eye sees the mixed print");
   f.flag("--force", job->force, "Replace an existing, non-empty output folder");
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSlice(*job); }};
 }
 

@@ -130,7 +130,7 @@ std::vector<Vec3> readPoints(const std::string& path, double scale) {
 std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidExemplars&)> prepareVolume(
     const SolidJob& job, Run& run) {
   const int n = job.volume;
-  checkMemory(render::solidVolumeMemoryBytes(n, job.scale, job.options.refinePasses), "--volume " + std::to_string(n));
+  run.checkMemory(render::solidVolumeMemoryBytes(n, job.scale, job.options.refinePasses), "--volume " + std::to_string(n));
   if (!job.raw.empty()) {
     std::error_code ec;
     const auto space = fs::space(fs::absolute(job.raw).parent_path(), ec);
@@ -170,7 +170,7 @@ std::function<Synthesized(const synthesis::SolidAnalysis&, const render::SolidEx
   for (const Vec3& corner : {job.origin, Vec3(job.origin + job.width * job.u), Vec3(job.origin + job.height * job.v),
                              Vec3(job.origin + job.width * job.u + job.height * job.v)})
     checkPosition(corner, job.scale, "--plane");
-  checkMemory(synthesis::synthesizeSolidMemoryBytes(int64_t(job.width) * job.height, job.options.refinePasses),
+  run.checkMemory(synthesis::synthesizeSolidMemoryBytes(int64_t(job.width) * job.height, job.options.refinePasses),
               "a " + std::to_string(job.width) + "x" + std::to_string(job.height) + " plane");
   checkImageWritable(job.output);
   const fs::path out = run.output(job.output);
@@ -367,7 +367,7 @@ Command addSolidCommand(CLI::App& root) {
            "Correction passes at the finest level (the paper: 2, about 3x the finest level's work)", {0, 4});
   f.option("--interleave", o.interleave,
            "2: 8 sub-passes per pass, as in the paper; 1: one (a far shorter dependency chain)", {1, 2});
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSolid(*job); }};
 }
 

@@ -80,8 +80,8 @@ void checkRepetition(const SynthJob& job, const Image& colors, const Image& exem
   run.ctx().warn(message);
 }
 
-Image load(const SynthJob& job, std::vector<Companion>& companions, const Context& ctx) {
-  Stage stage(ctx, "load");
+Image load(const SynthJob& job, std::vector<Companion>& companions, const Run& run) {
+  Stage stage(run.ctx(), "load");
   Image exemplar = readImage(job.exemplar);
   try {
     synthesis::validateExemplarSize(exemplar);
@@ -97,7 +97,7 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Contex
     channels += c.map.channels;
   }
   if (checksRepetition(job, exemplar.width, exemplar.height)) ++channels;  // the luminance it measures
-  checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels) +
+  run.checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels) +
                   synthesis::analysisMemoryBytes(exemplar.width, exemplar.height, job.analysis),
               "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " output from a " +
                   std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
@@ -122,7 +122,7 @@ void runSynth(SynthJob& job) {
   const fs::path coordsOut = job.coords.empty() ? fs::path() : run.output(job.coords);
   std::vector<Companion> companions = reserveCompanions(job, run);
 
-  const Image exemplar = load(job, companions, run.ctx());
+  const Image exemplar = load(job, companions, run);
   job.analysis.wrap = chooseWrap(job.wrap, exemplar, run);
   bool cached = false;
   const ExemplarAnalysis analysis = analyzeExemplar(run, exemplar, job.analysis, cached);
@@ -206,7 +206,7 @@ Command addSynthCommand(CLI::App& root) {
   f.app()->add_option("--apply", job->apply,
                       "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, roughness, "
                       "height; same size as the exemplar) and write OUT (repeatable)");
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSynth(*job); }};
 }
 

@@ -113,7 +113,7 @@ void runTexture(TextureJob& job) {
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
                      " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
-  checkMemory(render::textureMeshMemoryBytes(o), "a " + std::to_string(o.atlas.pack.width) + "x" +
+  run.checkMemory(render::textureMeshMemoryBytes(o), "a " + std::to_string(o.atlas.pack.width) + "x" +
                                                      std::to_string(o.atlas.pack.height) + " atlas");
   const CompanionFiles maps = parseMaps(job.maps);
   const fs::path out = run.output(job.output);
@@ -222,7 +222,7 @@ Command addTextureCommand(CLI::App& root) {
   f.size("--preview-size", job->previewOptions.width, job->previewOptions.height, "Preview size", {1, 16384});
   f.camera(job->previewOptions);
   f.up(job->up);
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runTexture(*job); }};
 }
 

@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: error: %s; give a larger %s or a simpler mesh\n", where.c_str(), e.what(), flag);
       return 2;
     } catch (const Error& e) {
-      std::fprintf(stderr, "%s: error: %s\n", where.c_str(), e.what());
+      std::fprintf(stderr, "%s: error: %s\n", where.c_str(), withOutputNames(e.what()).c_str());
       return 2;
     } catch (const std::bad_alloc&) {
       std::fprintf(stderr, "%s: error: out of memory\n", where.c_str());

@@ -38,8 +38,6 @@ std::string encodeBase64(const std::vector<uint8_t>& data) {
 
 class GltfBuilder {
 public:
-  explicit GltfBuilder(bool binary) : binary_(binary) {}
-
   int bufferView(const void* data, size_t size, int target) {
     align(4);
     json view = {{"buffer", 0}, {"byteOffset", buffer_.size()}, {"byteLength", size}};
@@ -90,7 +88,6 @@ public:
   }
 
 private:
-  bool binary_;
   std::vector<uint8_t> buffer_;
   json views_ = json::array();
   json accessors_ = json::array();
@@ -153,7 +150,7 @@ public:
   GltfDocument(const fs::path& path, const fs::path& tmp, bool binary, const MeshWriteOptions& options,
                std::vector<std::pair<fs::path, fs::path>>& sideFiles)
       : path_(path), tmp_(tmp), binary_(binary), external_(!binary && !options.embed), options_(options),
-        sideFiles_(sideFiles), b_(binary) {}
+        sideFiles_(sideFiles) {}
 
   /// Adds a mesh (prepared) and returns its index. Its materials are written in its order; those
   /// equal to a material of an earlier mesh are shared with it.

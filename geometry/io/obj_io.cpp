@@ -251,7 +251,8 @@ private:
   void materialLibraries(std::string_view line, const std::vector<std::string_view>& words) {
     if (words.size() < 2) return;
     const std::string rest(line.substr(size_t(words[1].data() - line.data())));
-    if (words.size() == 2 || fs::exists(path_.parent_path() / rest)) {
+    std::error_code ec;  // a name the system refuses (too long, ...) names no file
+    if (words.size() == 2 || fs::exists(path_.parent_path() / rest, ec)) {
       readMtl(path_, words.size() == 2 ? std::string(words[1]) : rest, mesh_.materials, byName_, textures_);
     } else {
       for (size_t i = 1; i < words.size(); ++i) readMtl(path_, std::string(words[i]), mesh_.materials, byName_, textures_);

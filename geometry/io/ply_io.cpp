@@ -162,6 +162,7 @@ public:
 
   void read(const Element& element) {
     checkCount(element);
+    if (element.properties.empty() && element.name != "vertex") return;  // items without data: nothing to read
     const bool isVertex = element.name == "vertex", isFace = element.name == "face";
     auto find = [&](std::initializer_list<const char*> names) -> int {
       for (const char* n : names)

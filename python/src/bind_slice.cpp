@@ -87,6 +87,7 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
       }
     }
     job.slice(ex, first, count, writer, modelName, call.ctx());
+    writer.publish();
     return print::readSliceManifest(folder);
   });
   return py::module_::import("json").attr("loads")(manifest.dump());

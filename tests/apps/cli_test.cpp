@@ -332,6 +332,136 @@ TEST(Cli, SignalsLeaveNoTemporaries) {
   }
 }
 
+namespace {
+
+// A job of a command that writes files: its arguments ({} stands for the scratch folder) and the
+// outputs it writes there.
+struct SignalJob {
+  std::string command;
+  std::vector<std::string> args;
+  std::vector<std::string> outputs;
+};
+
+std::vector<SignalJob> signalJobs() {
+  const std::string model = kModel.string(), exemplar = kExemplar.string();
+  return {
+      {"synth", {exemplar, "-o", "{}/s.png", "--size", "512", "--no-cache", "--coords", "{}/s.exr"}, {"s.png", "s.exr"}},
+      {"solid", {exemplar, "-o", "{}/volume", "--volume", "32", "--no-cache"}, {"volume"}},
+      {"atlas", {model, "-o", "{}/a.glb", "--resolution", "512"}, {"a.glb"}},
+      {"texture",
+       {model, "-e", exemplar, "-o", "{}/t.glb", "--resolution", "256", "--no-cache", "--preview", "{}/t.png"},
+       {"t.glb", "t.png"}},
+      {"cut", {model, "-e", exemplar, "-o", "{}/c.glb", "--plane", "0,0,0,0,1,0", "--resolution", "256", "--no-cache"}, {"c.glb"}},
+      {"fracture", {model, "-e", exemplar, "-o", "{}/f.glb", "--pieces", "3", "--resolution", "256", "--no-cache"}, {"f.glb"}},
+      {"slice", {model, "-o", "{}/layers", "--height", "20", "--dpi", "100", "--layer", "0.1", "--preview", "{}/l.png"},
+       {"layers", "l.png"}},
+      {"render", {model, "-o", "{}/r.png", "--size", "300"}, {"r.png"}},
+      {"convert", {model, "{}/m.glb", "--draco"}, {"m.glb"}},
+  };
+}
+
+std::vector<std::string> withFolder(const SignalJob& job, const fs::path& folder) {
+  std::vector<std::string> args{job.command};
+  for (std::string a : job.args) {
+    if (const size_t at = a.find("{}"); at != std::string::npos) a.replace(at, 2, folder.string());
+    args.push_back(a);
+  }
+  return args;
+}
+
+size_t linesIn(const fs::path& file) {
+  const std::string text = readFile(file);
+  return size_t(std::count(text.begin(), text.end(), '\n'));
+}
+
+} // namespace
+
+// Every command that writes files, stopped by SIGINT or SIGTERM after its first, middle and last
+// stage lines (and a few milliseconds into the next stage): it ends with 130 and leaves nothing (no output, no
+// temporary), or, if it finished first, with 0 and every output in place.
+TEST(Cli, EveryCommandStopsCleanlyAtEveryStage) {
+  TempDir d("texfab-cli");
+  uint32_t random = 12345;
+  for (const SignalJob& job : signalJobs()) {
+    SCOPED_TRACE(job.command);
+    const fs::path folder = d / job.command;
+    fs::create_directories(folder);
+    // A whole run: its stage lines (progress without a terminal prints one per finished stage).
+    const pid_t whole = spawn(withFolder(job, folder), d / "err.txt");
+    ASSERT_EQ(waitFor(whole), 0) << readFile(d / "err.txt");
+    const size_t stages = linesIn(d / "err.txt");
+    for (const std::string& out : job.outputs) fs::remove_all(folder / out);
+    int stopped = 0;
+    for (size_t stage : {size_t(0), stages / 2, stages - 1}) {
+      fs::remove(d / "err.txt");
+      const pid_t pid = spawn(withFolder(job, folder), d / "err.txt");
+      awaitStart(d / "err.txt");
+      for (int i = 0; i < 60000 && linesIn(d / "err.txt") < stage; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      random = random * 1103515245u + 12345u;
+      std::this_thread::sleep_for(std::chrono::milliseconds((random >> 16) % 40));
+      const int signal = stage % 2 ? SIGTERM : SIGINT;
+      ::kill(pid, signal);
+      const int status = waitFor(pid);
+      const std::string where = "after stage " + std::to_string(stage) + " of " + std::to_string(stages) + ", " +
+                                (signal == SIGINT ? "SIGINT" : "SIGTERM") + ": ";
+      EXPECT_TRUE(status == 130 || status == 0) << where << status << " " << readFile(d / "err.txt");
+      const std::vector<std::string> left = leftovers(folder);
+      EXPECT_TRUE(left.empty()) << where << left.front();
+      for (const std::string& out : job.outputs) {
+        EXPECT_EQ(fs::exists(folder / out), status == 0) << where << out;
+        fs::remove_all(folder / out);
+      }
+      stopped += status == 130;
+    }
+    EXPECT_GT(stopped, 0) << "no signal arrived before the job finished";
+  }
+}
+
+// Every command whose work can outgrow memory refuses, before any work, a job its estimate says
+// will not fit in --max-memory: one line naming the flag, exit 2, no output.
+TEST(Cli, EveryLongCommandRefusesWorkBeyondMaxMemory) {
+  TempDir d("texfab-cli");
+  int commands = 0;
+  for (const SignalJob& job : signalJobs()) {
+    if (runCli(job.command + " --help").out.find("--max-memory") == std::string::npos) continue;
+    ++commands;
+    std::vector<std::string> args = withFolder(job, d.path());
+    args.insert(args.end(), {"--max-memory", "1K"});
+    fs::remove(d / "err.txt");
+    const int status = waitFor(spawn(args, d / "err.txt"));
+    const std::string err = readFile(d / "err.txt");
+    EXPECT_EQ(status, 2) << job.command << ": " << err;
+    EXPECT_NE(err.find("allowed (--max-memory)"), std::string::npos) << job.command << ": " << err;
+    EXPECT_EQ(err.find("error:"), err.rfind("error:")) << job.command << ": " << err;
+    for (const std::string& out : job.outputs) EXPECT_FALSE(fs::exists(d / out)) << job.command << ": " << out;
+    EXPECT_TRUE(leftovers(d.path()).empty()) << job.command;
+  }
+  EXPECT_EQ(commands, 7);  // synth, solid, atlas, texture, cut, fracture, slice
+  EXPECT_EQ(runCli("synth " + quote(kExemplar) + " -o " + quote(d / "o.png") + " --max-memory lots").status, 1);
+}
+
+// A disk that fills up (a file size limit, SIGXFSZ ignored, fails writes as a full disk does) while
+// the analysis cache and the GLB are written: the cache is skipped with a warning and leaves no file,
+// the GLB's write is the one-line error naming the output, and the previous output is untouched.
+TEST(Cli, AFullDiskKeepsThePreviousOutputAndNoPartialCache) {
+  TempDir d("texfab-cli");
+  std::ofstream(d / "e.glb") << "previous";
+  const fs::path cache = d / "cache";
+  fs::create_directories(cache);
+  const std::string command = "bash -c \"trap '' XFSZ; ulimit -f 200; '" + std::string(TEXFAB_CLI) + "' texture " +
+                              quote(kModel) + " -e " + quote(kExemplar) + " -o " + quote(d / "e.glb") +
+                              " --resolution 512 -q --cache-dir " + quote(cache) + "\" 2>" + quote(d / "err.txt");
+  EXPECT_EQ(texfab::test::run(command), 2);
+  const std::string err = readFile(d / "err.txt");
+  EXPECT_NE(err.find("warning: the analysis cache cannot be written"), std::string::npos) << err;
+  EXPECT_NE(err.find("error: " + (d / "e.glb").string() + ": cannot write file: File too large"), std::string::npos) << err;
+  EXPECT_EQ(err.find("error:"), err.rfind("error:")) << err;
+  EXPECT_EQ(readFile(d / "e.glb"), "previous");
+  EXPECT_TRUE(leftovers(d.path()).empty()) << leftovers(d.path()).front();
+  EXPECT_TRUE(fs::is_empty(cache));
+}
+
 // The analysis cache keeps within --cache-size, dropping the least recently used analysis; a
 // cache that cannot be written is said once, and the job still succeeds.
 TEST(Cli, AnalysisCacheIsBoundedAndAnUnwritableOneIsSaidOnce) {

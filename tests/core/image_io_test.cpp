@@ -67,6 +67,40 @@ TEST(ImageIo, FloatExrKeepsValuesOutsideZeroOne) {
   EXPECT_EQ(back.pixels, image.pixels);
 }
 
+// An EXR holding NaN or infinity is refused with one line naming the file and the count;
+// synthesis never sees it.
+TEST(ImageIo, RefusesValuesThatAreNotFiniteNumbers) {
+  TempDir dir;
+  Image image(4, 4, 3, PixelFormat::Float);
+  for (const char* name : {"nan.exr", "inf.exr"}) {
+    image.pixels.assign(image.pixels.size(), 0.5f);
+    image.pixels[7] = std::string(name) == "nan.exr" ? NAN : INFINITY;
+    image.pixels[9] = -INFINITY;
+    writeImage(image, dir / name);
+    std::string message;
+    try {
+      readImage(dir / name);
+    } catch (const Error& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find((dir / name).string() + ": 2 pixel values are not a finite number"), std::string::npos)
+        << message;
+  }
+}
+
+// A file whose extension names another format than its bytes is read by the format its signature
+// names (a JPEG saved as .png), as OpenImageIO's own fallback would, without trying every reader.
+TEST(ImageIo, AFileIsReadByItsSignatureWhenItsExtensionLies) {
+  TempDir dir;
+  Image image(16, 8, 3);
+  for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = float(i % 17) / 16.0f;
+  writeImage(image, dir / "a.jpg");
+  std::filesystem::copy_file(dir / "a.jpg", dir / "a.png");
+  EXPECT_EQ(readImage(dir / "a.png").pixels, readImage(dir / "a.jpg").pixels);
+  std::ofstream(dir / "b.png", std::ios::binary) << "II*" << std::string(40, '\0');  // a TIFF signature, no TIFF
+  EXPECT_THROW(readImage(dir / "b.png"), Error);
+}
+
 TEST(ImageIo, JpegReadsBackClose) {
   TempDir dir;
   Image image(64, 64, 3);

@@ -396,6 +396,7 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
   const test::TempDir dir("texfab-golden");
   print::SliceWriter writer(dir / "layers", false);
   job.slice({&marble32(), &solidAnalysis32(), nullptr, "marble32"}, 12, 4, writer, "elephant.off", ctx);
+  writer.publish();
   uint64_t layers = 0xcbf29ce484222325ull;
   for (const print::SliceFile& f : writer.files()) {
     std::ifstream in(dir / "layers" / f.file, std::ios::binary);

@@ -212,7 +212,7 @@ TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
   texfab::geometry::writeMesh(open, dir / "open.off");
   expectRefused(dir, quoted(dir / "open.off") + " -q", "not closed");
   // A layer larger than this machine's memory.
-  expectRefused(dir, model + " --height 250 --dpi 100000 --layer 10", "more than this machine's");
+  expectRefused(dir, model + " --height 250 --dpi 100000 --layer 10", "of this machine's");
 }
 
 // --icc-profile: the manifest names the profile; a file that is not a usable printer profile and
@@ -275,6 +275,17 @@ TEST(CliSlice, AFullDiskLeavesNoOutput) {
   const std::string err = readText(dir / "err.txt");
   EXPECT_NE(err.find("disk full"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(dir / "out"));
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << "left behind: " << e.path();
+  // With --force over a previous print: that print stays as it was.
+  fs::create_directories(dir / "out");
+  std::ofstream(dir / "out" / "slices.json") << "previous";
+  const std::string force = "bash -c \"trap '' XFSZ; ulimit -f 1; '" + std::string(TEXFAB_CLI) + "' slice " +
+                            quoted(sphereModel(dir)) + kSmall + " --format voxelprint --force -o " + quoted(dir / "out") +
+                            "\" 2>" + quoted(dir / "err.txt");
+  EXPECT_EQ(texfab::test::run(force), 2);
+  EXPECT_EQ(readText(dir / "out" / "slices.json"), "previous");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);
   for (const auto& e : fs::directory_iterator(dir.path()))
     EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << "left behind: " << e.path();
 }

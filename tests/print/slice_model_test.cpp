@@ -122,6 +122,7 @@ TEST(SliceModel, DitheredBlocksAverageToTheFaceColors) {
     o.layerCount = 16;
     SliceWriter writer(dir / "out", false);
     sliceModel(voxelizer, colors, o, writer, {});
+    writer.publish();
     // Blocks against faces -x, +x, -y, +y, in the middle of each.
     const int blocks[4][2] = {{0, 32}, {64, 32}, {32, 0}, {32, 64}};
     for (int f = 0; f < 4; ++f) {
@@ -185,6 +186,7 @@ TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
       PrintSource source;
       source.model = "sphere";
       sliceModel(voxelizer, colors, o, writer, source, Context{.threads = threads});
+      writer.publish();
     };
     run(dir / "full", 0, -1, 1, 16);
     const int n = grid.layers;
@@ -212,6 +214,7 @@ TEST(SliceModel, MergeRefusesGapsOverlapsAndOtherPrints) {
     o.dither = dither;
     SliceWriter writer(out, false);
     sliceModel(voxelizer, colors, o, writer, {});
+    writer.publish();
   };
   run(dir / "a", 0, 4, DitherMode::BlueNoise);
   run(dir / "b", 4, 6, DitherMode::BlueNoise);
