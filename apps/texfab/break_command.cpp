@@ -140,8 +140,8 @@ void runBreak(const std::string& command, BreakJob& job) {
   }
   interiorCost.solid = o.interior.solid;
   run.checkMemory(render::textureMeshMemoryBytes(interiorCost) +
-                  (job.exemplar.empty() ? 0.0 : render::textureMeshMemoryBytes(o.outer)),
-              "the atlases of the outer and the cut faces");
+                      (job.exemplar.empty() ? 0.0 : render::textureMeshMemoryBytes(o.outer)),
+                  "the atlases of the outer and the cut faces");
   const fs::path out = run.output(job.output);
   const fs::path separate = job.separate.empty() ? fs::path() : run.outputs().addFolder(job.separate);
   if (!job.preview.empty()) checkImageWritable(job.preview);

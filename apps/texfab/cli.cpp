@@ -208,7 +208,7 @@ void Flags::common(CommonFlags& c, unsigned which) {
         "--max-memory", [&c](const std::string& text) { c.maxMemory = parseBytes("--max-memory", text); },
         "Refuse work whose memory estimate exceeds this (e.g. 4G), before it starts");
     o->type_name("BYTES");
-    o->default_str("80% of RAM");
+    o->default_str(std::to_string(int(kDefaultMemoryShare * 100)) + "% of RAM");
   }
   if (which & Common::Quiet) flag("-q,--quiet", c.quiet, "No progress output (warnings and errors are still printed)");
 }

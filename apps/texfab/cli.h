@@ -22,9 +22,9 @@
 // run.finish().
 
 #include "core/context.h"
-#include "core/memory.h"
 #include "core/error.h"
 #include "core/files.h"
+#include "core/memory.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/up_axis.h"
 #include "render/preview_renderer.h"

@@ -126,7 +126,7 @@ void runAtlas(AtlasJob& job) {
   checkPrintSize(job.write, job.output);
   const atlas::PackChartsOptions& pack = job.options.pack;
   run.checkMemory(atlas::atlasMemoryBytes(pack.width, pack.height),
-              "a " + std::to_string(pack.width) + "x" + std::to_string(pack.height) + " atlas");
+                  "a " + std::to_string(pack.width) + "x" + std::to_string(pack.height) + " atlas");
   const fs::path out = run.output(job.output);
   const fs::path debug = job.debugImages.empty() ? fs::path() : run.outputs().addFolder(job.debugImages);
 

@@ -107,8 +107,8 @@ void runSlice(SliceJob& job) {
   const print::PrintGrid& grid = print.grid();
   const auto [first, count] = layerRange(job, grid.layers);
   run.checkMemory(print.memoryBytes(run.ctx()),
-              "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
-                  " voxels with its batch (lower --dpi or the size)");
+                  "one layer of " + std::to_string(grid.width) + " x " + std::to_string(grid.height) +
+                      " voxels with its batch (lower --dpi or the size)");
   const Eigen::Vector3d size = grid.sizeMm();
   load.finish(job.model + ": " + counted(int64_t(print.mesh().triangleCount()), "triangle") + "; print " +
               figure(size.x()) + " x " + figure(size.y()) + " x " + figure(size.z()) + " mm (wide x deep x tall), " +

@@ -98,10 +98,10 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Run& r
   }
   if (checksRepetition(job, exemplar.width, exemplar.height)) ++channels;  // the luminance it measures
   run.checkMemory(synthesis::synthesize2dMemoryBytes(job.window, channels) +
-                  synthesis::analysisMemoryBytes(exemplar.width, exemplar.height, job.analysis),
-              "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " output from a " +
-                  std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
-                  " exemplar (synthesize it in windows, --window)");
+                      synthesis::analysisMemoryBytes(exemplar.width, exemplar.height, job.analysis),
+                  "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " output from a " +
+                      std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
+                      " exemplar (synthesize it in windows, --window)");
   stage.finish(job.exemplar + " " + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height));
   return exemplar;
 }

@@ -114,7 +114,7 @@ void runTexture(TextureJob& job) {
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
                      " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
   run.checkMemory(render::textureMeshMemoryBytes(o), "a " + std::to_string(o.atlas.pack.width) + "x" +
-                                                     std::to_string(o.atlas.pack.height) + " atlas");
+                                                         std::to_string(o.atlas.pack.height) + " atlas");
   const CompanionFiles maps = parseMaps(job.maps);
   const fs::path out = run.output(job.output);
   const fs::path heightOut =

@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -115,16 +116,31 @@ void copySeed(const fs::path& source, const fs::path& folder) {
   if (fs::exists(source)) fs::copy_file(source, folder / source.filename(), fs::copy_options::overwrite_existing);
 }
 
-// The textured cube (two materials, one textured; UVs, normals, face tags) as a file of `extension`
-// written with `options`: its bytes.
-std::vector<uint8_t> meshSeed(const std::string& extension, const geometry::MeshWriteOptions& options = {}) {
+// Calls `write(path)` for a file `name` in a fresh scratch folder; returns the bytes of that file,
+// then of each of `sideFiles` the writer put beside it (an OBJ's MTL).
+std::vector<std::vector<uint8_t>> writtenFiles(const std::string& name, const std::function<void(const fs::path&)>& write,
+                                               std::initializer_list<const char*> sideFiles = {}) {
   const fs::path dir = scratch() / "seed";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const fs::path path = dir / ("fuzz" + extension);
-  geometry::writeMesh(test::texturedCube(), path, options);
-  std::vector<uint8_t> bytes = readFile(path);
+  write(dir / name);
+  std::vector<std::vector<uint8_t>> files{readFile(dir / name)};
+  for (const char* side : sideFiles) files.push_back(readFile(dir / side));
   fs::remove_all(dir);
+  return files;
+}
+
+// The textured cube (two materials, one textured; UVs, normals, face tags) as a file of `extension`
+// written with `options`: its bytes.
+std::vector<uint8_t> meshSeed(const std::string& extension, const geometry::MeshWriteOptions& options = {}) {
+  return writtenFiles("fuzz" + extension, [&](const fs::path& path) {
+    geometry::writeMesh(test::texturedCube(), path, options);
+  })[0];
+}
+
+// Targets that read several formats take the format's index as their input's first byte.
+std::vector<uint8_t> withFormatByte(size_t format, std::vector<uint8_t> bytes) {
+  bytes.insert(bytes.begin(), uint8_t(format));
   return bytes;
 }
 
@@ -162,12 +178,10 @@ bool runObj(Bytes input) {
 }
 
 void seedObj(const fs::path& folder) {
-  const fs::path dir = scratch() / "seed";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  geometry::writeMesh(test::texturedCube(), dir / "fuzz.obj");
-  const std::vector<uint8_t> obj = readFile(dir / "fuzz.obj"), mtl = readFile(dir / "fuzz.mtl");
-  fs::remove_all(dir);
+  const auto files = writtenFiles("fuzz.obj", [](const fs::path& path) { geometry::writeMesh(test::texturedCube(), path); },
+                                  {"fuzz.mtl"});
+  const std::vector<uint8_t>& obj = files[0];
+  const std::vector<uint8_t>& mtl = files[1];
   std::vector<uint8_t> joined = obj;
   joined.insert(joined.end(), kMtlMarker.begin(), kMtlMarker.end());
   joined.insert(joined.end(), mtl.begin(), mtl.end());
@@ -219,11 +233,7 @@ void seed3mf(const fs::path& folder) { writeSeed(folder, "cube.3mf", meshSeed(".
 std::vector<uint8_t> imageSeed(const std::string& extension, PixelFormat format = PixelFormat::UInt8, int channels = 3) {
   Image image = *test::gradientImage(12, 10, channels);
   image.format = format;
-  const fs::path path = scratch() / ("seed" + extension);
-  writeImage(image, path);
-  std::vector<uint8_t> bytes = readFile(path);
-  fs::remove(path);
-  return bytes;
+  return writtenFiles("seed" + extension, [&](const fs::path& path) { writeImage(image, path); })[0];
 }
 
 bool runImageMemory(Bytes input) {
@@ -250,9 +260,7 @@ void seedImageFile(const fs::path& folder) {
   for (size_t i = 0; i < kImageExtensions.size(); ++i) {
     const std::string extension = kImageExtensions[i];
     const PixelFormat format = extension == ".exr" || extension == ".hdr" ? PixelFormat::Float : PixelFormat::UInt8;
-    std::vector<uint8_t> bytes = imageSeed(extension, format);
-    bytes.insert(bytes.begin(), uint8_t(i));
-    writeSeed(folder, "image" + extension, bytes);
+    writeSeed(folder, "image" + extension, withFormatByte(i, imageSeed(extension, format)));
   }
 }
 
@@ -297,12 +305,9 @@ void seedCoordMap(const fs::path& folder) {
   map.exemplarHeight = 48;
   for (int i = 0; i < map.width * map.height; ++i) map.coords.push_back(synthesis::packCoord(uint32_t(i % 64), uint32_t(i % 48)));
   for (size_t i = 0; i < kCoordExtensions.size(); ++i) {
-    const fs::path path = scratch() / (std::string("seed") + kCoordExtensions[i]);
-    synthesis::writeCoordMap(map, path);
-    std::vector<uint8_t> bytes = readFile(path);
-    fs::remove(path);
-    bytes.insert(bytes.begin(), uint8_t(i));
-    writeSeed(folder, std::string("coords") + kCoordExtensions[i], bytes);
+    const std::string name = std::string("coords") + kCoordExtensions[i];
+    writeSeed(folder, name,
+              withFormatByte(i, writtenFiles(name, [&](const fs::path& path) { synthesis::writeCoordMap(map, path); })[0]));
   }
 }
 
