@@ -11,8 +11,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <memory>
 #include <mutex>
 #include <string_view>
+#include <vector>
 
 namespace texfab::detail {
 namespace {
@@ -106,10 +109,93 @@ Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t maxBytes) {
   if (bytes > maxBytes)
     throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                 ", too large to load in this machine's memory");
-  Image image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
-  if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
-    throw Error(name + ": cannot decode image: " + oneLine(in.geterror()));
+  const auto failed = [&] { return Error(name + ": cannot decode image: " + oneLine(in.geterror())); };
+  Image image;
+  if (spec.channelformats.empty() && spec.format != OIIO::TypeDesc::FLOAT) {
+    // A read that converts goes through a 64 MB staging buffer in OpenImageIO 2.4, whatever the
+    // image's size. The file's own format is read instead, into memory left untouched until the
+    // decoder writes it, and converted once it has decoded: a corrupt file that claims a huge image
+    // costs little.
+    const std::unique_ptr<std::byte[]> native(new std::byte[spec.image_bytes(true)]);
+    if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UNKNOWN, native.get())) throw failed();
+    image = Image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
+    const size_t row = size_t(spec.width) * size_t(spec.nchannels);
+    for (size_t y = 0; y < size_t(spec.height); ++y)
+      OIIO::convert_pixel_values(spec.format, native.get() + y * row * spec.format.size(), OIIO::TypeDesc::FLOAT,
+                                 image.pixels.data() + y * row, int(row));
+  } else {
+    image = Image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
+    if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) throw failed();
+  }
   return image;
+}
+
+// OpenEXR 3.1 allocates and clears the chunk-offset table its header implies before reading it: a
+// few hundred corrupt bytes that claim 10^9 scanlines cost seconds. The table holds 8 bytes per chunk,
+// so a file too small for it is refused here, as is an attribute longer than the file (which OpenEXR
+// would allocate before finding the file too short). Parses the first part's header as far as `head` holds
+// it (OpenEXR file layout, "Header Attributes" and "Offset Tables"); returns quietly where it
+// cannot decide, leaving the verdict to OpenEXR.
+void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
+  if (head.size() < 8 || std::memcmp(head.data(), "\x76\x2f\x31\x01", 4) != 0) return;
+  auto int32At = [&](size_t at) {
+    int32_t v;
+    std::memcpy(&v, head.data() + at, 4);
+    return int64_t(v);
+  };
+  const bool tiled = (int32At(4) >> 8) & 0x2;
+  int64_t width = 0, height = 0, tileWidth = 0, tileHeight = 0, chunkCount = -1, linesPerChunk = -1;
+  size_t at = 8;
+  while (at < head.size() && head[at] != 0) {
+    const auto nameEnd = std::find(head.begin() + at, head.end(), 0);
+    const auto typeEnd = nameEnd == head.end() ? head.end() : std::find(nameEnd + 1, head.end(), 0);
+    if (typeEnd == head.end() || size_t(typeEnd - head.begin()) + 5 > head.size()) return;
+    const std::string_view attribute(reinterpret_cast<const char*>(&head[at]), size_t(nameEnd - head.begin()) - at);
+    const size_t value = size_t(typeEnd - head.begin()) + 5;
+    const int64_t size = int32At(value - 4);
+    if (size < 0 || value + uint64_t(size) > fileSize)
+      throw Error(name + ": corrupt EXR: its attribute '" + std::string(attribute) + "' runs past the end of the file");
+    if (value + uint64_t(size) > head.size()) return;
+    if (attribute == "dataWindow" && size == 16) {
+      width = int32At(value + 8) - int32At(value) + 1;
+      height = int32At(value + 12) - int32At(value + 4) + 1;
+    } else if (attribute == "tiles" && size == 9) {
+      tileWidth = uint32_t(int32At(value));
+      tileHeight = uint32_t(int32At(value + 4));
+    } else if (attribute == "chunkCount" && size == 4) {
+      chunkCount = int32At(value);
+    } else if (attribute == "compression" && size == 1) {
+      static constexpr int64_t kLines[] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};  // NONE … DWAB
+      linesPerChunk = head[value] < std::size(kLines) ? kLines[head[value]] : -1;
+    }
+    at = value + size_t(size);
+  }
+  if (at >= head.size()) return;  // the header goes on beyond what was read
+  int64_t chunks = chunkCount;  // multi-part and deep files name it; others imply it
+  if (chunks < 0) {
+    if (width <= 0 || height <= 0) return;
+    if (tiled && tileWidth > 0 && tileHeight > 0)
+      chunks = ((width + tileWidth - 1) / tileWidth) * ((height + tileHeight - 1) / tileHeight);
+    else if (!tiled && linesPerChunk > 0)
+      chunks = (height + linesPerChunk - 1) / linesPerChunk;
+    else
+      return;
+  }
+  if (uint64_t(chunks) * 8 > fileSize)
+    throw Error(name + ": corrupt EXR: its header names " + std::to_string(chunks) + " chunks, more than its " +
+                std::to_string(fileSize) + " bytes can hold");
+}
+
+void checkExrFile(const std::string& file) {
+  std::error_code error;
+  const uint64_t size = std::filesystem::file_size(file, error);
+  if (error) return;
+  std::vector<uint8_t> head(std::min<uint64_t>(size, 1 << 16));
+  if (FILE* f = std::fopen(file.c_str(), "rb")) {
+    head.resize(std::fread(head.data(), 1, head.size(), f));
+    std::fclose(f);
+    checkExrChunkTable(head, size, file);
+  }
 }
 
 // The extension of the format a file's first bytes name, or null (TGA, for one, has no signature).
@@ -136,12 +222,14 @@ const char* extensionBySignature(const std::string& file) {
 // Not OIIO's own fallback (try_all_readers, off in this module), which tries every reader it has:
 // some take seconds to refuse a corrupt file of a few hundred bytes.
 Image read(const std::string& name, uint64_t maxBytes) {
+  checkExrFile(name);
   const OIIO::ImageSpec config = readConfig();
   const QuietStderr quiet;
   auto in = OIIO::ImageInput::open(name, &config);
   if (!in) {
     const std::string why = OIIO::geterror();
-    if (const char* extension = extensionBySignature(name)) {
+    const char* extension = extensionBySignature(name);
+    if (extension && extensionOf(name) != std::string(".") + extension) {  // not the reader that refused it
       in = OIIO::ImageInput::create(extension, false, &config);
       OIIO::ImageSpec spec;
       if (in && !in->open(name, spec, config)) in.reset();
@@ -153,6 +241,7 @@ Image read(const std::string& name, uint64_t maxBytes) {
 
 Image decodeBytes(std::span<const uint8_t> bytes, const std::string& pseudoName, const std::string& name,
                   uint64_t maxBytes) {
+  checkExrChunkTable(bytes, bytes.size(), name);
   OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
   OIIO::ImageSpec config = readConfig();
   // OIIO 2.4 ignores open()'s proxy argument when a configuration is given; the hint carries it.

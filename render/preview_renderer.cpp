@@ -13,6 +13,7 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <set>
 
 namespace texfab::render {
 
@@ -284,6 +285,23 @@ const geometry::Material& fallbackMaterial() {
 const Vector3f kKeyColor(2.6f, 2.5f, 2.35f), kSkyColor(0.55f, 0.6f, 0.7f), kGroundColor(0.25f, 0.22f, 0.2f);
 
 } // namespace
+
+double renderMemoryBytes(const geometry::Mesh& mesh, const RenderOptions& options) {
+  constexpr double kPyramid = 4.0 / 3.0;                   // a MIP chain over its base level
+  constexpr double kPerTriangle = 4 + 3 * (12 + 16) + 96;  // uv density, corner normals and tangents, BVH
+  double bytes = double(options.width) * options.height * 4 * sizeof(float) +
+                 kPerTriangle * double(mesh.triangleCount());
+  std::set<const Image*> seen;
+  for (const geometry::Material& m : mesh.materials)
+    for (const geometry::Texture* t : {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture}) {
+      if (!*t || !seen.insert(t->image.get()).second) continue;
+      const double texels = double(t->image->width) * t->image->height;
+      bytes += kPyramid * texels * 4 * sizeof(float);
+      if (t == &m.normalTexture && options.filterNormalMaps)  // one lobe per texel at level 0, then 8
+        bytes += texels * sizeof(VmfLobe) * (1 + FilterNormalMapOptions{}.lobes * (kPyramid - 1));
+    }
+  return bytes;
+}
 
 Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const {
   if (o.width < 1 || o.height < 1 || o.width > kMaxImageSide || o.height > kMaxImageSide)

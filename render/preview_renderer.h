@@ -52,6 +52,11 @@ struct RenderOptions {
 /// `up` is along Z (+Y when it points down): the side a Y-up or Z-up model is usually seen from.
 Eigen::Vector3f frontFor(const Eigen::Vector3f& up);
 
+/// Peak memory of a PreviewRenderer of `mesh` rendering one view with `options`, in bytes, beyond
+/// the mesh itself (meant as an upper bound): the picture, the BVH and per-corner shading data, the
+/// textures' MIP pyramids, and the fitted normal distributions of normal maps when filtered.
+double renderMemoryBytes(const geometry::Mesh& mesh, const RenderOptions& options);
+
 class PreviewRenderer {
 public:
   /// Builds the Embree scene and the texture pyramids once; render() can then be called for many

@@ -1,43 +1,50 @@
 #!/usr/bin/env bash
 # Fuzzes texfab's readers with libFuzzer under AddressSanitizer and UBSan (tests/fuzz/).
 #
-#   scripts/fuzz.sh [--runs N] [--time SECONDS] [--jobs J] [TARGET...]
+#   scripts/fuzz.sh [--runs N] [--time SECONDS] [--jobs J] [--sanitizers LIST] [TARGET...]
 #
-# Builds build-fuzz/ with clang (TEXFAB_FUZZ=ON), writes each target's seeds from the test models,
+# Builds build-fuzz/ with clang (TEXFAB_FUZZ=ON; with --sanitizers other than the default
+# address,undefined, build-fuzz-<list>/: `undefined` alone runs the image, 3MF and cache readers
+# 10-50x faster, since ASan pays for every large buffer those libraries allocate), writes each target's seeds from the test models,
 # and runs each target (all when none is named) for N inputs (default 1000000) or SECONDS each,
-# whichever ends first, J targets at a time (default: the number of cores). The corpus grows in build-fuzz/fuzz/corpus/
-# and is kept between runs. Findings (crash-*, timeout-*, oom-*, leak-*) are copied into
+# whichever ends first, J targets at a time (default: the number of cores). The corpus grows in
+# build-fuzz/fuzz/corpus/, shared by every build and kept between runs: `--runs 0` replays it once
+# (for example under ASan after a long UBSan round). Findings (crash-*, timeout-*, oom-*, leak-*) are copied into
 # tests/fuzz/regressions/<target>/, where the test suite replays them; the script then exits 1.
 # A table of executions, coverage and findings per target ends the run (build-fuzz/fuzz/summary.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repo="$(pwd)"
 
-runs=1000000 seconds="" jobs="$(nproc)" targets=()
+runs=1000000 seconds="" jobs="$(nproc)" sanitizers="address,undefined" targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --runs) runs="$2"; shift 2 ;;
     --time) seconds="$2"; shift 2 ;;
     --jobs) jobs="$2"; shift 2 ;;
-    -h|--help) sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --sanitizers) sanitizers="$2"; shift 2 ;;
+    -h|--help) sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     -*) echo "fuzz.sh: unknown option $1" >&2; exit 1 ;;
     *) targets+=("$1"); shift ;;
   esac
 done
 
+build=build-fuzz
+[ "$sanitizers" = "address,undefined" ] || build="build-fuzz-${sanitizers//,/-}"
 scripts/install-deps.sh --fuzz >/dev/null
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTEXFAB_FUZZ=ON \
-  -DTEXFAB_BUILD_TESTS=OFF -DTEXFAB_BUILD_BENCH=OFF -DTEXFAB_PYTHON=OFF -DTEXFAB_VULKAN=OFF >/dev/null
-cmake --build build-fuzz --parallel "$(nproc)" --target texfab_fuzz texfab_fuzz_seeds
+CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTEXFAB_FUZZ=ON \
+  -DTEXFAB_FUZZ_SANITIZERS="$sanitizers" -DTEXFAB_BUILD_TESTS=OFF -DTEXFAB_BUILD_BENCH=OFF -DTEXFAB_PYTHON=OFF \
+  -DTEXFAB_VULKAN=OFF >/dev/null
+cmake --build "$build" --parallel "$(nproc)" --target texfab_fuzz texfab_fuzz_seeds
 
-fuzzer="$repo/build-fuzz/tests/fuzz/texfab_fuzz"
+fuzzer="$repo/$build/tests/fuzz/texfab_fuzz"
 work="$repo/build-fuzz/fuzz"
 if [ ${#targets[@]} -eq 0 ]; then
   mapfile -t targets < <(TEXFAB_FUZZ_TARGET= "$fuzzer" 2>&1 | awk 'NR > 1 { print $1 }')
 fi
 rm -rf "$work/seeds" "$work/logs"
 mkdir -p "$work/seeds" "$work/logs"
-"$repo/build-fuzz/tests/fuzz/texfab_fuzz_seeds" "$work/seeds" "${targets[@]}"
+"$repo/$build/tests/fuzz/texfab_fuzz_seeds" "$work/seeds" "${targets[@]}"
 
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:symbolize=1"
 export LSAN_OPTIONS="suppressions=$repo/tests/fuzz/lsan.supp:print_suppressions=0"

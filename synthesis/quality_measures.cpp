@@ -261,6 +261,20 @@ double contrastRatio(const Image& image, const Image& exemplar) {
   return e > 0 ? deviation(image) / e : std::numeric_limits<double>::quiet_NaN();
 }
 
+double measureQualityMemoryBytes(const Image& image, const Image& exemplar, const FidelityOptions& fidelity) {
+  const double dims = double((2 * fidelity.radius + 1) * (2 * fidelity.radius + 1) * colorChannelCount(exemplar));
+  auto sampled = [&](double pixels) { return fidelity.samples > 0 ? std::min(pixels, 2.0 * fidelity.samples) : pixels; };
+  auto phase = [&](double searched, double measured) {  // 8-bit set searched, float patches and distances measured
+    return searched * dims + sampled(measured) * (dims * sizeof(float) + sizeof(double));
+  };
+  const double imagePixels = double(image.width) * image.height;
+  const double exemplarPixels = double(exemplar.width) * exemplar.height;
+  const double cropPixels = std::min(imagePixels, 4 * exemplarPixels);
+  return std::max(phase(exemplarPixels, imagePixels),
+                  cropPixels * image.channels * sizeof(float) + phase(cropPixels, exemplarPixels)) +
+         imagePixels * sizeof(float);  // the luminance of the image (shifted correlation)
+}
+
 QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
                              const FidelityOptions& fidelity, const Context& ctx) {
   QualityReport report;

@@ -87,6 +87,11 @@ struct QualityReport {
   std::optional<double> coherence;
   std::optional<double> coverage;
 };
+/// Peak memory of measureQuality on these images, in bytes, beyond the images themselves (meant as
+/// an upper bound): the exemplar's 8-bit neighborhoods searched for fidelity, the image crop's
+/// searched for completeness (the larger phase), and the sampled neighborhoods of each.
+double measureQualityMemoryBytes(const Image& image, const Image& exemplar, const FidelityOptions& fidelity);
+
 QualityReport measureQuality(const Image& image, const Image& exemplar, const CoordMap* coords,
                              const FidelityOptions& fidelity = {}, const Context& ctx = {});
 

@@ -130,18 +130,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   solid.refinePasses = job.refinePasses;
   o.shareTextureSettings(job.seed, solid);
   o.outer.measure = false;
-  render::TextureMeshOptions interiorCost;  // the cut faces' atlas costs as a solid texture job's
-  interiorCost.mode = render::TextureMode::Solid;
-  interiorCost.atlas = o.interior.atlas;
-  if (interiorCost.atlas.pack.width == 0) {  // auto: 1.5 times the outer atlas per side (2.25 its texels), or 2048^2
-    const bool outer = !job.exemplar.empty();
-    interiorCost.atlas.pack.width = outer ? int(1.5 * o.outer.atlas.pack.width) : 2048;
-    interiorCost.atlas.pack.height = outer ? int(1.5 * o.outer.atlas.pack.height) : 2048;
-  }
-  interiorCost.solid = o.interior.solid;
-  run.checkMemory(render::textureMeshMemoryBytes(interiorCost) +
-                      (job.exemplar.empty() ? 0.0 : render::textureMeshMemoryBytes(o.outer)),
-                  "the atlases of the outer and the cut faces");
+  run.checkMemory(render::breakModelMemoryBytes(o, !job.exemplar.empty()), "the atlases of the outer and the cut faces");
   const fs::path out = run.output(job.output);
   const fs::path separate = job.separate.empty() ? fs::path() : run.outputs().addFolder(job.separate);
   if (!job.preview.empty()) checkImageWritable(job.preview);

@@ -63,13 +63,15 @@ void runRender(RenderJob& job) {
   Stage load(run.ctx(), "load");
   const geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
   load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle"));
-  Stage bvh(run.ctx(), "bvh");
-  const render::PreviewRenderer renderer(mesh);
-  bvh.finish();
   render::RenderOptions options = job.options;
   options.up = geometry::upVector(upAxisFor(job.up, job.model));
   options.normalMapCache = run.analysisCache();
   options.margin = job.options.margin / job.zoom;
+  run.checkMemory(render::renderMemoryBytes(mesh, options),
+                  "a " + std::to_string(options.width) + "x" + std::to_string(options.height) + " render");
+  Stage bvh(run.ctx(), "bvh");
+  const render::PreviewRenderer renderer(mesh);
+  bvh.finish();
   for (int i = 0; i < views; ++i) {
     Stage stage(run.ctx(), "render");
     if (job.turntable) options.azimuthDegrees = job.options.azimuthDegrees + 360.0f * float(i) / float(views);
@@ -105,7 +107,7 @@ Command addRenderCommand(CLI::App& root) {
       "transparent, white, black, grey, #rrggbb or R,G,B (each 0 to 1)");
   background->type_name("COLOUR");
   background->default_str("white");
-  f.common(job->common, Common::Threads | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Quiet);
   return {f.app(), [job] { runRender(*job); }};
 }
 

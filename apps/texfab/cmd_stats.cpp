@@ -8,7 +8,9 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "synthesis/quality_measures.h"
+#include "synthesis/synthesize_2d.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -37,6 +39,12 @@ void runStats(const StatsJob& args) {
                   std::to_string(coords->height) + " but the image is " + std::to_string(image.width) + "x" +
                   std::to_string(image.height));
   }
+  double bytes = measureQualityMemoryBytes(image, exemplar, args.fidelity);
+  if (args.baseline)
+    bytes = std::max(bytes, analysisMemoryBytes(exemplar.width, exemplar.height, {}) +
+                                synthesize2dMemoryBytes({0, 0, image.width, image.height}, exemplar.channels) +
+                                measureQualityMemoryBytes(image, exemplar, args.fidelity));
+  run.checkMemory(bytes, "measuring a " + std::to_string(image.width) + "x" + std::to_string(image.height) + " image");
   Stage measure(run.ctx(), "measures");
   const QualityReport q = measureQuality(image, exemplar, coords ? &*coords : nullptr, args.fidelity, measure.inner());
   measure.finish();
@@ -90,7 +98,7 @@ Command addStatsCommand(CLI::App& root) {
   f.flag("--baseline-2d", job->baseline,
          "Also measure a 2-D synthesis of the image's size from the exemplar (seed 1, default options) and give "
          "the image's fidelity relative to it: for slices of a solid texture, 1 = as faithful as 2-D synthesis");
-  f.common(job->common, Common::Threads | Common::Report | Common::Cache | Common::Quiet);
+  f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Quiet);
   return {f.app(), [job] { runStats(*job); }};
 }
 

@@ -170,6 +170,7 @@ BrokenOutput breakModel(const py::object& meshLike, const py::object& planes, in
   o.outer.measure = false;
   o.shareTextureSettings(seed, solidOptions(seed, method, contrastGain, refine));
 
+  checkMemory(render::breakModelMemoryBytes(o, !exemplar.is_none()), "the atlases of the outer and the cut faces");
   render::BreakExemplars ex;
   if (!exemplar.is_none()) ex.outer = toImage(exemplar, "exemplar");
   if (!interior.is_none()) ex.interior = toImage(interior, "interior");

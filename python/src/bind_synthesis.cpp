@@ -74,6 +74,12 @@ SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& siz
     if (map.width != exemplar.width || map.height != exemplar.height)
       throw Error("maps['" + name + "']: a companion map must have the exemplar's size");
 
+  int channels = exemplar.channels;  // resolved through the coordinates: the colours, then each map
+  for (const auto& [name, map] : maps) channels += map.channels;
+  checkMemory(synthesize2dMemoryBytes(w, channels) +
+                  analysisMemoryBytes(exemplar.width, exemplar.height, analysis),
+              "a " + std::to_string(w.width) + "x" + std::to_string(w.height) + " output from a " +
+                  std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) + " exemplar");
   struct Result {
     CoordMap coords;
     Image image;

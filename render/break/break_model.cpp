@@ -140,6 +140,18 @@ void BreakExemplars::analyze(const BreakModelOptions& o, const std::function<syn
   }
 }
 
+double breakModelMemoryBytes(const BreakModelOptions& options, bool texturesOutside) {
+  TextureMeshOptions interior;  // the cut faces' atlas costs as a solid texture job's
+  interior.mode = TextureMode::Solid;
+  interior.atlas = options.interior.atlas;
+  if (interior.atlas.pack.width == 0) {  // auto: at most 1.5 times the outer atlas per side, or 2048^2
+    interior.atlas.pack.width = texturesOutside ? int(1.5 * options.outer.atlas.pack.width) : 2048;
+    interior.atlas.pack.height = texturesOutside ? int(1.5 * options.outer.atlas.pack.height) : 2048;
+  }
+  interior.solid = options.interior.solid;
+  return textureMeshMemoryBytes(interior) + (texturesOutside ? textureMeshMemoryBytes(options.outer) : 0.0);
+}
+
 BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer, const InteriorExemplar& interior,
                        const BreakModelOptions& o, const Context& ctx, synthesis::SolidLevelCache* cache) {
   if (o.planes.empty() == !o.fracture) throw Error("break: give cutting planes or fracture options (one of the two)");

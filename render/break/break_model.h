@@ -91,6 +91,11 @@ struct BrokenModel {
   std::optional<CutFaceTexture> interior;  ///< absent when nothing was cut
 };
 
+/// Peak memory of breakModel's textures, in bytes (meant as an upper bound): the cut faces' atlas
+/// as a solid texture job's (textureMeshMemoryBytes; an automatic size counted as 1.5 times the
+/// outer atlas per side, or 2048^2), plus the outer texture's when `texturesOutside`.
+double breakModelMemoryBytes(const BreakModelOptions& options, bool texturesOutside);
+
 /// Throws texfab::Error for bad options (neither or both of planes and fracture), a model that
 /// cannot be made a solid, or a missing interior exemplar when there are faces to texture.
 /// `outer.color` null keeps the model's own materials and UVs on the outer faces. Stages: repair,

@@ -437,7 +437,10 @@ TEST(Cli, EveryLongCommandRefusesWorkBeyondMaxMemory) {
     for (const std::string& out : job.outputs) EXPECT_FALSE(fs::exists(d / out)) << job.command << ": " << out;
     EXPECT_TRUE(leftovers(d.path()).empty()) << job.command;
   }
-  EXPECT_EQ(commands, 7);  // synth, solid, atlas, texture, cut, fracture, slice
+  EXPECT_EQ(commands, 8);  // synth, solid, atlas, texture, cut, fracture, slice, render
+  const CliResult stats = runCli("stats " + quote(kExemplar) + " --exemplar " + quote(kExemplar) + " --max-memory 1K");
+  EXPECT_EQ(stats.status, 2) << stats.err;
+  EXPECT_NE(stats.err.find("measuring a "), std::string::npos) << stats.err;
   EXPECT_EQ(runCli("synth " + quote(kExemplar) + " -o " + quote(d / "o.png") + " --max-memory lots").status, 1);
 }
 

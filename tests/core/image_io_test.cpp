@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace texfab {
@@ -99,6 +101,33 @@ TEST(ImageIo, AFileIsReadByItsSignatureWhenItsExtensionLies) {
   EXPECT_EQ(readImage(dir / "a.png").pixels, readImage(dir / "a.jpg").pixels);
   std::ofstream(dir / "b.png", std::ios::binary) << "II*" << std::string(40, '\0');  // a TIFF signature, no TIFF
   EXPECT_THROW(readImage(dir / "b.png"), Error);
+}
+
+// A few corrupt bytes of EXR header must not make OpenEXR allocate what they claim.
+TEST(ImageIo, RefusesAnExrHeaderThatClaimsMoreThanTheFileHolds) {
+  TempDir dir;
+  writeImage(Image(8, 4, 3), dir / "a.exr");
+  std::ifstream in(dir / "a.exr", std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_NO_THROW(readImage(dir / "a.exr"));
+  // The message readImage gives once `value` is written at `offset` after the attribute's type.
+  auto corrupt = [&](const std::string& attribute, size_t offset, int32_t value) {
+    std::string bytes = good;
+    const size_t at = bytes.find(attribute + '\0');
+    EXPECT_NE(at, std::string::npos) << attribute;
+    const size_t sizeField = bytes.find('\0', at + attribute.size() + 1) + 1;
+    std::memcpy(&bytes[sizeField + offset], &value, 4);
+    std::ofstream(dir / "b.exr", std::ios::binary) << bytes;
+    try {
+      readImage(dir / "b.exr");
+      ADD_FAILURE() << attribute << " corrupted, yet read";
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(corrupt("dataWindow", 4 + 12, 1 << 30).find("corrupt EXR: its header names"), std::string::npos);
+  EXPECT_NE(corrupt("channels", 0, 1 << 30).find("corrupt EXR: its attribute 'channels' runs past"), std::string::npos);
 }
 
 TEST(ImageIo, JpegReadsBackClose) {
