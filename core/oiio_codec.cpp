@@ -100,9 +100,29 @@ OIIO::ImageSpec readConfig() {
   return config;
 }
 
-Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t maxBytes) {
+// The most pixels a file of `bytes` bytes in this format can encode, or 0 where there is no such
+// bound (WebP's lossless mode and TIFF's sparse tiles need no bits per pixel): PNG's deflate
+// expands at most 1032 times and a pixel takes at least 1 bit; a JPEG block of 64 pixels takes at
+// least 1 bit (a DC code); an LZW code of 12 bits yields at most 4096 GIF pixels.
+uint64_t mostPixels(std::string_view format, uint64_t bytes) {
+  if (bytes == 0) return 0;  // unknown
+  if (format == "png") return bytes * 1032 * 8;
+  if (format == "jpeg") return bytes * 8 * 64;
+  if (format == "gif") return bytes * 8 / 12 * 4096 + 4096;
+  return 0;
+}
+
+// `sourceBytes`: the size of the file or memory the image is read from.
+Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t sourceBytes, uint64_t maxBytes) {
   const OIIO::ImageSpec& spec = in.spec();
   checkImageSize(spec.width, spec.height, name);
+  // A corrupt header that claims a huge image: decoders allocate what it claims before they find
+  // the data missing.
+  if (const uint64_t most = mostPixels(in.format_name(), sourceBytes);
+      most > 0 && uint64_t(spec.width) * uint64_t(spec.height) > most)
+    throw Error(name + ": corrupt " + in.format_name() + ": it claims " + std::to_string(spec.width) + "x" +
+                std::to_string(spec.height) + " pixels, more than its " + std::to_string(sourceBytes) +
+                " bytes can hold");
   if (spec.depth > 1) throw Error(name + ": volume images are not supported");
   if (spec.nchannels < 1) throw Error(name + ": image has no channels");
   const uint64_t bytes = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels) * sizeof(float);
@@ -186,7 +206,23 @@ void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const 
                 std::to_string(fileSize) + " bytes can hold");
 }
 
-void checkExrFile(const std::string& file) {
+// OpenImageIO's GIF reader decodes the first frame when it opens the file, into a canvas of the
+// logical screen's size: a screen larger than the file can fill is refused before.
+void checkGifScreen(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
+  if (head.size() < 10 || std::memcmp(head.data(), "GIF8", 4) != 0) return;
+  const uint64_t width = head[6] | unsigned(head[7]) << 8, height = head[8] | unsigned(head[9]) << 8;
+  if (width * height > mostPixels("gif", fileSize))
+    throw Error(name + ": corrupt gif: it claims " + std::to_string(width) + "x" + std::to_string(height) +
+                " pixels, more than its " + std::to_string(fileSize) + " bytes can hold");
+}
+
+// The checks above, on what a file's or a buffer's first bytes claim.
+void checkClaims(std::span<const uint8_t> head, uint64_t size, const std::string& name) {
+  checkExrChunkTable(head, size, name);
+  checkGifScreen(head, size, name);
+}
+
+void checkFileClaims(const std::string& file) {
   std::error_code error;
   const uint64_t size = std::filesystem::file_size(file, error);
   if (error) return;
@@ -194,7 +230,7 @@ void checkExrFile(const std::string& file) {
   if (FILE* f = std::fopen(file.c_str(), "rb")) {
     head.resize(std::fread(head.data(), 1, head.size(), f));
     std::fclose(f);
-    checkExrChunkTable(head, size, file);
+    checkClaims(head, size, file);
   }
 }
 
@@ -222,7 +258,7 @@ const char* extensionBySignature(const std::string& file) {
 // Not OIIO's own fallback (try_all_readers, off in this module), which tries every reader it has:
 // some take seconds to refuse a corrupt file of a few hundred bytes.
 Image read(const std::string& name, uint64_t maxBytes) {
-  checkExrFile(name);
+  checkFileClaims(name);
   const OIIO::ImageSpec config = readConfig();
   const QuietStderr quiet;
   auto in = OIIO::ImageInput::open(name, &config);
@@ -236,12 +272,14 @@ Image read(const std::string& name, uint64_t maxBytes) {
     }
     if (!in) throw Error(name + ": cannot read image: " + oneLine(why));
   }
-  return decode(*in, name, maxBytes);
+  std::error_code error;
+  const uint64_t bytes = std::filesystem::file_size(name, error);
+  return decode(*in, name, error ? 0 : bytes, maxBytes);
 }
 
 Image decodeBytes(std::span<const uint8_t> bytes, const std::string& pseudoName, const std::string& name,
                   uint64_t maxBytes) {
-  checkExrChunkTable(bytes, bytes.size(), name);
+  checkClaims(bytes, bytes.size(), name);
   OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
   OIIO::ImageSpec config = readConfig();
   // OIIO 2.4 ignores open()'s proxy argument when a configuration is given; the hint carries it.
@@ -256,7 +294,7 @@ Image decodeBytes(std::span<const uint8_t> bytes, const std::string& pseudoName,
     const std::string why = in ? in->geterror() : OIIO::geterror();
     throw Error(name + ": cannot decode image: " + oneLine(why));
   }
-  return decode(*in, name, maxBytes);
+  return decode(*in, name, bytes.size(), maxBytes);
 }
 
 bool canWrite(const std::string& name) { return OIIO::ImageOutput::create(name) != nullptr; }

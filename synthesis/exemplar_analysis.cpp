@@ -11,6 +11,7 @@
 #include "core/image_io.h"
 #include "core/parallel.h"
 #include "synthesis/analysis_cache.h"
+#include "synthesis/appearance_space.h"
 #include "synthesis/coord_map.h"
 
 #include <Eigen/Dense>
@@ -28,12 +29,12 @@
 namespace texfab::synthesis {
 namespace fs = std::filesystem;
 
+using namespace detail;
+
 namespace {
 
 constexpr uint32_t kCacheMagic = 0x41584654;  // "TFXA"
 constexpr uint32_t kCacheVersion = 3;         // bump whenever the analysis changes
-constexpr int kPatchRadius = 2;               // 5x5 appearance neighborhoods
-constexpr float kPatchSigma = 1.5f;           // Gaussian weighting of the 5x5 samples
 constexpr int kValidMarginSpacings = 1;       // Clamp: valid-region margin, in level spacings
 
 int wrap(int a, int m) {
@@ -136,40 +137,6 @@ int64_t pixelDistance2(int ax, int ay, int bx, int by, int w, int h, ExemplarWra
   return int64_t(dx) * dx + int64_t(dy) * dy;
 }
 
-// The weighted 5x5 neighborhood of (x, y) with taps `spacing` apart: dims = 25 * channels values.
-void patchOf(const Image& level, int x, int y, int spacing, ExemplarWrap w, const float* weights, float* out) {
-  const int side = 2 * kPatchRadius + 1;
-  for (int j = -kPatchRadius; j <= kPatchRadius; ++j)
-    for (int i = -kPatchRadius; i <= kPatchRadius; ++i) {
-      const float wgt = weights[(j + kPatchRadius) * side + i + kPatchRadius];
-      const float* p =
-          level.pixel(foldIndex(x + i * spacing, level.width, w), foldIndex(y + j * spacing, level.height, w));
-      for (int ch = 0; ch < level.channels; ++ch) *out++ = wgt * p[ch];
-    }
-}
-
-// The PCA basis (dims x kAppearanceDims, largest variance first) of the rows of `raw`, which are
-// centred in place; each column's sign is fixed (largest-magnitude component positive) so the
-// basis is reproducible.
-Eigen::MatrixXf principalBasis(Eigen::MatrixXf& raw, Eigen::RowVectorXf& mean) {
-  const int n = int(raw.rows()), dims = int(raw.cols());
-  mean = raw.colwise().mean();
-  raw.rowwise() -= mean;
-  const Eigen::MatrixXf covariance = (raw.transpose() * raw) / float(std::max(1, n - 1));
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXf> solver(covariance);
-  // Eigenvalues come in increasing order: take the last kAppearanceDims columns.
-  const int keep = std::min(kAppearanceDims, dims);
-  Eigen::MatrixXf basis = Eigen::MatrixXf::Zero(dims, kAppearanceDims);
-  for (int k = 0; k < keep; ++k) {
-    Eigen::VectorXf v = solver.eigenvectors().col(dims - 1 - k);
-    Eigen::Index arg;
-    v.cwiseAbs().maxCoeff(&arg);
-    if (v(arg) < 0) v = -v;
-    basis.col(k) = v;
-  }
-  return basis;
-}
-
 // Appearance vectors of one stack level: Gaussian-weighted 5x5 neighborhoods with taps `spacing`
 // apart, projected on their 8 principal components, quantized to int8 with one scale.
 //
@@ -182,11 +149,7 @@ std::vector<int8_t> appearanceVectors(const Image& level, int spacing, ExemplarW
   const int side = 2 * kPatchRadius + 1;
   const int dims = side * side * c;
   const int64_t n = int64_t(width) * h;
-  std::vector<float> weights(size_t(side * side));
-  for (int j = -kPatchRadius; j <= kPatchRadius; ++j)
-    for (int i = -kPatchRadius; i <= kPatchRadius; ++i)
-      weights[size_t((j + kPatchRadius) * side + i + kPatchRadius)] =
-          std::sqrt(std::exp(-float(i * i + j * j) / (2 * kPatchSigma * kPatchSigma)));
+  const std::vector<float> weights = patchWeights();
 
   std::vector<int8_t> out(size_t(n) * kAppearanceDims);
   auto quantize = [](float v, float scale) { return int8_t(std::clamp(std::lrint(v * scale), -127L, 127L)); };
@@ -220,22 +183,13 @@ std::vector<int8_t> appearanceVectors(const Image& level, int spacing, ExemplarW
   const float scale = maxAbs > 0 ? 127.0f / maxAbs : 0.0f;
   raw.resize(0, 0);
   // Each pixel's projection is a fixed-order dot product: independent of the thread count.
-  // Each coefficient is summed over d in order (the same bits however the loop is vectorized: the
-  // lanes are the kAppearanceDims coefficients, each its own sum).
   const RowMatrix b = basis;  // dims x kAppearanceDims, row-major
   parallelFor(0, h, ctx, [&](int y0, int y1) {
     std::vector<float> patch(static_cast<size_t>(dims));
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < width; ++x) {
         patchOf(level, x, y, spacing, w, weights.data(), patch.data());
-        float sum[kAppearanceDims] = {};
-        for (int d = 0; d < dims; ++d) {
-          const float v = patch[size_t(d)] - mean(d);
-          const float* row = b.data() + size_t(d) * kAppearanceDims;
-          for (int k = 0; k < kAppearanceDims; ++k) sum[k] += row[k] * v;
-        }
-        int8_t* o = &out[(size_t(y) * width + x) * kAppearanceDims];
-        for (int k = 0; k < kAppearanceDims; ++k) o[k] = quantize(sum[k], scale);
+        projectPatch(patch.data(), dims, mean, b.data(), scale, &out[(size_t(y) * width + x) * kAppearanceDims]);
       }
   }, 4);
   return out;

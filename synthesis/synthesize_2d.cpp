@@ -26,16 +26,8 @@ using cpu::LevelGrid;
 // Rows per task: enough work to amortize scheduling, small enough to balance two cores.
 constexpr int kRowGrain = 8;
 
-LevelGrid expand(const LevelGrid& g, int by) {
-  return {g.x0 - by, g.y0 - by, g.width + 2 * by, g.height + 2 * by};
-}
-
-// The parent-level rectangle that upsampling `g` reads.
-LevelGrid parentOf(const LevelGrid& g) {
-  const int64_t x0 = cpu::floorShift(g.x0, 1), y0 = cpu::floorShift(g.y0, 1);
-  const int64_t x1 = cpu::floorShift(g.x0 + g.width - 1, 1), y1 = cpu::floorShift(g.y0 + g.height - 1, 1);
-  return {x0, y0, int(x1 - x0 + 1), int(y1 - y0 + 1)};
-}
+using cpu::expand;
+using cpu::parentOf;
 
 // The region a level's coordinates must stay in, for a non-toroidal exemplar; null when it tiles.
 const ValidRegion* clampOf(const ExemplarAnalysis& a, int level) {
@@ -300,15 +292,19 @@ int firstSynthesisLevel(int levelCount, const SynthesisOptions& options) {
   return first;
 }
 
+void Window::validate() const {
+  if (width <= 0 || height <= 0 || width > kMaxImageSide || height > kMaxImageSide)
+    throw Error("output size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1 to " +
+                std::to_string(kMaxImageSide) + " per side)");
+  constexpr int64_t kMaxPosition = int64_t(1) << 40;
+  if (std::abs(x) > kMaxPosition || std::abs(y) > kMaxPosition)
+    throw Error("window position is out of range (|x|, |y| <= 2^40)");
+}
+
 SynthesisResult synthesize2d(const ExemplarAnalysis& analysis, const Window& window,
                              const SynthesisOptions& options, const Context& ctx) {
   options.validate();
-  if (window.width <= 0 || window.height <= 0 || window.width > kMaxImageSide || window.height > kMaxImageSide)
-    throw Error("output size " + std::to_string(window.width) + "x" + std::to_string(window.height) +
-                " is out of range (1 to " + std::to_string(kMaxImageSide) + " per side)");
-  constexpr int64_t kMaxPosition = int64_t(1) << 40;
-  if (std::abs(window.x) > kMaxPosition || std::abs(window.y) > kMaxPosition)
-    throw Error("window position is out of range (|x|, |y| <= 2^40)");
+  window.validate();
   if (analysis.levels.empty()) throw Error("exemplar analysis is empty");
   const auto device = deviceFor(ctx);
   SynthesisResult result;

@@ -31,6 +31,8 @@ struct Window {
   int64_t y = 0;
   int width = 0;
   int height = 0;
+  /// Throws texfab::Error unless 1 to kMaxImageSide texels per side, |x|, |y| <= 2^40.
+  void validate() const;
 };
 
 struct SynthesisOptions {

@@ -6,11 +6,15 @@
 #include "apps/texfab/report_json.h"
 #include "core/image_io.h"
 #include "core/memory.h"
+#include "core/text.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/quality_measures.h"
+#include "synthesis/graph_file.h"
 #include "synthesis/synthesize_2d.h"
+#include "synthesis/synthesize_graph.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -27,7 +31,8 @@ constexpr double kRepetitionLimit = 0.25;
 constexpr int kRepetitionCheckedUpTo = 8;
 
 struct SynthJob {
-  std::string exemplar, output, coords;
+  std::string exemplar, graph, output, coords;
+  double zoom = 1;
   std::vector<std::string> apply;
   synthesis::Window window{0, 0, 512, 512};
   bool windowGiven = false, tileable = false;
@@ -106,8 +111,64 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Run& r
   return exemplar;
 }
 
+// synth --graph: multiscale synthesis from an exemplar graph (Han et al. 2008), at --zoom.
+void runGraphSynth(const SynthJob& job) {
+  using namespace synthesis;
+  Run run("synth", job.common);
+  if (job.tileable || !job.coords.empty() || !job.apply.empty())
+    throw UsageError("--graph does not take --tileable, --coords or --apply yet");
+  GraphSynthesisOptions options;
+  options.seed = job.options.seed;
+  options.jitter = job.options.jitter;
+  options.passes = job.options.passes;
+  options.interleave = job.options.interleave;
+  options.zoomOctaves = int(std::lrint(std::log2(job.zoom)));
+  if (std::ldexp(1.0, options.zoomOctaves) != job.zoom)
+    throw UsageError("--zoom: expected a power of two (1, 2, 4, ... or 0.5, 0.25, ...)");
+  checkImageWritable(job.output);
+  const fs::path out = run.output(job.output);
+
+  Stage load(run.ctx(), "load");
+  const ExemplarGraph graph = readExemplarGraph(job.graph);
+  run.checkMemory(graphAnalysisMemoryBytes(int(graph.exemplars.size()), graph.side()) +
+                      synthesizeGraphMemoryBytes(job.window),
+                  "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) +
+                      " output from a graph of " + std::to_string(graph.exemplars.size()) + " exemplars");
+  load.finish(job.graph + ": " + std::to_string(graph.exemplars.size()) + " exemplars, " +
+              std::to_string(graph.edges.size()) + " edges");
+  Stage analyze(run.ctx(), "analysis");
+  const GraphAnalysis analysis = analyzeGraph(graph, {}, analyze.inner());
+  analyze.finish();
+  options.validate(analysis);
+  const int deepest = graph.deepestLevel(), level = graphOutputLevel(analysis, options);
+  if (deepest >= 0 && level > deepest)
+    run.ctx().warn("zoom " + figure(job.zoom) + " is finer than the graph's finest exemplar (zoom " +
+                   figure(std::ldexp(1.0, deepest - analysis.finestLevel())) + "): its pixels are magnified");
+
+  Stage synth(run.ctx(), "synthesis");
+  const SynthesisResult result = synthesizeGraph(analysis, job.window, options, synth.inner());
+  synth.finish(std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " at zoom " +
+               figure(job.zoom));
+  Stage write(run.ctx(), "write");
+  writeImage(applyCoords(result.coords, analysis.colors, run.ctx()), out);
+  write.finish(job.output);
+
+  nlohmann::json& r = run.report();
+  r["graph"] = {{"file", job.graph}, {"exemplars", graph.names}, {"edges", graph.edges.size()},
+                {"side", graph.side()}, {"deepest_level", deepest}};
+  r["window"] = {{"x", job.window.x}, {"y", job.window.y}, {"width", job.window.width}, {"height", job.window.height}};
+  r["parameters"] = {{"seed", options.seed}, {"zoom", job.zoom}, {"passes", options.passes},
+                     {"interleave", options.interleave},
+                     {"jitter", options.jitter.empty() ? defaultJitter(analysis.levels) : options.jitter}};
+  r["levels"] = toJson(result.levels);
+  run.finish();
+}
+
 void runSynth(SynthJob& job) {
   using namespace synthesis;
+  if (job.exemplar.empty() == job.graph.empty()) throw UsageError("give an exemplar image or --graph, not both");
+  if (!job.graph.empty()) return runGraphSynth(job);
+  if (job.zoom != 1) throw UsageError("--zoom needs --graph");
   Run run("synth", job.common);
   // Everything checkable is checked, and every output reserved, before any work.
   if (job.tileable) {
@@ -175,7 +236,14 @@ Command addSynthCommand(CLI::App& root) {
   synthesis::SynthesisOptions& o = job->options;
   Flags f(root.add_subcommand("synth", "Synthesize a texture of any size from a small exemplar image "
                                        "(parallel appearance-space synthesis, Lefebvre & Hoppe 2005/2006)"));
-  f.input("exemplar", job->exemplar, "Exemplar image (PNG, JPEG, TGA, TIFF, EXR, GIMP .pat)");
+  f.input("exemplar", job->exemplar, "Exemplar image (PNG, JPEG, TGA, TIFF, EXR, GIMP .pat)")->required(false);
+  f.text("--graph", job->graph,
+         "Synthesize from an exemplar graph instead (JSON: exemplars at several scales and the edges between "
+         "them; docs/exemplar-graphs.md): structure from the largest scale to the finest");
+  f.option("--zoom", job->zoom,
+           "With --graph: output texels are 1/ZOOM of a root exemplar pixel (a power of two; 16 shows the "
+           "exemplar an edge of scale 16 leads to at its own resolution)",
+           {1.0 / 4096, 1e18});
   f.text("-o,--output", job->output, "Output image (.png, .exr, .tif, ...)")->required();
   f.size("--size", job->window.width, job->window.height, "Output size", {1, kMaxImageSide});
   f.numbers("--window", 4, "X,Y,W,H",

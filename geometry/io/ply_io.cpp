@@ -258,8 +258,8 @@ private:
     for (double idx : list_) {
       if (!(idx >= 0) || idx >= double(mesh_.positions.size()))
         throw Error(path_.string() + ": PLY face " + std::to_string(item) + " uses vertex " +
-                    std::to_string((long long)idx) + " but there are " + std::to_string(mesh_.positions.size()) +
-                    " vertices");
+                    (std::abs(idx) < 1e15 ? std::to_string((long long)idx) : std::string("beyond any index")) +
+                    " but there are " + std::to_string(mesh_.positions.size()) + " vertices");
       facePositions_.push_back(mesh_.positions[size_t(idx)]);
     }
     faceCorners_ = triangulatePolygon(facePositions_);

@@ -25,6 +25,16 @@ struct LevelGrid {
   int height = 0;
 };
 
+/// `g` grown by `by` texels on every side.
+inline LevelGrid expand(const LevelGrid& g, int by) { return {g.x0 - by, g.y0 - by, g.width + 2 * by, g.height + 2 * by}; }
+
+/// The parent-level rectangle that upsampling `g` reads.
+inline LevelGrid parentOf(const LevelGrid& g) {
+  const int64_t x0 = g.x0 >> 1, y0 = g.y0 >> 1;
+  const int64_t x1 = (g.x0 + g.width - 1) >> 1, y1 = (g.y0 + g.height - 1) >> 1;
+  return {x0, y0, int(x1 - x0 + 1), int(y1 - y0 + 1)};
+}
+
 /// What the kernels need to know about the exemplar at one level (views into ExemplarAnalysis).
 struct LevelTables {
   int exemplarWidth = 0;

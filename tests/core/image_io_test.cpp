@@ -130,6 +130,22 @@ TEST(ImageIo, RefusesAnExrHeaderThatClaimsMoreThanTheFileHolds) {
   EXPECT_NE(corrupt("channels", 0, 1 << 30).find("corrupt EXR: its attribute 'channels' runs past"), std::string::npos);
 }
 
+// A GIF whose header claims a 65535x65535 screen in 40 bytes (named .png: read by its signature) is
+// refused before a decoder allocates it (OpenImageIO decodes the first frame when it opens a GIF).
+TEST(ImageIo, RefusesAGifThatClaimsMorePixelsThanItsBytesHold) {
+  std::string gif = "GIF89a\xff\xff\xff\xff\x80";
+  gif.resize(40, '\0');
+  TempDir dir;
+  std::ofstream(dir / "huge.png", std::ios::binary) << gif;
+  try {
+    readImage(dir / "huge.png");
+    ADD_FAILURE() << "read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("corrupt gif: it claims 65535x65535 pixels, more than its 40 bytes"),
+              std::string::npos) << e.what();
+  }
+}
+
 TEST(ImageIo, JpegReadsBackClose) {
   TempDir dir;
   Image image(64, 64, 3);

@@ -153,6 +153,58 @@ TEST(CliSynth, WindowsMatchTheFullImage) {
       for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 74, y + 27, c));
 }
 
+// synth --graph: a two-exemplar graph at two zooms; windows agree with the full image; a bad graph
+// file, or a flag --graph does not take, is one line and no output.
+TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
+  TempDir dir;
+  const std::string photos = std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/photos/";
+  auto graphFile = [&](const std::string& name, const std::string& edges) {
+    std::ofstream(dir / name) << R"({"exemplars": [{"name": "rock", "image": ")" << photos << R"(rock.png"},
+      {"name": "stone", "image": ")" << photos << R"(stone.png"}], "edges": [)" << edges << "]}";
+    return (dir / name).string();
+  };
+  const std::string graph = graphFile("g.json", R"({"from": "rock", "to": "stone", "scale": 16})");
+  for (const char* zoom : {"1", "16"}) {
+    const Outcome o = texfab("synth --graph " + graph + " --zoom " + zoom + " -q -o " + (dir / "full.png").string() +
+                             " --window -20,-10,96,64 --report " + (dir / "r.json").string());
+    ASSERT_EQ(o.status, 0) << o.err;
+    ASSERT_EQ(texfab("synth --graph " + graph + " --zoom " + zoom + " -q -o " + (dir / "part.png").string() +
+                     " --window 5,7,30,20 --threads 1").status, 0);
+    const Image full = readImage(dir / "full.png"), part = readImage(dir / "part.png");
+    for (int y = 0; y < 20; ++y)
+      for (int x = 0; x < 30; ++x)
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 25, y + 17, c)) << "zoom " << zoom;
+    std::ifstream report(dir / "r.json");
+    EXPECT_EQ(nlohmann::json::parse(report)["graph"]["deepest_level"], 7 + 4);
+  }
+  const std::string out = (dir / "out.png").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--graph " + graphFile("b1.json", R"({"from": "rock", "to": "stone", "scale": 12})"),
+       "scale 12 must be a power of two greater than 1"},
+      {"--graph " + graphFile("b2.json", R"({"from": "rock", "to": "gravel", "scale": 4})"),
+       "no exemplar is named 'gravel'"},
+      {"--graph " + graphFile("b3.json", R"({"from": "rock", "to": "stone", "scale": 2, "region": [0, 0, 8, 8]})"),
+       "unknown field 'region'"},
+      {"--graph " + graphFile("b4.json", R"({"from": "rock", "to": "stone", "scale": 1})"), "greater than 1"},
+      {"--graph " + graphFile("b5.json", R"({"from": "rock", "to": "stone", "scale": 32})"),
+       "use exemplars of at least 256 pixels or a smaller scale"},
+      {"--graph " + graphFile("b6.json", ""), "'stone' is not reached from the root 'rock'"},
+      {"--graph " + (dir / "none.json").string(), "cannot open the graph file"},
+      {"--graph " + graph + " --zoom 3", "--zoom: expected a power of two"},
+      {"--graph " + graph + " --coords " + (dir / "c.exr").string(), "--graph does not take"},
+      {kBrick + " --graph " + graph, "not both"},
+      {kBrick + " --zoom 2", "--zoom needs --graph"},
+  };
+  for (const auto& [args, mention] : cases) {
+    SCOPED_TRACE(args);
+    const Outcome o = texfab("synth " + args + " -q -o " + out);
+    EXPECT_NE(o.status, 0);
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+    EXPECT_NE(o.err.find(mention), std::string::npos) << o.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+  }
+}
+
 // --backend: an unknown name is a usage error; Vulkan without the device asked for is one line
 // (exit 2, no output); auto falls back to the CPU and says so; with a usable device, vulkan writes
 // the CPU's bytes. info --devices lists what the loader finds.

@@ -1,0 +1,356 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: C. Han et al. Multiscale texture synthesis. SIGGRAPH 2008; C. Han, PhD thesis, 2011,
+//           ch. 4 and §5.2 (admissible candidates 𝒜(E_k^i), k-coherence across exemplars).
+#include "synthesis/exemplar_graph.h"
+
+#include "core/error.h"
+#include "core/hash.h"
+#include "core/parallel.h"
+#include "synthesis/appearance_space.h"
+#include "synthesis/coord_map.h"
+
+#include <nanoflann.hpp>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <functional>
+
+namespace texfab::synthesis {
+
+using namespace detail;
+
+namespace {
+
+constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
+
+struct Cloud {
+  std::vector<float> points;  // n * kAppearanceDims
+  size_t kdtree_get_point_count() const { return points.size() / kAppearanceDims; }
+  float kdtree_get_pt(size_t i, size_t d) const { return points[i * kAppearanceDims + d]; }
+  template <class Box> bool kdtree_get_bbox(Box&) const { return false; }
+};
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud, kAppearanceDims,
+                                                 uint32_t>;
+
+// RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
+Image rgbOf(const Image& image) {
+  Image out(image.width, image.height, 3, image.format);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const float* p = image.pixel(x, y);
+      float* o = out.pixel(x, y);
+      for (int c = 0; c < 3; ++c) o[c] = p[image.channels >= 3 ? c : 0];
+    }
+  return out;
+}
+
+struct Tile {
+  int node = 0, level = 0;
+  bool operator==(const Tile&) const = default;
+};
+
+bool isLeaf(const ExemplarGraph& g, int node) {
+  return std::none_of(g.edges.begin(), g.edges.end(), [&](const GraphEdge& e) { return e.from == node; });
+}
+
+// 𝒜(E_k^i): the levels a texel of level k of node i may move to (thesis §5.2.1.2), itself first
+// where it may stay; the finest level of a node that has edges out is never one (a leaf's is, to
+// itself: see the header), nor an edge's destination level coarser than minEntryLevel.
+std::vector<Tile> admissible(const ExemplarGraph& g, int levels, Tile from, int minEntryLevel) {
+  const int finest = levels - 1;
+  std::vector<Tile> out;
+  if (from.level < finest || isLeaf(g, from.node)) out.push_back(from);
+  for (const GraphEdge& e : g.edges) {
+    const Tile t{e.to, from.level - e.octaves};
+    if (e.from != from.node || t.level < std::min(minEntryLevel, finest) || (t.level == finest && !isLeaf(g, e.to)))
+      continue;
+    if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+  }
+  return out;
+}
+
+// Appearance vectors of every atlas texel in one PCA space (see the header's deviations): the
+// basis and the quantization scale from a regular sample of about kExactAnalysisPixels
+// neighborhoods over all tiles, every texel projected by fixed-order sums.
+std::vector<int8_t> appearanceOf(const std::vector<std::vector<Image>>& stacks, const GraphAnalysis& a,
+                                 const Context& ctx) {
+  const int m = a.side, tiles = a.nodes * a.levels;
+  const int dims = (2 * kPatchRadius + 1) * (2 * kPatchRadius + 1) * 3;
+  const std::vector<float> weights = patchWeights();
+  const int step = std::max(1, int(std::ceil(std::sqrt(double(tiles) * m * m / double(kExactAnalysisPixels)))));
+  const int perSide = (m + step - 1) / step;
+  Eigen::MatrixXf raw(int64_t(tiles) * perSide * perSide, dims);
+  std::vector<float> patch(static_cast<size_t>(dims));
+  int64_t row = 0;
+  for (int i = 0; i < a.nodes; ++i)
+    for (int k = 0; k < a.levels; ++k)
+      for (int y = 0; y < m; y += step)
+        for (int x = 0; x < m; x += step, ++row) {
+          patchOf(stacks[size_t(i)][size_t(k)], x, y, a.spacing(k), ExemplarWrap::Tile, weights.data(), patch.data());
+          for (int d = 0; d < dims; ++d) raw(row, d) = patch[size_t(d)];
+        }
+  Eigen::RowVectorXf mean;
+  const Eigen::MatrixXf basis = principalBasis(raw, mean);
+  const float maxAbs = (raw * basis).cwiseAbs().maxCoeff();
+  const float scale = maxAbs > 0 ? 127.0f / maxAbs : 0.0f;
+  raw.resize(0, 0);
+  const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> b = basis;
+
+  const int aw = a.atlasWidth();
+  std::vector<int8_t> out(size_t(aw) * size_t(a.atlasHeight()) * kAppearanceDims);
+  parallelFor(0, a.atlasHeight(), ctx, [&](int y0, int y1) {
+    std::vector<float> p(static_cast<size_t>(dims));
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < aw; ++x) {
+        const int node = y / m, level = x / m;
+        patchOf(stacks[size_t(node)][size_t(level)], x % m, y % m, a.spacing(level), ExemplarWrap::Tile,
+                weights.data(), p.data());
+        projectPatch(p.data(), dims, mean, b.data(), scale, &out[(size_t(y) * aw + x) * kAppearanceDims]);
+      }
+  }, 4);
+  return out;
+}
+
+// Each texel's 4 diagonal appearance vectors at its level's spacing, wrapped in its tile.
+std::vector<int8_t> neighborhoodsOf(const GraphAnalysis& a) {
+  const int m = a.side, aw = a.atlasWidth();
+  std::vector<int8_t> out(size_t(aw) * size_t(a.atlasHeight()) * kNeighborhoodDims);
+  for (int y = 0; y < a.atlasHeight(); ++y)
+    for (int x = 0; x < aw; ++x) {
+      const int h = a.spacing(x / m), tx = x - x % m, ty = y - y % m;
+      for (int i = 0; i < kNeighborhoodSamples; ++i) {
+        const int sx = tx + ((x % m + kDiagonalX[i] * h) % m + m) % m;
+        const int sy = ty + ((y % m + kDiagonalY[i] * h) % m + m) % m;
+        std::memcpy(&out[(size_t(y) * aw + x) * kNeighborhoodDims + size_t(i) * kAppearanceDims],
+                    &a.appearance[(size_t(sy) * aw + sx) * kAppearanceDims], kAppearanceDims);
+      }
+    }
+  return out;
+}
+
+// One admissible level's search structure: its texels on a grid of stride min(h_l, m/8) (a
+// coarse level sees texels closer than h_l as one feature; cf. coherenceCandidates).
+struct LevelSearch {
+  Tile tile;
+  int stride = 1;
+  Cloud cloud;
+  std::vector<uint32_t> sites;  // packed atlas coordinates
+  std::unique_ptr<Tree> tree;
+
+  LevelSearch(const GraphAnalysis& a, Tile t) : tile(t) {
+    const int m = a.side;
+    stride = std::max(1, std::min(a.spacing(t.level), m / 8));
+    for (int y = 0; y < m; y += stride)
+      for (int x = 0; x < m; x += stride) {
+        const int ax = t.level * m + x, ay = t.node * m + y;
+        sites.push_back(packCoord(uint32_t(ax), uint32_t(ay)));
+        const int8_t* v = &a.appearance[(size_t(ay) * a.atlasWidth() + ax) * kAppearanceDims];
+        cloud.points.insert(cloud.points.end(), v, v + kAppearanceDims);
+      }
+    tree = std::make_unique<Tree>(kAppearanceDims, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  }
+};
+
+int64_t tileDistance2(uint32_t a, uint32_t b, int m) {
+  int dx = std::abs(int(coordU(a)) - int(coordU(b))) % m, dy = std::abs(int(coordV(a)) - int(coordV(b))) % m;
+  dx = std::min(dx, m - dx);
+  dy = std::min(dy, m - dy);
+  return int64_t(dx) * dx + int64_t(dy) * dy;
+}
+
+} // namespace
+
+void GraphAnalysisOptions::validate() const {
+  if (candidatesPerLevel < 1 || candidatesPerLevel > 4) throw Error("graph candidates per level must be 1 to 4");
+  if (!(minSpread >= 0.0f && minSpread <= 0.5f)) throw Error("graph candidate spread must be in [0, 0.5]");
+  if (minEntryLevel < 0 || minEntryLevel > 9) throw Error("graph entry level must be 0 to 9");
+}
+
+void ExemplarGraph::validate() const {
+  if (exemplars.empty()) throw Error("exemplar graph: no exemplars");
+  if (names.size() != exemplars.size()) throw Error("exemplar graph: one name per exemplar");
+  const int m = side();
+  for (size_t i = 0; i < exemplars.size(); ++i) {
+    const Image& e = exemplars[i];
+    const std::string what = "exemplar '" + names[i] + "'";
+    if (e.width != e.height || !std::has_single_bit(unsigned(e.width)) || e.width < kMinGraphExemplarSide ||
+        e.width > kMaxGraphExemplarSide)
+      throw Error(what + " is " + std::to_string(e.width) + "x" + std::to_string(e.height) +
+                  ": graph exemplars must be square, with a power-of-two side from " +
+                  std::to_string(kMinGraphExemplarSide) + " to " + std::to_string(kMaxGraphExemplarSide));
+    if (e.width != m)
+      throw Error(what + " is " + std::to_string(e.width) + " pixels wide, the root '" + names[0] + "' " +
+                  std::to_string(m) + ": every exemplar of a graph has the same size");
+    if (e.channels < 1 || e.pixels.size() != size_t(e.width) * e.height * e.channels) throw Error(what + " has no pixels");
+    if (!std::all_of(e.pixels.begin(), e.pixels.end(), [](float v) { return std::isfinite(v); }))
+      throw Error(what + " holds values that are not finite numbers");
+  }
+  const int levels = std::countr_zero(unsigned(m));  // L
+  for (size_t n = 0; n < edges.size(); ++n) {
+    const GraphEdge& e = edges[n];
+    const int nodes = int(exemplars.size());
+    if (e.from < 0 || e.from >= nodes || e.to < 0 || e.to >= nodes)
+      throw Error("exemplar graph: edge " + std::to_string(n + 1) + " joins an exemplar that does not exist");
+    const std::string what = "edge '" + names[size_t(e.from)] + "' -> '" + names[size_t(e.to)] + "'";
+    if (e.octaves < 1)
+      throw Error(what + ": its scale ratio must be greater than 1 (a power of two: 2, 4, 8, ...)");
+    if (e.octaves > std::min(levels, kMaxGraphEdgeOctaves))
+      throw Error(what + ": scale ratio " + std::to_string(int64_t(1) << std::min(e.octaves, 40)) +
+                  " is more than the exemplars' " + std::to_string(m) +
+                  " pixels: the whole destination would fit in one pixel of the source");
+    for (size_t o = 0; o < n; ++o)
+      if (edges[o].from == e.from && edges[o].to == e.to && edges[o].octaves == e.octaves)
+        throw Error(what + " is given twice");
+  }
+  std::vector<char> reached(exemplars.size(), 0);
+  std::vector<int> todo{0};
+  reached[0] = 1;
+  while (!todo.empty()) {
+    const int n = todo.back();
+    todo.pop_back();
+    for (const GraphEdge& e : edges)
+      if (e.from == n && !reached[size_t(e.to)]) reached[size_t(e.to)] = 1, todo.push_back(e.to);
+  }
+  for (size_t i = 0; i < exemplars.size(); ++i)
+    if (!reached[i]) throw Error("exemplar '" + names[i] + "' is not reached from the root '" + names[0] + "' by any edge");
+}
+
+int ExemplarGraph::deepestLevel() const {
+  // Longest path (in octaves) from the root; a node on the current path seen again is a cycle.
+  std::vector<int> memo(exemplars.size(), -2), onPath(exemplars.size(), 0);
+  std::function<int(int)> depth = [&](int n) -> int {
+    if (onPath[size_t(n)]) return -1;
+    if (memo[size_t(n)] != -2) return memo[size_t(n)];
+    onPath[size_t(n)] = 1;
+    int best = 0;
+    for (const GraphEdge& e : edges) {
+      if (e.from != n) continue;
+      const int d = depth(e.to);
+      if (d < 0) return onPath[size_t(n)] = 0, memo[size_t(n)] = -1;
+      best = std::max(best, e.octaves + d);
+    }
+    onPath[size_t(n)] = 0;
+    return memo[size_t(n)] = best;
+  };
+  const int d = depth(0);
+  return d < 0 ? -1 : d + std::countr_zero(unsigned(side()));
+}
+
+double graphAnalysisMemoryBytes(int nodes, int side) {
+  const double levels = std::countr_zero(unsigned(side)) + 1;
+  const double texels = double(nodes) * levels * side * side;
+  // stacks and colour atlas (RGB floats twice), appearance, neighborhoods, candidates (at most
+  // 1 + 4 per admissible level, a few levels), the search trees.
+  return texels * (2 * 3 * sizeof(float) + kAppearanceDims + kNeighborhoodDims + 4 * 17 + 2 * kAppearanceDims * 4) +
+         double(kExactAnalysisPixels) * 75 * sizeof(float) * 2;
+}
+
+GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options, const Context& ctx) {
+  graph.validate();
+  options.validate();
+  GraphAnalysis a;
+  a.side = graph.side();
+  a.levels = std::countr_zero(unsigned(a.side)) + 1;
+  a.nodes = int(graph.exemplars.size());
+  const int m = a.side, aw = a.atlasWidth();
+
+  Stage stacks(ctx, "stacks");
+  std::vector<std::vector<Image>> stack;
+  a.colors = Image(aw, a.atlasHeight(), 3);
+  for (int i = 0; i < a.nodes; ++i) {
+    stack.push_back(gaussianStack(rgbOf(graph.exemplars[size_t(i)]), ExemplarWrap::Tile));
+    for (int k = 0; k < a.levels; ++k)
+      for (int y = 0; y < m; ++y)
+        std::memcpy(a.colors.pixel(k * m, i * m + y), stack.back()[size_t(k)].pixel(0, y), size_t(m) * 3 * sizeof(float));
+  }
+  stacks.finish();
+
+  Stage appearance(ctx, "appearance");
+  a.appearance = appearanceOf(stack, a, appearance.inner());
+  a.neighborhood = neighborhoodsOf(a);
+  appearance.finish();
+
+  Stage candidates(ctx, "candidates");
+  std::vector<std::vector<Tile>> admissibleOf(size_t(a.nodes * a.levels));
+  size_t widest = 1;
+  for (int i = 0; i < a.nodes; ++i)
+    for (int k = 0; k < a.levels; ++k) {
+      auto& set = admissibleOf[size_t(i * a.levels + k)] = admissible(graph, a.levels, {i, k}, options.minEntryLevel);
+      widest = std::max(widest, set.size());
+      a.selfAdmissible.push_back(!set.empty() && set.front() == Tile{i, k});
+    }
+  a.k = 1 + options.candidatesPerLevel * int(widest);
+  a.entryLevel = std::min(options.minEntryLevel, a.finestLevel());
+  for (const GraphEdge& e : graph.edges)
+    if (e.octaves + a.entryLevel > a.finestLevel())
+      throw Error("edge '" + graph.names[size_t(e.from)] + "' -> '" + graph.names[size_t(e.to)] + "': a scale of " +
+                  std::to_string(1 << e.octaves) + " leaves fewer than " + std::to_string(1 << a.entryLevel) +
+                  " texels of '" + graph.names[size_t(e.to)] + "' per side at the finest level of '" +
+                  graph.names[size_t(e.from)] + "': use exemplars of at least " +
+                  std::to_string(1 << (e.octaves + a.entryLevel)) + " pixels or a smaller scale");
+  std::vector<std::unique_ptr<LevelSearch>> searches(size_t(a.nodes * a.levels));
+  for (const auto& set : admissibleOf)
+    for (const Tile& t : set)
+      if (!searches[size_t(t.node * a.levels + t.level)])
+        searches[size_t(t.node * a.levels + t.level)] = std::make_unique<LevelSearch>(a, t);
+
+  const int64_t spread = std::max<int64_t>(2, std::lrint(options.minSpread * float(m)));
+  a.candidates.assign(size_t(aw) * size_t(a.atlasHeight()) * size_t(a.k), 0);
+  parallelFor(0, a.atlasHeight(), ctx, [&](int y0, int y1) {
+    std::vector<uint32_t> index(kSearchNeighbors);
+    std::vector<float> dist(kSearchNeighbors), point(kAppearanceDims);
+    std::vector<std::pair<float, uint32_t>> ranked;
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < aw; ++x) {
+        const int tile = (y / m) * a.levels + x / m;
+        const uint32_t self = packCoord(uint32_t(x), uint32_t(y));
+        const int8_t* v = &a.appearance[(size_t(y) * aw + x) * kAppearanceDims];
+        for (int d = 0; d < kAppearanceDims; ++d) point[size_t(d)] = v[d];
+        uint32_t* slot = &a.candidates[(size_t(y) * aw + x) * size_t(a.k)];
+        int taken = 0;
+        if (a.selfAdmissible[size_t(tile)]) slot[taken++] = self;
+        for (const Tile& t : admissibleOf[size_t(tile)]) {
+          const LevelSearch& s = *searches[size_t(t.node * a.levels + t.level)];
+          const size_t found = s.tree->knnSearch(point.data(), std::min(s.sites.size(), size_t(kSearchNeighbors)),
+                                                 index.data(), dist.data());
+          ranked.clear();
+          for (size_t f = 0; f < found; ++f) ranked.emplace_back(dist[f], s.sites[index[f]]);
+          std::sort(ranked.begin(), ranked.end());  // distance, then coordinate: a fixed order for ties
+          const int first = taken;
+          const int64_t apart2 = std::max<int64_t>(spread, s.stride) * std::max<int64_t>(spread, s.stride);
+          for (const auto& [d, c] : ranked) {
+            if (taken - first == options.candidatesPerLevel) break;
+            bool apart = true;  // from the texel itself and from this level's other picks
+            if (t == Tile{y / m, x / m}) apart = tileDistance2(c, self, m) >= apart2;
+            for (int o = first; o < taken && apart; ++o) apart = tileDistance2(c, slot[o], m) >= apart2;
+            if (apart) slot[taken++] = c;
+          }
+        }
+        if (taken == 0) slot[taken++] = self;
+        for (int o = taken; o < a.k; ++o) slot[o] = slot[0];  // missing slots repeat the first
+      }
+  }, 1);
+  candidates.finish();
+
+  Fnv1a hash;
+  hash.add(uint32_t(1));  // the graph analysis' version
+  for (const Image& e : graph.exemplars) {
+    hash.add(e.width);
+    hash.add(e.channels);
+    hash.add(e.pixels.data(), e.pixels.size() * sizeof(float));
+  }
+  for (const GraphEdge& e : graph.edges) {
+    hash.add(e.from);
+    hash.add(e.to);
+    hash.add(e.octaves);
+  }
+  hash.add(options.candidatesPerLevel);
+  hash.add(options.minSpread);
+  hash.add(options.minEntryLevel);
+  a.key = hash.h;
+  return a;
+}
+
+} // namespace texfab::synthesis

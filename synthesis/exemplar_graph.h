@@ -1,0 +1,113 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Exemplar graphs: several exemplars at different scales, joined by edges that say which exemplar
+// details which, and their analysis for multiscale synthesis (synthesize_graph.h).
+//
+// Based on:
+//   C. Han, E. Risser, R. Ramamoorthi, E. Grinspun. Multiscale texture synthesis. SIGGRAPH 2008;
+//     C. Han, PhD thesis, Columbia 2011, ch. 4 (the exemplar graph) and §5.2 (Gaussian stacks,
+//     admissible candidates, k-coherence across exemplars, the superexemplar's packed levels).
+// Notes: ../shared/notes/han-multiscale-notes.md §2-3; docs/exemplar-graphs.md.
+//
+// The analysis packs every Gaussian-stack level of every exemplar into one atlas (the thesis'
+// §5.4 packing, u' = m e + u, in two dimensions): level k of node i is the m x m tile at
+// (k m, i m). A synthesis coordinate is a packed atlas coordinate (coord_map.h), so it names an
+// exemplar, a stack level and a position at once, the thesis' pointer (i, k, u).
+//
+// Deviations from the thesis, on purpose:
+//   * appearance vectors as in texfab's single-exemplar analysis (exemplar_analysis.h: Gaussian-
+//     weighted 5x5 neighborhoods at the level's spacing, 8-D PCA, int8), with one PCA basis for
+//     the whole graph instead of one per synthesis level, so that every pair of levels compares in
+//     one space; k-nearest candidates among those vectors, not among full neighborhoods;
+//   * candidates: the texel itself (where admissible), then the best of each admissible level in
+//     turn, so that every edge offers a way down at every level (the thesis keeps the K = 2 best
+//     over all admissible levels, which a self-similar exemplar fills with its own texels);
+//   * an edge admits only its destination's levels of 8 texels per side or more (minEntryLevel);
+//   * the finest level of an exemplar with no outgoing edge (a leaf) is admissible to itself, so
+//     that its texture can be synthesized down to its own pixels; beyond them it is magnified;
+//   * exemplars are toroidal (coordinates wrap in their tile), square, all of one power-of-two
+//     side m, as the thesis assumes for exposition; colour only (no companion maps yet);
+//   * no inconsistency correction (§5.3's transfer functions): exemplars of one graph should come
+//     from one source or agree in colour.
+
+#include "core/context.h"
+#include "core/image.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace texfab::synthesis {
+
+/// An edge (i, j, r) of the thesis: a pixel of exemplar `from` spans 2^octaves pixels of exemplar
+/// `to`; `to` details `from` at that scale. from == to makes a self-similar (infinitely zoomable)
+/// exemplar.
+struct GraphEdge {
+  int from = 0;
+  int to = 0;
+  int octaves = 1;  ///< r >= 1: the scale ratio is 2^r
+};
+
+/// Largest side of a graph exemplar, and largest r of an edge.
+inline constexpr int kMaxGraphExemplarSide = 512;
+inline constexpr int kMaxGraphEdgeOctaves = 12;
+/// Smallest side: 8 pixels, so that every level has a few distinct texels.
+inline constexpr int kMinGraphExemplarSide = 8;
+
+struct ExemplarGraph {
+  std::vector<std::string> names;  ///< one per node, for messages
+  std::vector<Image> exemplars;    ///< node i's exemplar; node 0 is the root (the coarsest)
+  std::vector<GraphEdge> edges;
+
+  int side() const { return exemplars.empty() ? 0 : exemplars.front().width; }
+  /// Throws texfab::Error, naming the node or edge, unless: at least one node; every exemplar
+  /// square, of one power-of-two side in [kMinGraphExemplarSide, kMaxGraphExemplarSide], finite;
+  /// edges between existing nodes with 1 <= octaves <= kMaxGraphEdgeOctaves, no edge twice; every
+  /// node reachable from the root.
+  void validate() const;
+  /// The finest synthesis level any output texel can need: the deepest path's total octaves plus
+  /// the exemplars' levels; -1 when a cycle makes the texture infinitely deep.
+  int deepestLevel() const;
+};
+
+struct GraphAnalysisOptions {
+  int candidatesPerLevel = 2;  ///< best matches kept from each admissible level; 1..4
+  float minSpread = 0.05f;     ///< candidates from one level lie at least max(2, minSpread * m) apart
+  /// An edge leads only to destination levels with at least 2^minEntryLevel texels per side (the
+  /// thesis admits any level >= 0): coarser ones are a few blurred texels that cannot hold the
+  /// source's structure at that scale, and texels that entered them showed flat blobs.
+  int minEntryLevel = 3;
+  void validate() const;
+};
+
+/// What graph synthesis reads: the packed stack levels and their tables.
+struct GraphAnalysis {
+  int side = 0;        ///< m
+  int levels = 0;      ///< L + 1 stack levels per exemplar
+  int nodes = 0;
+  int k = 0;           ///< candidates per atlas texel
+  int entryLevel = 0;  ///< the coarsest level an edge leads to (GraphAnalysisOptions::minEntryLevel)
+  Image colors;        ///< the atlas of stack levels: levels*m x nodes*m, RGB
+  std::vector<int8_t> appearance;    ///< per atlas texel, kAppearanceDims
+  std::vector<int8_t> neighborhood;  ///< per atlas texel, kNeighborhoodDims (diagonals at the level's spacing)
+  std::vector<uint32_t> candidates;  ///< per atlas texel, k packed atlas coordinates
+  /// Per tile (node * levels + level): may a texel keep its level while synthesis goes finer.
+  std::vector<uint8_t> selfAdmissible;
+  uint64_t key = 0;
+
+  int atlasWidth() const { return side * levels; }
+  int atlasHeight() const { return side * nodes; }
+  int finestLevel() const { return levels - 1; }
+  /// h_k = 2^(L-k), in pixels of the level's own exemplar.
+  int spacing(int level) const { return 1 << (finestLevel() - level); }
+};
+
+/// Analyses `graph` (validated first). Pure: a function of the exemplars, the edges and the
+/// options. Reports the stages "stacks", "appearance" and "candidates" through ctx.
+GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options = {},
+                           const Context& ctx = {});
+
+/// Peak memory of analyzeGraph, in bytes (an upper bound).
+double graphAnalysisMemoryBytes(int nodes, int side);
+
+} // namespace texfab::synthesis

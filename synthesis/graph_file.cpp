@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "synthesis/graph_file.h"
+
+#include "core/error.h"
+#include "core/image_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <bit>
+#include <fstream>
+#include <cmath>
+#include <initializer_list>
+#include <type_traits>
+
+namespace texfab::synthesis {
+
+namespace {
+
+using nlohmann::json;
+
+void onlyKeys(const json& object, std::initializer_list<const char*> keys, const std::string& where) {
+  for (const auto& item : object.items())
+    if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return item.key() == k; }))
+      throw Error(where + ": unknown field '" + item.key() + "'");
+}
+
+// object[key], which must be there and be a T (std::string, double or json for an array).
+template <class T> T get(const json& object, const char* key, const std::string& where) {
+  if (!object.contains(key)) throw Error(where + ": missing \"" + key + "\"");
+  const json& v = object.at(key);
+  bool ok = v.is_array();
+  if constexpr (std::is_same_v<T, std::string>) ok = v.is_string();
+  if constexpr (std::is_same_v<T, double>) ok = v.is_number();
+  if (!ok) throw Error(where + ": \"" + key + "\" has the wrong type");
+  return v.get<T>();
+}
+
+} // namespace
+
+ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::ifstream in(path);
+  if (!in) throw Error(file + ": cannot open the graph file");
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::exception& e) {
+    throw Error(file + ": not valid JSON (" + std::string(e.what()) + ")");
+  }
+  if (!doc.is_object()) throw Error(file + ": expected an object with \"exemplars\" and \"edges\"");
+  onlyKeys(doc, {"exemplars", "edges", "root"}, file);
+
+  ExemplarGraph graph;
+  std::vector<std::string> images;
+  for (const json& e : get<json>(doc, "exemplars", file)) {
+    const std::string where = file + ": exemplar " + std::to_string(graph.names.size() + 1);
+    if (!e.is_object()) throw Error(where + ": expected {\"name\": ..., \"image\": ...}");
+    onlyKeys(e, {"name", "image"}, where);
+    const std::string name = get<std::string>(e, "name", where);
+    if (std::find(graph.names.begin(), graph.names.end(), name) != graph.names.end())
+      throw Error(file + ": exemplar '" + name + "' is named twice");
+    graph.names.push_back(name);
+    images.push_back(get<std::string>(e, "image", where));
+  }
+  if (graph.names.empty()) throw Error(file + ": \"exemplars\" is empty");
+  auto indexOf = [&](const std::string& name, const std::string& where) {
+    const auto it = std::find(graph.names.begin(), graph.names.end(), name);
+    if (it == graph.names.end()) throw Error(where + ": no exemplar is named '" + name + "'");
+    return int(it - graph.names.begin());
+  };
+  if (doc.contains("root")) {
+    const int root = indexOf(get<std::string>(doc, "root", file), file + ": root");
+    std::rotate(graph.names.begin(), graph.names.begin() + root, graph.names.begin() + root + 1);
+    std::rotate(images.begin(), images.begin() + root, images.begin() + root + 1);
+  }
+  if (doc.contains("edges")) {
+    for (const json& e : get<json>(doc, "edges", file)) {
+      const std::string where = file + ": edge " + std::to_string(graph.edges.size() + 1);
+      if (!e.is_object()) throw Error(where + ": expected {\"from\": ..., \"to\": ..., \"scale\": ...}");
+      onlyKeys(e, {"from", "to", "scale"}, where);
+      const double scale = get<double>(e, "scale", where);
+      if (!(scale > 1) || scale > 1e6 || scale != std::floor(scale) || !std::has_single_bit(uint64_t(scale)))
+        throw Error(where + ": scale " + e.at("scale").dump() + " must be a power of two greater than 1 (2, 4, 8, ...)");
+      graph.edges.push_back({indexOf(get<std::string>(e, "from", where), where),
+                             indexOf(get<std::string>(e, "to", where), where),
+                             std::countr_zero(uint64_t(scale))});
+    }
+  }
+  const std::filesystem::path folder = path.parent_path();
+  for (const std::string& image : images) graph.exemplars.push_back(readImage(folder / image));  // absolute: as is
+  try {
+    graph.validate();
+  } catch (const Error& e) {
+    throw Error(file + ": " + e.what());
+  }
+  return graph;
+}
+
+} // namespace texfab::synthesis

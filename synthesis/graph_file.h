@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The exemplar graph file (docs/exemplar-graphs.md#the-file):
+//
+//   {
+//     "exemplars": [ {"name": "regions", "image": "regions.png"},
+//                    {"name": "grain", "image": "grain.png"} ],
+//     "root": "regions",
+//     "edges": [ {"from": "regions", "to": "grain", "scale": 16} ]
+//   }
+//
+// Images are read relative to the file's folder. "root" is optional (default: the first
+// exemplar). An edge's "scale" is how many pixels of `to` one pixel of `from` spans: a power of two
+// from 2 up; from == to makes an exemplar self-similar (an infinite zoom).
+
+#include "synthesis/exemplar_graph.h"
+
+#include <filesystem>
+
+namespace texfab::synthesis {
+
+/// Reads and validates a graph file (ExemplarGraph::validate), the root first. Throws texfab::Error
+/// with one line naming the file and the problem: not JSON, an unknown or missing field, an
+/// unknown or repeated name, a scale that is not a power of two above 1, an unreadable image.
+ExemplarGraph readExemplarGraph(const std::filesystem::path& path);
+
+} // namespace texfab::synthesis

@@ -1,0 +1,233 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Based on: C. Han et al. Multiscale texture synthesis. SIGGRAPH 2008 (thesis §5.2);
+//           S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005, §3.
+#include "synthesis/synthesize_graph.h"
+
+#include "core/error.h"
+#include "core/hash.h"
+#include "core/parallel.h"
+#include "synthesis/cpu/synthesis_kernels.h"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <string>
+
+namespace texfab::synthesis {
+
+namespace {
+
+using cpu::LevelGrid;
+constexpr int kRowGrain = 8;
+
+// The atlas as the kernels see it: tiles of m = 2^shift texels, level k of node i at (k m, i m).
+struct Atlas {
+  int shift = 0, finest = 0, levels = 0, width = 0, k = 0;
+  const int8_t* appearance = nullptr;
+  const int8_t* neighborhood = nullptr;
+  const uint32_t* candidates = nullptr;
+  const uint8_t* selfAdmissible = nullptr;
+
+  explicit Atlas(const GraphAnalysis& a)
+      : shift(std::countr_zero(unsigned(a.side))), finest(a.finestLevel()), levels(a.levels),
+        width(a.atlasWidth()), k(a.k), appearance(a.appearance.data()), neighborhood(a.neighborhood.data()),
+        candidates(a.candidates.data()), selfAdmissible(a.selfAdmissible.data()) {}
+
+  uint32_t mask() const { return (1u << shift) - 1; }
+  int level(uint32_t c) const { return int(coordU(c) >> shift); }
+  int tile(uint32_t c) const { return int(coordV(c) >> shift) * levels + level(c); }
+  int spacing(uint32_t c) const { return 1 << (finest - level(c)); }
+  size_t texel(uint32_t c) const { return size_t(coordV(c)) * size_t(width) + coordU(c); }
+  // c moved by (dx, dy) texels of its tile, wrapped in the tile.
+  uint32_t move(uint32_t c, int64_t dx, int64_t dy) const {
+    const uint32_t u = coordU(c), v = coordV(c);
+    return packCoord((u & ~mask()) | ((u + uint32_t(dx)) & mask()), (v & ~mask()) | ((v + uint32_t(dy)) & mask()));
+  }
+};
+
+// Upsampling: a texel at level k < L of its exemplar becomes four at level k+1, h_{k+1} apart
+// (the thesis' ⌊h Δ⌋ with the child's spacing, notes §3.2 erratum); at the finest level, magnified.
+void upsample(const Atlas& a, const uint32_t* parent, const LevelGrid& pg, uint32_t* out, const LevelGrid& g,
+              int r0, int r1) {
+  for (int y = r0; y < r1; ++y) {
+    const int64_t qy = g.y0 + y;
+    const uint32_t* prow = parent + size_t((qy >> 1) - pg.y0) * size_t(pg.width);
+    for (int x = 0; x < g.width; ++x) {
+      const int64_t qx = g.x0 + x;
+      const uint32_t s = prow[(qx >> 1) - pg.x0];
+      if (a.level(s) == a.finest) {
+        out[size_t(y) * g.width + x] = s;
+        continue;
+      }
+      const uint32_t next = packCoord(coordU(s) + (1u << a.shift), coordV(s));  // same place, one level finer
+      const int h = a.spacing(next);
+      out[size_t(y) * g.width + x] = a.move(next, (qx & 1) * h, (qy & 1) * h);
+    }
+  }
+}
+
+// Jitter: S[q] += round(strength h_k H(q)), H uniform in [-1, 1)^2 from texelHash(seed, t, q), the
+// strength and h_k those of the tile S[q] points to; in integers as cpu::jitterKernel.
+void jitter(const Atlas& a, uint32_t* coords, const LevelGrid& g, uint32_t seed, int t,
+            const std::vector<int64_t>& amplitude256, int r0, int r1) {
+  for (int y = r0; y < r1; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      uint32_t& s = coords[size_t(y) * g.width + x];
+      const int64_t amp = amplitude256[size_t(a.tile(s))];
+      if (amp == 0) continue;
+      const int64_t qx = g.x0 + x, qy = g.y0 + y;
+      const int64_t hx = int64_t(texelHash(seed, uint32_t(t), int32_t(qx), int32_t(qy), 0) >> 16) - 32768;
+      const int64_t hy = int64_t(texelHash(seed, uint32_t(t), int32_t(qx), int32_t(qy), 1) >> 16) - 32768;
+      s = a.move(s, (amp * hx + (int64_t(1) << 22)) >> 23, (amp * hy + (int64_t(1) << 22)) >> 23);
+    }
+}
+
+int32_t distance(const int8_t* target, const int8_t* n) {
+  int32_t sum = 0;
+  for (int i = 0; i < kNeighborhoodDims; ++i) {
+    const int32_t d = int32_t(target[i]) - int32_t(n[i]);
+    sum += d * d;
+  }
+  return sum;
+}
+
+// One correction sub-pass (cpu::correctKernel's rules): each texel of the class takes the best of
+// { C_i(S[q+D]) - h D } (h of each candidate's level, wrapped in its tile) and S[q] itself where
+// S[q]'s level is admissible to itself, or at the output level (nothing finer is synthesized, so a
+// finest level may stay: the root shows its own pixels at zoom 1); ties to S[q], then to the
+// smallest coordinate.
+void correct(const Atlas& a, const uint32_t* in, uint32_t* out, const LevelGrid& g, bool outputLevel, int interleave,
+             int cx, int cy, int x0, int x1, int r0, int r1) {
+  const auto w = size_t(g.width);
+  const int firstX = x0 + int(cpu::floorMod(cx - (g.x0 + x0), interleave));
+  for (int y = r0; y < r1; ++y) {
+    const uint32_t* row = in + size_t(y) * w;
+    uint32_t* outRow = out + size_t(y) * w;
+    for (int x = x0; x < x1; ++x) outRow[x] = row[x];
+    if (cpu::floorMod(g.y0 + y - cy, interleave) != 0) continue;
+    for (int x = firstX; x < x1; x += interleave) {
+      alignas(32) int8_t target[kNeighborhoodDims];
+      for (int i = 0; i < kNeighborhoodSamples; ++i) {
+        const uint32_t s = in[size_t(y + kDiagonalY[i]) * w + size_t(x + kDiagonalX[i])];
+        std::copy_n(a.appearance + a.texel(s) * kAppearanceDims, kAppearanceDims, target + i * kAppearanceDims);
+      }
+      const uint32_t current = row[x];
+      uint32_t best = current;
+      int32_t bestDistance = outputLevel || a.selfAdmissible[a.tile(current)]
+                                 ? distance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
+                                 : INT32_MAX;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const uint32_t* cand = a.candidates + a.texel(in[size_t(y + dy) * w + size_t(x + dx)]) * size_t(a.k);
+          for (int i = 0; i < a.k; ++i) {
+            const int h = a.spacing(cand[i]);
+            const uint32_t c = a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy);
+            if (c == best) continue;
+            const int32_t d = distance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
+            if (d < bestDistance || (d == bestDistance && best != current && c < best)) {
+              bestDistance = d;
+              best = c;
+            }
+          }
+        }
+      outRow[x] = best;
+    }
+  }
+}
+
+double since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+} // namespace
+
+void GraphSynthesisOptions::validate(const GraphAnalysis& analysis) const {
+  if (zoomOctaves < -analysis.finestLevel())
+    throw Error("zoom: at most " + std::to_string(analysis.side) + "x out (the root exemplar's whole tile in one texel)");
+  if (analysis.finestLevel() + zoomOctaves > 60) throw Error("zoom: at most 2^60");
+  for (float j : jitter)
+    if (!(j >= 0.0f && j <= 1.0f)) throw Error("jitter values must be in [0, 1]");
+  if (passes < 0 || passes > 8) throw Error("passes must be 0 to 8");
+  if (interleave < 1 || interleave > 3) throw Error("interleave must be 1 to 3");
+}
+
+int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options) {
+  return analysis.finestLevel() + options.zoomOctaves;
+}
+
+double synthesizeGraphMemoryBytes(const Window& window) {
+  // Three coordinate buffers of the padded finest level, then RGB floats.
+  return double(window.width + 64) * double(window.height + 64) * (3 * sizeof(uint32_t) + 3 * sizeof(float));
+}
+
+SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& window,
+                                const GraphSynthesisOptions& options, const Context& ctx) {
+  options.validate(analysis);
+  window.validate();
+  const Atlas atlas(analysis);
+  const int finest = graphOutputLevel(analysis, options);
+  const int subpasses = options.passes * options.interleave * options.interleave;
+
+  std::vector<LevelGrid> padded(size_t(finest + 1));
+  LevelGrid valid{window.x, window.y, window.width, window.height};
+  for (int t = finest; t >= 0; --t) {
+    padded[size_t(t)] = cpu::expand(valid, subpasses);
+    valid = cpu::parentOf(padded[size_t(t)]);
+  }
+  // The root's schedule starts at its level 0; another exemplar's two steps before the level texels
+  // enter it, as the layout above that level came from the exemplar they left (entered at the start
+  // of the schedule, it lost fidelity: 1.35x the single exemplar's on rock -> stone at 16x zoom;
+  // never jittered, it copied coherent squares).
+  std::vector<float> strength = options.jitter.empty() ? defaultJitter(analysis.levels) : options.jitter;
+  strength.resize(size_t(analysis.levels), strength.back());
+  std::vector<int64_t> amplitude256;  // per tile
+  for (int node = 0; node < analysis.nodes; ++node)
+    for (int k = 0; k < analysis.levels; ++k) {
+      const int step = std::max(0, k - (node == 0 ? 0 : analysis.entryLevel - 2));
+      amplitude256.push_back(int64_t(std::lrint(double(strength[size_t(step)]) * analysis.spacing(k) * 256.0)));
+    }
+
+  SynthesisResult result;
+  std::vector<uint32_t> previous, current, scratch;
+  for (int t = 0; t <= finest; ++t) {
+    const auto start = std::chrono::steady_clock::now();
+    Stage stage(ctx, "level " + std::to_string(t + 1) + "/" + std::to_string(finest + 1));
+    const LevelGrid& g = padded[size_t(t)];
+    const auto rows = [&](auto&& kernel) { parallelFor(0, g.height, ctx, kernel, kRowGrain); };
+    current.assign(size_t(g.width) * size_t(g.height), 0);  // t = 0: the root's coarsest level, at (0, 0)
+    if (t > 0) rows([&](int r0, int r1) { upsample(atlas, previous.data(), padded[size_t(t - 1)], current.data(), g, r0, r1); });
+    rows([&](int r0, int r1) { jitter(atlas, current.data(), g, options.seed, t, amplitude256, r0, r1); });
+    scratch.assign(current.size(), 0);
+    int inset = 0;
+    for (int pass = 0; pass < options.passes; ++pass)
+      for (int cy = 0; cy < options.interleave; ++cy)
+        for (int cx = 0; cx < options.interleave; ++cx) {
+          ++inset;
+          parallelFor(inset, g.height - inset, ctx, [&](int r0, int r1) {
+            correct(atlas, current.data(), scratch.data(), g, t == finest, options.interleave, cx, cy, inset,
+                    g.width - inset, r0, r1);
+          }, kRowGrain);
+          current.swap(scratch);
+          stage.advance(inset, subpasses);
+        }
+    previous.swap(current);
+    result.levels.push_back({t, int64_t(g.width) * g.height, since(start)});
+    stage.finish();
+  }
+
+  CoordMap& out = result.coords;
+  out.width = window.width;
+  out.height = window.height;
+  out.exemplarWidth = analysis.atlasWidth();
+  out.exemplarHeight = analysis.atlasHeight();
+  out.coords.resize(size_t(window.width) * size_t(window.height));
+  const LevelGrid& g = padded[size_t(finest)];
+  for (int y = 0; y < window.height; ++y)
+    std::copy_n(&previous[size_t(y + subpasses) * size_t(g.width) + size_t(subpasses)], window.width,
+                &out.coords[size_t(y) * size_t(window.width)]);
+  return result;
+}
+
+} // namespace texfab::synthesis

@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Multiscale synthesis from an exemplar graph: any window of an infinite texture, at any zoom,
+// with the structure of every exemplar at its own scale.
+//
+// Based on:
+//   C. Han, E. Risser, R. Ramamoorthi, E. Grinspun. Multiscale texture synthesis. SIGGRAPH 2008;
+//     C. Han, PhD thesis, 2011, §5.2 (per-texel pointers (i, k, u) and spacing h_k, upsampling to
+//     the next stack level, jitter, correction in sub-passes over admissible candidates).
+//   S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005 (the pyramid
+//     this extends; texfab's synthesize2d).
+// Notes: docs/exemplar-graphs.md.
+//
+// Synthesis level t has texels 2^(L-t) root pixels wide: level L shows the root exemplar at its own
+// resolution, level L + z a zoom of 2^z into it, where finer exemplars take over along the graph's
+// edges. A texel is an atlas coordinate of GraphAnalysis (exemplar, stack level, position); its
+// colour is that stack level's, so a zoomed-out view shows each exemplar prefiltered.
+//
+// Determinism: every output texel is a pure function of (analysis, options, position); a window
+// equals, bit for bit, the same texels of any larger window; the thread count changes nothing.
+// Deviations (beyond exemplar_graph.h's): jitter strength follows the stack level a texel points
+// to, counted from near where texels enter its exemplar, not the synthesis level (without jitter there,
+// texels that entered an exemplar copied coherent blocks of it, which showed as squares); a leaf
+// exemplar's finest level, zoomed further, is magnified.
+
+#include "core/context.h"
+#include "synthesis/coord_map.h"
+#include "synthesis/exemplar_graph.h"
+#include "synthesis/synthesize_2d.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace texfab::synthesis {
+
+struct GraphSynthesisOptions {
+  uint32_t seed = 1;
+  /// Output texels are 2^-zoomOctaves root pixels wide: 0 shows the root at its own resolution,
+  /// 4 a 16x zoom (where an edge of 4 octaves hands over to its destination), -2 a view 4x
+  /// farther out. At least -L.
+  int zoomOctaves = 0;
+  /// Jitter strength per stack level of the exemplar a texel points to, coarsest first, each in
+  /// [0, 1]; fewer values than levels repeat the last; empty: defaultJitter() (1, 1, 1, 0.5, 0...).
+  /// The root's levels take it from level 0; another exemplar's from two levels before
+  /// GraphAnalysis::entryLevel, where texels enter it: it is randomized where it takes over.
+  std::vector<float> jitter;
+  int passes = 2;      ///< correction passes per level
+  int interleave = 2;  ///< sub-passes per pass = interleave^2; 1..3
+
+  /// Throws texfab::Error naming the field when a value is out of range for `analysis`.
+  void validate(const GraphAnalysis& analysis) const;
+};
+
+/// The synthesis level of the output: L + zoomOctaves.
+int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options);
+
+/// Peak memory of synthesizeGraph on `window`, in bytes, with its colours resolved (applyCoords).
+double synthesizeGraphMemoryBytes(const Window& window);
+
+/// Synthesizes the atlas coordinates of `window` (at most kMaxImageSide per side) at the options'
+/// zoom; their colours are applyCoords(result.coords, analysis.colors). Reports "level t/T" stages.
+SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& window,
+                                const GraphSynthesisOptions& options, const Context& ctx = {});
+
+} // namespace texfab::synthesis

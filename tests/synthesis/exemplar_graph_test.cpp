@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "core/error.h"
+#include "core/hash.h"
+#include "core/image_io.h"
+#include "synthesis/coord_map.h"
+#include "synthesis/exemplar_graph.h"
+#include "synthesis/quality_measures.h"
+#include "synthesis/synthesize_2d.h"
+#include "synthesis/synthesize_graph.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+namespace texfab::synthesis {
+namespace {
+
+// A side x side RGB exemplar of blobs and stripes from `seed`.
+Image patterned(int side, uint32_t seed) {
+  Image image(side, side, 3);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x)
+      for (int c = 0; c < 3; ++c)
+        image.pixel(x, y)[c] = float((texelHash(seed, 0, x / 3, y / 2, uint32_t(c)) >> 24) % 200) / 255.0f +
+                               0.2f * float((x + 2 * y + int(seed)) % 7 == 0);
+  return image;
+}
+
+ExemplarGraph twoNodes(int side, int octaves) {
+  ExemplarGraph g;
+  g.names = {"coarse", "fine"};
+  g.exemplars = {patterned(side, 1), patterned(side, 2)};
+  g.edges = {{0, 1, octaves}};
+  return g;
+}
+
+std::string refusal(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+Image photo(const char* name) {
+  return readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / "exemplars" / "photos" / name);
+}
+
+TEST(ExemplarGraph, RefusesBadGraphsWithOneLine) {
+  auto refused = [](ExemplarGraph g) { return refusal([&] { g.validate(); }); };
+  ExemplarGraph g = twoNodes(32, 2);
+  EXPECT_EQ(refused(g), "(accepted)");
+  ExemplarGraph bad = g;
+  bad.exemplars[1] = patterned(16, 3);
+  EXPECT_NE(refused(bad).find("every exemplar of a graph has the same size"), std::string::npos) << refused(bad);
+  bad = g;
+  bad.exemplars[1] = Image(32, 24, 3);
+  EXPECT_NE(refused(bad).find("must be square, with a power-of-two side"), std::string::npos) << refused(bad);
+  bad = g;
+  bad.edges[0].octaves = 0;
+  EXPECT_NE(refused(bad).find("scale ratio must be greater than 1"), std::string::npos) << refused(bad);
+  bad = g;
+  bad.edges[0].octaves = 6;  // 64 > 32 pixels
+  EXPECT_NE(refused(bad).find("the whole destination would fit in one pixel"), std::string::npos) << refused(bad);
+  bad = g;
+  bad.edges.push_back(g.edges[0]);
+  EXPECT_NE(refused(bad).find("is given twice"), std::string::npos) << refused(bad);
+  bad = g;
+  bad.edges.clear();
+  EXPECT_NE(refused(bad).find("'fine' is not reached from the root 'coarse'"), std::string::npos) << refused(bad);
+  bad = g;
+  bad.exemplars[0].pixels[5] = std::nanf("");
+  EXPECT_NE(refused(bad).find("not finite"), std::string::npos) << refused(bad);
+  // Valid, but too deep for 32-pixel exemplars: 8 texels of 'fine' need 2^(3+3) pixels.
+  bad = twoNodes(32, 3);
+  EXPECT_NE(refusal([&] { analyzeGraph(bad); }).find("use exemplars of at least 64 pixels or a smaller scale"),
+            std::string::npos);
+}
+
+TEST(ExemplarGraph, DeepestLevelFollowsTheLongestPathAndCyclesAreInfinite) {
+  ExemplarGraph g = twoNodes(16, 2);  // L = 4
+  g.names.push_back("finer");
+  g.exemplars.push_back(patterned(16, 4));
+  g.edges.push_back({1, 2, 1});
+  g.edges.push_back({0, 2, 1});
+  EXPECT_EQ(g.deepestLevel(), 4 + 2 + 1);
+  g.edges.push_back({2, 2, 1});  // self-similar: zooms forever
+  EXPECT_EQ(g.deepestLevel(), -1);
+}
+
+// Han's admissible sets (thesis §5.2.1.2): candidates of a level lie in the level itself (where a
+// texel may stay) or in an edge's destination at k - r, never in the finest level of an exemplar
+// with edges out, never above the entry level.
+TEST(ExemplarGraph, CandidatesLieInAdmissibleLevels) {
+  const GraphAnalysis a = analyzeGraph(twoNodes(64, 2));  // L = 6, entry level 3
+  ASSERT_EQ(a.levels, 7);
+  EXPECT_EQ(a.k, 1 + 2 * 2);
+  EXPECT_FALSE(a.selfAdmissible[size_t(a.finestLevel())]);          // the root's finest level
+  EXPECT_TRUE(a.selfAdmissible[size_t(a.levels + a.finestLevel())]);  // the leaf's
+  const int m = a.side;
+  int crossings = 0;
+  for (int y = 0; y < a.atlasHeight(); ++y)
+    for (int x = 0; x < a.atlasWidth(); ++x) {
+      const int node = y / m, level = x / m;
+      for (int i = 0; i < a.k; ++i) {
+        const uint32_t c = a.candidates[(size_t(y) * a.atlasWidth() + x) * size_t(a.k) + size_t(i)];
+        const int cNode = int(coordV(c)) / m, cLevel = int(coordU(c)) / m;
+        const bool same = cNode == node && cLevel == level;
+        const bool edge = node == 0 && cNode == 1 && cLevel == level - 2 && cLevel >= 3;
+        ASSERT_TRUE((same && a.selfAdmissible[size_t(node * a.levels + level)]) || edge)
+            << "texel (" << x << ", " << y << ") candidate " << i << " in node " << cNode << " level " << cLevel;
+        crossings += edge;
+      }
+    }
+  EXPECT_GT(crossings, 0);
+}
+
+// Every output texel is a function of its position: windows agree with larger requests, at any
+// thread count, at every zoom.
+TEST(SynthesizeGraph, WindowsAgreeWithLargerRequestsAndThreadCounts) {
+  const GraphAnalysis a = analyzeGraph(twoNodes(64, 2));
+  for (int zoom : {-1, 0, 2, 3}) {
+    GraphSynthesisOptions options;
+    options.zoomOctaves = zoom;
+    options.seed = 7;
+    const Window outer{-21, -13, 80, 70};
+    const CoordMap big = synthesizeGraph(a, outer, options, Context{.threads = 2}).coords;
+    for (const Window inner : {Window{-21, -13, 80, 70}, Window{-5, 4, 31, 17}, Window{40, 30, 19, 27}}) {
+      const CoordMap part = synthesizeGraph(a, inner, options, Context{.threads = 1}).coords;
+      for (int y = 0; y < inner.height; ++y)
+        for (int x = 0; x < inner.width; ++x)
+          ASSERT_EQ(part.at(x, y), big.at(int(inner.x - outer.x) + x, int(inner.y - outer.y) + y))
+              << "zoom 2^" << zoom << " texel (" << inner.x + x << ", " << inner.y + y << ")";
+    }
+    options.seed = 8;
+    EXPECT_NE(synthesizeGraph(a, outer, options).coords.coords, big.coords) << "the seed changes nothing";
+  }
+}
+
+// The two-node target on photographs: a coarse exemplar (rock) detailed by a fine one
+// (stone) at 1/16 the scale. At zoom 1 the output is the rock's, at zoom 16 the stone's, each
+// within 1.3x the 7x7 fidelity of a single-exemplar synthesis of that exemplar.
+TEST(SynthesizeGraph, EachScaleIsAsFaithfulAsASingleExemplarSynthesis) {
+  ExemplarGraph g;
+  g.names = {"rock", "stone"};
+  g.exemplars = {photo("rock.png"), photo("stone.png")};
+  g.edges = {{0, 1, 4}};
+  const GraphAnalysis a = analyzeGraph(g);
+  const Window window{0, 0, 192, 192};
+  for (const auto& [zoom, node] : {std::pair{0, 0}, std::pair{4, 1}}) {
+    const Image& exemplar = g.exemplars[size_t(node)];
+    GraphSynthesisOptions options;
+    options.zoomOctaves = zoom;
+    const Image graph = applyCoords(synthesizeGraph(a, window, options).coords, a.colors);
+    AnalysisOptions single;
+    single.wrap = detectExemplarWrap(exemplar);
+    const Image alone = applyCoords(synthesize2d(analyzeExemplar(exemplar, single), window, {}).coords, exemplar);
+    const double ratio = neighborhoodFidelity(graph, exemplar) / neighborhoodFidelity(alone, exemplar);
+    EXPECT_LE(ratio, 1.3) << g.names[size_t(node)] << " at zoom " << (1 << zoom);
+    RecordProperty(g.names[size_t(node)] + "_fidelity_ratio", std::to_string(ratio));
+  }
+}
+
+} // namespace
+} // namespace texfab::synthesis
