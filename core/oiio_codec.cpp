@@ -102,13 +102,14 @@ OIIO::ImageSpec readConfig() {
 
 // The most pixels a file of `bytes` bytes in this format can encode, or 0 where there is no such
 // bound (WebP's lossless mode and TIFF's sparse tiles need no bits per pixel): PNG's deflate
-// expands at most 1032 times and a pixel takes at least 1 bit; a JPEG block of 64 pixels takes at
-// least 1 bit (a DC code); an LZW code of 12 bits yields at most 4096 GIF pixels.
+// expands at most 1032 times and a pixel takes at least 1 bit; a Huffman-coded JPEG block of 64
+// pixels takes at least 1 bit (its DC code; arithmetic coding, rare, could take less); a GIF LZW
+// code of at least 3 bits yields at most 4096 pixels.
 uint64_t mostPixels(std::string_view format, uint64_t bytes) {
   if (bytes == 0) return 0;  // unknown
   if (format == "png") return bytes * 1032 * 8;
   if (format == "jpeg") return bytes * 8 * 64;
-  if (format == "gif") return bytes * 8 / 12 * 4096 + 4096;
+  if (format == "gif") return bytes * 8 / 3 * 4096;
   return 0;
 }
 
@@ -165,11 +166,15 @@ void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const 
   };
   const bool tiled = (int32At(4) >> 8) & 0x2;
   int64_t width = 0, height = 0, tileWidth = 0, tileHeight = 0, chunkCount = -1, linesPerChunk = -1;
+  // Where `head` ends: the file's end (a header cut short is corrupt), or only what was read.
+  const auto stop = [&] {
+    if (head.size() == fileSize) throw Error(name + ": corrupt EXR: its header runs past the end of the file");
+  };
   size_t at = 8;
   while (at < head.size() && head[at] != 0) {
     const auto nameEnd = std::find(head.begin() + at, head.end(), 0);
     const auto typeEnd = nameEnd == head.end() ? head.end() : std::find(nameEnd + 1, head.end(), 0);
-    if (typeEnd == head.end() || size_t(typeEnd - head.begin()) + 5 > head.size()) return;
+    if (typeEnd == head.end() || size_t(typeEnd - head.begin()) + 5 > head.size()) return stop();
     const std::string_view attribute(reinterpret_cast<const char*>(&head[at]), size_t(nameEnd - head.begin()) - at);
     const size_t value = size_t(typeEnd - head.begin()) + 5;
     const int64_t size = int32At(value - 4);
@@ -190,7 +195,7 @@ void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const 
     }
     at = value + size_t(size);
   }
-  if (at >= head.size()) return;  // the header goes on beyond what was read
+  if (at >= head.size()) return stop();  // the header goes on beyond what was read
   int64_t chunks = chunkCount;  // multi-part and deep files name it; others imply it
   if (chunks < 0) {
     if (width <= 0 || height <= 0) return;

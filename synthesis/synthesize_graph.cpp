@@ -185,7 +185,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   std::vector<int64_t> amplitude256;  // per tile
   for (int node = 0; node < analysis.nodes; ++node)
     for (int k = 0; k < analysis.levels; ++k) {
-      const int step = std::max(0, k - (node == 0 ? 0 : analysis.entryLevel - 2));
+      const int step = std::clamp(k - (node == 0 ? 0 : analysis.entryLevel - 2), 0, analysis.levels - 1);
       amplitude256.push_back(int64_t(std::lrint(double(strength[size_t(step)]) * analysis.spacing(k) * 256.0)));
     }
 
