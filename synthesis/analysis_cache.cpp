@@ -27,7 +27,7 @@ void pruneCache(const fs::path& cacheDir, uint64_t maxBytes) {
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(cacheDir, ec)) {
     const std::string ext = e.path().extension().string();
-    if ((ext != ".analysis" && ext != ".solid" && ext != ".tiles" && ext != ".ndf") || !e.is_regular_file(ec)) continue;
+    if ((ext != ".analysis" && ext != ".solid" && ext != ".tiles" && ext != ".ndf" && ext != ".graph") || !e.is_regular_file(ec)) continue;
     const uint64_t bytes = e.file_size(ec);
     if (ec) continue;
     entries.push_back({e.last_write_time(ec), bytes, e.path()});

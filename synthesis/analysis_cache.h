@@ -25,8 +25,9 @@ struct AnalysisCacheSettings {
   uint64_t maxBytes = uint64_t(1) << 30;
 };
 
-/// Removes the least recently used analyses (*.analysis, *.solid, *.tiles, *.ndf) of `cacheDir` until the rest
-/// take at most `maxBytes`. Other files are left alone; errors are ignored (a cache is optional).
+/// Removes the least recently used analyses (*.analysis, *.solid, *.tiles, *.ndf, *.graph) of
+/// `cacheDir` until the rest take at most `maxBytes`. Other files are left alone; errors are
+/// ignored (a cache is optional).
 void pruneCache(const std::filesystem::path& cacheDir, uint64_t maxBytes);
 /// The same for `cache`'s folder and bound; nothing without a folder.
 void pruneCache(const AnalysisCacheSettings& cache);

@@ -4,9 +4,11 @@
 #include "synthesis/exemplar_graph.h"
 
 #include "core/error.h"
+#include "core/files.h"
 #include "core/hash.h"
 #include "core/parallel.h"
 #include "synthesis/appearance_space.h"
+#include "synthesis/binary_io.h"
 #include "synthesis/coord_map.h"
 
 #include <nanoflann.hpp>
@@ -15,6 +17,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
 
 namespace texfab::synthesis {
@@ -24,6 +27,8 @@ using namespace detail;
 namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
+constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
+constexpr uint32_t kGraphCacheVersion = 1;         // bump whenever the graph analysis changes
 
 struct Cloud {
   std::vector<float> points;  // n * kAppearanceDims
@@ -334,8 +339,13 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
   }, 1);
   candidates.finish();
 
+  a.key = graphAnalysisKey(graph, options);
+  return a;
+}
+
+uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions& options) {
   Fnv1a hash;
-  hash.add(uint32_t(1));  // the graph analysis' version
+  hash.add(kGraphCacheVersion);
   for (const Image& e : graph.exemplars) {
     hash.add(e.width);
     hash.add(e.channels);
@@ -349,7 +359,71 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
   hash.add(options.candidatesPerLevel);
   hash.add(options.minSpread);
   hash.add(options.minEntryLevel);
-  a.key = hash.h;
+  return hash.h;
+}
+
+void writeGraphAnalysis(const GraphAnalysis& a, const std::filesystem::path& path) {
+  writeFileAtomically(path, [&](std::ostream& out) {
+    BinaryWriter w{out};
+    w.value(kGraphCacheMagic);
+    w.value(kGraphCacheVersion);
+    w.value(a.key);
+    w.value(a.side);
+    w.value(a.nodes);
+    w.value(a.k);
+    w.value(a.entryLevel);
+    w.vec(a.colors.pixels);
+    w.vec(a.appearance);
+    w.vec(a.neighborhood);
+    w.vec(a.candidates);
+    w.vec(a.selfAdmissible);
+  });
+}
+
+std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path, uint64_t expectedKey) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  BinaryReader r{in};
+  uint32_t magic = 0, version = 0;
+  GraphAnalysis a;
+  r.value(magic);
+  r.value(version);
+  r.value(a.key);
+  r.value(a.side);
+  r.value(a.nodes);
+  r.value(a.k);
+  r.value(a.entryLevel);
+  if (!r.ok || magic != kGraphCacheMagic || version != kGraphCacheVersion || a.key != expectedKey ||
+      a.side < kMinGraphExemplarSide || a.side > kMaxGraphExemplarSide || !std::has_single_bit(unsigned(a.side)) ||
+      a.nodes < 1 || a.nodes > 65535 / a.side || a.k < 1 || a.k > 1 + 4 * 64 || a.entryLevel < 0)
+    return std::nullopt;
+  a.levels = std::countr_zero(unsigned(a.side)) + 1;
+  const size_t texels = size_t(a.atlasWidth()) * size_t(a.atlasHeight());
+  a.colors = Image(a.atlasWidth(), a.atlasHeight(), 3);
+  r.vec(a.colors.pixels, texels * 3);
+  r.vec(a.appearance, texels * kAppearanceDims);
+  r.vec(a.neighborhood, texels * kNeighborhoodDims);
+  r.vec(a.candidates, texels * size_t(a.k));
+  r.vec(a.selfAdmissible, size_t(a.nodes) * size_t(a.levels));
+  if (!r.ok || in.peek() != std::ifstream::traits_type::eof()) return std::nullopt;
+  for (uint32_t c : a.candidates)
+    if (coordU(c) >= uint32_t(a.atlasWidth()) || coordV(c) >= uint32_t(a.atlasHeight())) return std::nullopt;
+  return a;
+}
+
+GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options,
+                           const AnalysisCacheSettings& cache, const Context& ctx, bool* cached) {
+  graph.validate();
+  options.validate();
+  Stage stage(ctx, "analysis");
+  bool fromCache = false;
+  GraphAnalysis a = cache.dir ? loadOrCompute(*cache.dir, graphAnalysisKey(graph, options), ".graph",
+                                              readGraphAnalysis, [&] { return analyzeGraph(graph, options, stage.inner()); },
+                                              writeGraphAnalysis, &fromCache, ctx)
+                              : analyzeGraph(graph, options, stage.inner());
+  pruneCache(cache);
+  stage.finish(fromCache ? "(cached)" : std::to_string(a.nodes) + " exemplars, " + std::to_string(a.levels) + " levels");
+  if (cached) *cached = fromCache;
   return a;
 }
 

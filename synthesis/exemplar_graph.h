@@ -32,8 +32,11 @@
 
 #include "core/context.h"
 #include "core/image.h"
+#include "synthesis/analysis_cache.h"
 
 #include <cstdint>
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -106,6 +109,20 @@ struct GraphAnalysis {
 /// options. Reports the stages "stacks", "appearance" and "candidates" through ctx.
 GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options = {},
                            const Context& ctx = {});
+
+/// The cache key of (graph, options).
+uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions& options);
+
+/// analyzeGraph through the analysis cache (`<key>.graph` in cache.dir): read when present and
+/// valid (a damaged or foreign file is recomputed, never trusted), else analysed and stored, the
+/// cache then pruned. `cached` (optional) tells which. Reports one "analysis" stage.
+GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options,
+                           const AnalysisCacheSettings& cache, const Context& ctx, bool* cached = nullptr);
+
+/// Writes / reads one cached graph analysis; readGraphAnalysis returns nothing for a missing,
+/// foreign or damaged file.
+void writeGraphAnalysis(const GraphAnalysis& analysis, const std::filesystem::path& path);
+std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path, uint64_t expectedKey);
 
 /// Peak memory of analyzeGraph, in bytes (an upper bound).
 double graphAnalysisMemoryBytes(int nodes, int side);

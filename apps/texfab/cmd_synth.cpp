@@ -136,9 +136,8 @@ void runGraphSynth(const SynthJob& job) {
                       " output from a graph of " + std::to_string(graph.exemplars.size()) + " exemplars");
   load.finish(job.graph + ": " + std::to_string(graph.exemplars.size()) + " exemplars, " +
               std::to_string(graph.edges.size()) + " edges");
-  Stage analyze(run.ctx(), "analysis");
-  const GraphAnalysis analysis = analyzeGraph(graph, {}, analyze.inner());
-  analyze.finish();
+  bool cached = false;
+  const GraphAnalysis analysis = analyzeGraph(graph, {}, run.analysisCache(), run.ctx(), &cached);
   options.validate(analysis);
   const int deepest = graph.deepestLevel(), level = graphOutputLevel(analysis, options);
   if (deepest >= 0 && level > deepest)
@@ -155,7 +154,7 @@ void runGraphSynth(const SynthJob& job) {
 
   nlohmann::json& r = run.report();
   r["graph"] = {{"file", job.graph}, {"exemplars", graph.names}, {"edges", graph.edges.size()},
-                {"side", graph.side()}, {"deepest_level", deepest}};
+                {"side", graph.side()}, {"deepest_level", deepest}, {"analysis_cached", cached}};
   r["window"] = {{"x", job.window.x}, {"y", job.window.y}, {"width", job.window.width}, {"height", job.window.height}};
   r["parameters"] = {{"seed", options.seed}, {"zoom", job.zoom}, {"passes", options.passes},
                      {"interleave", options.interleave},

@@ -9,6 +9,7 @@
 #include "print/slice_writer.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
+#include "synthesis/exemplar_graph.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
 #include "tests/geometry/test_meshes.h"
@@ -413,6 +414,20 @@ void seedTilesCache(const fs::path& folder) {
   synthesis::writeSolidTiles(tiles, folder / "gradient.tiles");
 }
 
+bool runGraphCache(Bytes input) {
+  return cacheLoads([&] { return synthesis::readGraphAnalysis(inputFile(input, "fuzz.graph"), kSeedKey).has_value(); });
+}
+
+void seedGraphCache(const fs::path& folder) {
+  synthesis::ExemplarGraph graph;
+  graph.names = {"gradient", "detail"};
+  graph.exemplars = {seedExemplar(), seedExemplar()};
+  graph.edges = {{0, 1, 1}};
+  synthesis::GraphAnalysis analysis = synthesis::analyzeGraph(graph);
+  analysis.key = kSeedKey;
+  synthesis::writeGraphAnalysis(analysis, folder / "gradient.graph");
+}
+
 constexpr char kOff[] = ".off", kPly[] = ".ply", kStl[] = ".stl", kGltf[] = ".gltf", kGlb[] = ".glb", k3mf[] = ".3mf";
 
 constexpr FuzzTarget kTargets[] = {
@@ -433,6 +448,7 @@ constexpr FuzzTarget kTargets[] = {
     {"analysis_cache", "readAnalysis: the 2-D analysis cache", runAnalysisCache, seedAnalysisCache},
     {"solid_cache", "readSolidAnalysis: the solid analysis cache", runSolidCache, seedSolidCache},
     {"tiles_cache", "readSolidTiles: the solid tiles cache", runTilesCache, seedTilesCache},
+    {"graph_cache", "readGraphAnalysis: the exemplar graph analysis cache", runGraphCache, seedGraphCache},
 };
 
 } // namespace

@@ -8,6 +8,8 @@
 #include "synthesis/synthesize_2d.h"
 #include "synthesis/synthesize_graph.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -117,6 +119,31 @@ TEST(ExemplarGraph, CandidatesLieInAdmissibleLevels) {
       }
     }
   EXPECT_GT(crossings, 0);
+}
+
+// The cached analysis is the computed one; a truncated or foreign file is recomputed, never trusted.
+TEST(ExemplarGraph, CachedAnalysesAreTheComputedOnesAndDamagedFilesAreRecomputed) {
+  test::TempDir dir;
+  const ExemplarGraph g = twoNodes(32, 1);
+  const AnalysisCacheSettings cache{dir.path(), uint64_t(1) << 30};
+  bool cached = true;
+  const GraphAnalysis first = analyzeGraph(g, {}, cache, {}, &cached);
+  EXPECT_FALSE(cached);
+  const GraphAnalysis second = analyzeGraph(g, {}, cache, {}, &cached);
+  EXPECT_TRUE(cached);
+  EXPECT_EQ(second.colors.pixels, first.colors.pixels);
+  EXPECT_EQ(second.appearance, first.appearance);
+  EXPECT_EQ(second.neighborhood, first.neighborhood);
+  EXPECT_EQ(second.candidates, first.candidates);
+  EXPECT_EQ(second.selfAdmissible, first.selfAdmissible);
+  EXPECT_EQ(second.entryLevel, first.entryLevel);
+  const std::filesystem::path file = std::filesystem::directory_iterator(dir.path())->path();
+  EXPECT_FALSE(readGraphAnalysis(file, first.key + 1)) << "a foreign key was trusted";
+  std::filesystem::resize_file(file, std::filesystem::file_size(file) / 2);
+  EXPECT_FALSE(readGraphAnalysis(file, first.key));
+  const GraphAnalysis third = analyzeGraph(g, {}, cache, {}, &cached);
+  EXPECT_FALSE(cached);
+  EXPECT_EQ(third.candidates, first.candidates);
 }
 
 // Every output texel is a function of its position: windows agree with larger requests, at any
