@@ -104,14 +104,16 @@ OIIO::ImageSpec readConfig() {
 // bound (WebP's lossless mode needs no bits per pixel): PNG's deflate expands at most 1032 times
 // and a pixel takes at least 1 bit; a Huffman-coded JPEG block of 64 pixels takes at least 1 bit
 // (its DC code; arithmetic coding, rare, could take less); a GIF LZW code of at least 3 bits yields
-// at most 4096 pixels. TIFF has no such bound (fax coding, sparse tiles): 65536 pixels per byte,
-// 30 times a blank fax page's, keeps 227 bytes from claiming gigabytes.
+// at most 4096 pixels; BMP's run-length codes at most 255 pixels per 2 bytes. TIFF has no such
+// bound (fax coding, sparse tiles): 65536 pixels per byte, 30 times a blank fax page's, keeps 227
+// bytes from claiming gigabytes.
 uint64_t mostPixels(std::string_view format, uint64_t bytes) {
   if (bytes == 0) return 0;  // unknown
   if (format == "png") return bytes * 1032 * 8;
   if (format == "jpeg") return bytes * 8 * 64;
   if (format == "gif") return bytes * 8 / 3 * 4096;
   if (format == "tiff") return bytes * 65536;
+  if (format == "bmp") return bytes * 128;
   return 0;
 }
 

@@ -165,6 +165,57 @@ int64_t tileDistance2(uint32_t a, uint32_t b, int m) {
   return int64_t(dx) * dx + int64_t(dy) * dy;
 }
 
+// Each atlas texel's candidates: itself where its level admits it, then the candidatesPerLevel
+// best of each admissible level (exact k-nearest in appearance space, spread apart), missing slots
+// repeating the first.
+std::vector<uint32_t> candidatesOf(const GraphAnalysis& a, const std::vector<std::vector<Tile>>& admissibleOf,
+                                   const GraphAnalysisOptions& options, const Context& ctx) {
+  const int m = a.side, aw = a.atlasWidth();
+  std::vector<std::unique_ptr<LevelSearch>> searches(size_t(a.nodes * a.levels));
+  for (const auto& set : admissibleOf)
+    for (const Tile& t : set)
+      if (!searches[size_t(t.node * a.levels + t.level)])
+        searches[size_t(t.node * a.levels + t.level)] = std::make_unique<LevelSearch>(a, t);
+
+  const int64_t spread = std::max<int64_t>(2, std::lrint(options.minSpread * float(m)));
+  std::vector<uint32_t> candidates(size_t(aw) * size_t(a.atlasHeight()) * size_t(a.k), 0);
+  parallelFor(0, a.atlasHeight(), ctx, [&](int y0, int y1) {
+    std::vector<uint32_t> index(kSearchNeighbors);
+    std::vector<float> dist(kSearchNeighbors), point(kAppearanceDims);
+    std::vector<std::pair<float, uint32_t>> ranked;
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < aw; ++x) {
+        const int tile = (y / m) * a.levels + x / m;
+        const uint32_t self = packCoord(uint32_t(x), uint32_t(y));
+        const int8_t* v = &a.appearance[(size_t(y) * aw + x) * kAppearanceDims];
+        for (int d = 0; d < kAppearanceDims; ++d) point[size_t(d)] = v[d];
+        uint32_t* slot = &candidates[(size_t(y) * aw + x) * size_t(a.k)];
+        int taken = 0;
+        if (a.selfAdmissible[size_t(tile)]) slot[taken++] = self;
+        for (const Tile& t : admissibleOf[size_t(tile)]) {
+          const LevelSearch& s = *searches[size_t(t.node * a.levels + t.level)];
+          const size_t found = s.tree->knnSearch(point.data(), std::min(s.sites.size(), size_t(kSearchNeighbors)),
+                                                 index.data(), dist.data());
+          ranked.clear();
+          for (size_t f = 0; f < found; ++f) ranked.emplace_back(dist[f], s.sites[index[f]]);
+          std::sort(ranked.begin(), ranked.end());  // distance, then coordinate: a fixed order for ties
+          const int first = taken;
+          const int64_t apart2 = std::max<int64_t>(spread, s.stride) * std::max<int64_t>(spread, s.stride);
+          for (const auto& [d, c] : ranked) {
+            if (taken - first == options.candidatesPerLevel) break;
+            bool apart = true;  // from the texel itself and from this level's other picks
+            if (t == Tile{y / m, x / m}) apart = tileDistance2(c, self, m) >= apart2;
+            for (int o = first; o < taken && apart; ++o) apart = tileDistance2(c, slot[o], m) >= apart2;
+            if (apart) slot[taken++] = c;
+          }
+        }
+        if (taken == 0) slot[taken++] = self;
+        for (int o = taken; o < a.k; ++o) slot[o] = slot[0];  // missing slots repeat the first
+      }
+  }, 1);
+  return candidates;
+}
+
 } // namespace
 
 void GraphAnalysisOptions::validate() const {
@@ -259,6 +310,14 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
   a.side = graph.side();
   a.levels = std::countr_zero(unsigned(a.side)) + 1;
   a.nodes = int(graph.exemplars.size());
+  a.entryLevel = std::min(options.minEntryLevel, a.finestLevel());
+  for (const GraphEdge& e : graph.edges)
+    if (e.octaves + a.entryLevel > a.finestLevel())
+      throw Error("edge '" + graph.names[size_t(e.from)] + "' -> '" + graph.names[size_t(e.to)] + "': a scale of " +
+                  std::to_string(1 << e.octaves) + " leaves fewer than " + std::to_string(1 << a.entryLevel) +
+                  " texels of '" + graph.names[size_t(e.to)] + "' per side at the finest level of '" +
+                  graph.names[size_t(e.from)] + "': use exemplars of at least " +
+                  std::to_string(1 << (e.octaves + a.entryLevel)) + " pixels or a smaller scale");
   const int m = a.side, aw = a.atlasWidth();
 
   Stage stacks(ctx, "stacks");
@@ -287,56 +346,7 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
       a.selfAdmissible.push_back(!set.empty() && set.front() == Tile{i, k});
     }
   a.k = 1 + options.candidatesPerLevel * int(widest);
-  a.entryLevel = std::min(options.minEntryLevel, a.finestLevel());
-  for (const GraphEdge& e : graph.edges)
-    if (e.octaves + a.entryLevel > a.finestLevel())
-      throw Error("edge '" + graph.names[size_t(e.from)] + "' -> '" + graph.names[size_t(e.to)] + "': a scale of " +
-                  std::to_string(1 << e.octaves) + " leaves fewer than " + std::to_string(1 << a.entryLevel) +
-                  " texels of '" + graph.names[size_t(e.to)] + "' per side at the finest level of '" +
-                  graph.names[size_t(e.from)] + "': use exemplars of at least " +
-                  std::to_string(1 << (e.octaves + a.entryLevel)) + " pixels or a smaller scale");
-  std::vector<std::unique_ptr<LevelSearch>> searches(size_t(a.nodes * a.levels));
-  for (const auto& set : admissibleOf)
-    for (const Tile& t : set)
-      if (!searches[size_t(t.node * a.levels + t.level)])
-        searches[size_t(t.node * a.levels + t.level)] = std::make_unique<LevelSearch>(a, t);
-
-  const int64_t spread = std::max<int64_t>(2, std::lrint(options.minSpread * float(m)));
-  a.candidates.assign(size_t(aw) * size_t(a.atlasHeight()) * size_t(a.k), 0);
-  parallelFor(0, a.atlasHeight(), ctx, [&](int y0, int y1) {
-    std::vector<uint32_t> index(kSearchNeighbors);
-    std::vector<float> dist(kSearchNeighbors), point(kAppearanceDims);
-    std::vector<std::pair<float, uint32_t>> ranked;
-    for (int y = y0; y < y1; ++y)
-      for (int x = 0; x < aw; ++x) {
-        const int tile = (y / m) * a.levels + x / m;
-        const uint32_t self = packCoord(uint32_t(x), uint32_t(y));
-        const int8_t* v = &a.appearance[(size_t(y) * aw + x) * kAppearanceDims];
-        for (int d = 0; d < kAppearanceDims; ++d) point[size_t(d)] = v[d];
-        uint32_t* slot = &a.candidates[(size_t(y) * aw + x) * size_t(a.k)];
-        int taken = 0;
-        if (a.selfAdmissible[size_t(tile)]) slot[taken++] = self;
-        for (const Tile& t : admissibleOf[size_t(tile)]) {
-          const LevelSearch& s = *searches[size_t(t.node * a.levels + t.level)];
-          const size_t found = s.tree->knnSearch(point.data(), std::min(s.sites.size(), size_t(kSearchNeighbors)),
-                                                 index.data(), dist.data());
-          ranked.clear();
-          for (size_t f = 0; f < found; ++f) ranked.emplace_back(dist[f], s.sites[index[f]]);
-          std::sort(ranked.begin(), ranked.end());  // distance, then coordinate: a fixed order for ties
-          const int first = taken;
-          const int64_t apart2 = std::max<int64_t>(spread, s.stride) * std::max<int64_t>(spread, s.stride);
-          for (const auto& [d, c] : ranked) {
-            if (taken - first == options.candidatesPerLevel) break;
-            bool apart = true;  // from the texel itself and from this level's other picks
-            if (t == Tile{y / m, x / m}) apart = tileDistance2(c, self, m) >= apart2;
-            for (int o = first; o < taken && apart; ++o) apart = tileDistance2(c, slot[o], m) >= apart2;
-            if (apart) slot[taken++] = c;
-          }
-        }
-        if (taken == 0) slot[taken++] = self;
-        for (int o = taken; o < a.k; ++o) slot[o] = slot[0];  // missing slots repeat the first
-      }
-  }, 1);
+  a.candidates = candidatesOf(a, admissibleOf, options, ctx);
   candidates.finish();
 
   a.key = graphAnalysisKey(graph, options);

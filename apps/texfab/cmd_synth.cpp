@@ -8,8 +8,8 @@
 #include "core/memory.h"
 #include "core/text.h"
 #include "synthesis/coord_map.h"
-#include "synthesis/quality_measures.h"
 #include "synthesis/graph_file.h"
+#include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
 #include "synthesis/synthesize_graph.h"
 
@@ -165,7 +165,8 @@ void runGraphSynth(const SynthJob& job) {
 
 void runSynth(SynthJob& job) {
   using namespace synthesis;
-  if (job.exemplar.empty() == job.graph.empty()) throw UsageError("give an exemplar image or --graph, not both");
+  if (job.exemplar.empty() == job.graph.empty())
+    throw UsageError(job.graph.empty() ? "give an exemplar image (or --graph)" : "give an exemplar image or --graph, not both");
   if (!job.graph.empty()) return runGraphSynth(job);
   if (job.zoom != 1) throw UsageError("--zoom needs --graph");
   Run run("synth", job.common);
