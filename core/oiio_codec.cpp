@@ -117,17 +117,22 @@ uint64_t mostPixels(std::string_view format, uint64_t bytes) {
   return 0;
 }
 
+// Throws when a `format` image of `bytes` bytes claims width x height pixels, more than it can encode.
+void checkClaimedPixels(std::string_view format, uint64_t width, uint64_t height, uint64_t bytes,
+                        const std::string& name) {
+  const uint64_t most = mostPixels(format, bytes);
+  if (most > 0 && width * height > most)
+    throw Error(name + ": corrupt " + std::string(format) + ": it claims " + std::to_string(width) + "x" +
+                std::to_string(height) + " pixels, more than its " + std::to_string(bytes) + " bytes can hold");
+}
+
 // `sourceBytes`: the size of the file or memory the image is read from.
 Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t sourceBytes, uint64_t maxBytes) {
   const OIIO::ImageSpec& spec = in.spec();
   checkImageSize(spec.width, spec.height, name);
   // A corrupt header that claims a huge image: decoders allocate what it claims before they find
   // the data missing.
-  if (const uint64_t most = mostPixels(in.format_name(), sourceBytes);
-      most > 0 && uint64_t(spec.width) * uint64_t(spec.height) > most)
-    throw Error(name + ": corrupt " + in.format_name() + ": it claims " + std::to_string(spec.width) + "x" +
-                std::to_string(spec.height) + " pixels, more than its " + std::to_string(sourceBytes) +
-                " bytes can hold");
+  checkClaimedPixels(in.format_name(), uint64_t(spec.width), uint64_t(spec.height), sourceBytes, name);
   if (spec.depth > 1) throw Error(name + ": volume images are not supported");
   if (spec.nchannels < 1) throw Error(name + ": image has no channels");
   const uint64_t bytes = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels) * sizeof(float);
@@ -219,10 +224,7 @@ void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const 
 // logical screen's size: a screen larger than the file can fill is refused before.
 void checkGifScreen(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
   if (head.size() < 10 || std::memcmp(head.data(), "GIF8", 4) != 0) return;
-  const uint64_t width = head[6] | unsigned(head[7]) << 8, height = head[8] | unsigned(head[9]) << 8;
-  if (width * height > mostPixels("gif", fileSize))
-    throw Error(name + ": corrupt gif: it claims " + std::to_string(width) + "x" + std::to_string(height) +
-                " pixels, more than its " + std::to_string(fileSize) + " bytes can hold");
+  checkClaimedPixels("gif", head[6] | unsigned(head[7]) << 8, head[8] | unsigned(head[9]) << 8, fileSize, name);
 }
 
 // The checks above, on what a file's or a buffer's first bytes claim.
@@ -231,16 +233,18 @@ void checkClaims(std::span<const uint8_t> head, uint64_t size, const std::string
   checkGifScreen(head, size, name);
 }
 
-void checkFileClaims(const std::string& file) {
+// checkClaims on a file's first 64 KB; returns the file's size (0 when the system does not say).
+uint64_t checkFileClaims(const std::string& file) {
   std::error_code error;
   const uint64_t size = std::filesystem::file_size(file, error);
-  if (error) return;
+  if (error) return 0;
   std::vector<uint8_t> head(std::min<uint64_t>(size, 1 << 16));
   if (FILE* f = std::fopen(file.c_str(), "rb")) {
     head.resize(std::fread(head.data(), 1, head.size(), f));
     std::fclose(f);
     checkClaims(head, size, file);
   }
+  return size;
 }
 
 // The extension of the format a file's first bytes name, or null (TGA, for one, has no signature).
@@ -267,7 +271,7 @@ const char* extensionBySignature(const std::string& file) {
 // Not OIIO's own fallback (try_all_readers, off in this module), which tries every reader it has:
 // some take seconds to refuse a corrupt file of a few hundred bytes.
 Image read(const std::string& name, uint64_t maxBytes) {
-  checkFileClaims(name);
+  const uint64_t bytes = checkFileClaims(name);
   const OIIO::ImageSpec config = readConfig();
   const QuietStderr quiet;
   auto in = OIIO::ImageInput::open(name, &config);
@@ -281,9 +285,7 @@ Image read(const std::string& name, uint64_t maxBytes) {
     }
     if (!in) throw Error(name + ": cannot read image: " + oneLine(why));
   }
-  std::error_code error;
-  const uint64_t bytes = std::filesystem::file_size(name, error);
-  return decode(*in, name, error ? 0 : bytes, maxBytes);
+  return decode(*in, name, bytes, maxBytes);
 }
 
 Image decodeBytes(std::span<const uint8_t> bytes, const std::string& pseudoName, const std::string& name,

@@ -7,6 +7,15 @@
 
 namespace texfab::synthesis::detail {
 
+int64_t pixelDistance2(int ax, int ay, int bx, int by, int w, int h, ExemplarWrap wrap) {
+  int dx = std::abs(ax - bx), dy = std::abs(ay - by);
+  if (wrap == ExemplarWrap::Tile) {
+    dx = std::min(dx, w - dx);
+    dy = std::min(dy, h - dy);
+  }
+  return int64_t(dx) * dx + int64_t(dy) * dy;
+}
+
 std::vector<float> patchWeights() {
   const int side = 2 * kPatchRadius + 1;
   std::vector<float> weights(size_t(side * side));

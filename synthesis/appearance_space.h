@@ -9,6 +9,7 @@
 #include "synthesis/exemplar_analysis.h"
 
 #include <Eigen/Dense>
+#include <nanoflann.hpp>
 
 #include <cstdint>
 #include <vector>
@@ -17,6 +18,19 @@ namespace texfab::synthesis::detail {
 
 inline constexpr int kPatchRadius = 2;      ///< 5x5 appearance neighborhoods
 inline constexpr float kPatchSigma = 1.5f;  ///< Gaussian weighting of the 5x5 samples
+
+/// Appearance vectors as a point cloud for nanoflann's exact k-nearest search.
+struct AppearanceCloud {
+  std::vector<float> points;  ///< n * kAppearanceDims
+  size_t kdtree_get_point_count() const { return points.size() / kAppearanceDims; }
+  float kdtree_get_pt(size_t i, size_t d) const { return points[i * kAppearanceDims + d]; }
+  template <class Box> bool kdtree_get_bbox(Box&) const { return false; }
+};
+using AppearanceTree = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<float, AppearanceCloud>, AppearanceCloud, kAppearanceDims, uint32_t>;
+
+/// Squared distance between two pixels of a w x h exemplar, toroidal (Tile) or not.
+int64_t pixelDistance2(int ax, int ay, int bx, int by, int w, int h, ExemplarWrap wrap);
 
 /// The square roots of the Gaussian weights of the 5x5 samples, row by row (so that distances
 /// between weighted patches are Gaussian-weighted).

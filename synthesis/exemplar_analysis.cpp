@@ -15,7 +15,6 @@
 #include "synthesis/coord_map.h"
 
 #include <Eigen/Dense>
-#include <nanoflann.hpp>
 
 #include <algorithm>
 #include <array>
@@ -116,26 +115,7 @@ void distanceTransform1d(std::vector<float>& f) {
 }
 
 // Data set adaptor for nanoflann over quantized appearance vectors.
-struct AppearanceCloud {
-  std::vector<float> points;  // n * kAppearanceDims
-  size_t kdtree_get_point_count() const { return points.size() / kAppearanceDims; }
-  float kdtree_get_pt(size_t i, size_t d) const { return points[i * kAppearanceDims + d]; }
-  template <class Box> bool kdtree_get_bbox(Box&) const { return false; }
-};
-using AppearanceTree = nanoflann::KDTreeSingleIndexAdaptor<
-    nanoflann::L2_Simple_Adaptor<float, AppearanceCloud>, AppearanceCloud, kAppearanceDims, uint32_t>;
-
 using RowMatrix = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-// Squared distance between two exemplar pixels, toroidal or not.
-int64_t pixelDistance2(int ax, int ay, int bx, int by, int w, int h, ExemplarWrap wrapMode) {
-  int dx = std::abs(ax - bx), dy = std::abs(ay - by);
-  if (wrapMode == ExemplarWrap::Tile) {
-    dx = std::min(dx, w - dx);
-    dy = std::min(dy, h - dy);
-  }
-  return int64_t(dx) * dx + int64_t(dy) * dy;
-}
 
 // Appearance vectors of one stack level: Gaussian-weighted 5x5 neighborhoods with taps `spacing`
 // apart, projected on their 8 principal components, quantized to int8 with one scale.

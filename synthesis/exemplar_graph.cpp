@@ -11,8 +11,6 @@
 #include "synthesis/binary_io.h"
 #include "synthesis/coord_map.h"
 
-#include <nanoflann.hpp>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -30,14 +28,6 @@ constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible l
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
 constexpr uint32_t kGraphCacheVersion = 1;         // bump whenever the graph analysis changes
 
-struct Cloud {
-  std::vector<float> points;  // n * kAppearanceDims
-  size_t kdtree_get_point_count() const { return points.size() / kAppearanceDims; }
-  float kdtree_get_pt(size_t i, size_t d) const { return points[i * kAppearanceDims + d]; }
-  template <class Box> bool kdtree_get_bbox(Box&) const { return false; }
-};
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud, kAppearanceDims,
-                                                 uint32_t>;
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
 Image rgbOf(const Image& image) {
@@ -140,9 +130,9 @@ std::vector<int8_t> neighborhoodsOf(const GraphAnalysis& a) {
 struct LevelSearch {
   Tile tile;
   int stride = 1;
-  Cloud cloud;
+  AppearanceCloud cloud;
   std::vector<uint32_t> sites;  // packed atlas coordinates
-  std::unique_ptr<Tree> tree;
+  std::unique_ptr<AppearanceTree> tree;
 
   LevelSearch(const GraphAnalysis& a, Tile t) : tile(t) {
     const int m = a.side;
@@ -154,15 +144,14 @@ struct LevelSearch {
         const int8_t* v = &a.appearance[(size_t(ay) * a.atlasWidth() + ax) * kAppearanceDims];
         cloud.points.insert(cloud.points.end(), v, v + kAppearanceDims);
       }
-    tree = std::make_unique<Tree>(kAppearanceDims, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    tree = std::make_unique<AppearanceTree>(kAppearanceDims, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   }
 };
 
+// Squared distance between two texels of one tile, toroidal.
 int64_t tileDistance2(uint32_t a, uint32_t b, int m) {
-  int dx = std::abs(int(coordU(a)) - int(coordU(b))) % m, dy = std::abs(int(coordV(a)) - int(coordV(b))) % m;
-  dx = std::min(dx, m - dx);
-  dy = std::min(dy, m - dy);
-  return int64_t(dx) * dx + int64_t(dy) * dy;
+  return pixelDistance2(int(coordU(a)) % m, int(coordV(a)) % m, int(coordU(b)) % m, int(coordV(b)) % m, m, m,
+                        ExemplarWrap::Tile);
 }
 
 // Each atlas texel's candidates: itself where its level admits it, then the candidatesPerLevel

@@ -84,15 +84,6 @@ void jitter(const Atlas& a, uint32_t* coords, const LevelGrid& g, uint32_t seed,
     }
 }
 
-int32_t distance(const int8_t* target, const int8_t* n) {
-  int32_t sum = 0;
-  for (int i = 0; i < kNeighborhoodDims; ++i) {
-    const int32_t d = int32_t(target[i]) - int32_t(n[i]);
-    sum += d * d;
-  }
-  return sum;
-}
-
 // One correction sub-pass (cpu::correctKernel's rules): each texel of the class takes the best of
 // { C_i(S[q+D]) - h D } (h of each candidate's level, wrapped in its tile) and S[q] itself where
 // S[q]'s level is admissible to itself, or at the output level (nothing finer is synthesized, so a
@@ -116,7 +107,7 @@ void correct(const Atlas& a, const uint32_t* in, uint32_t* out, const LevelGrid&
       const uint32_t current = row[x];
       uint32_t best = current;
       int32_t bestDistance = outputLevel || a.selfAdmissible[a.tile(current)]
-                                 ? distance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
+                                 ? cpu::neighborhoodDistance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
                                  : INT32_MAX;
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
@@ -125,7 +116,7 @@ void correct(const Atlas& a, const uint32_t* in, uint32_t* out, const LevelGrid&
             const int h = a.spacing(cand[i]);
             const uint32_t c = a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy);
             if (c == best) continue;
-            const int32_t d = distance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
+            const int32_t d = cpu::neighborhoodDistance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
             if (d < bestDistance || (d == bestDistance && best != current && c < best)) {
               bestDistance = d;
               best = c;
