@@ -35,6 +35,11 @@ struct ProgressEvent {
                             ///< Warning: the message
 };
 
+/// Seconds on the steady clock since `start`: a level's or stage's duration.
+inline double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 /// Receives progress. It may be called from several threads at once: it must be thread-safe.
 using ProgressSink = std::function<void(const ProgressEvent&)>;
 

@@ -13,6 +13,7 @@
 #include "synthesis/coord_map.h"
 #include "synthesis/refine_solid.h"
 #include "synthesis/synthesize_surface.h"
+#include "synthesis/synthesize_surface_graph.h"
 
 #include <algorithm>
 #include <atomic>
@@ -77,6 +78,9 @@ void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
   if (!ex.color) throw Error("texture: no exemplar image");
   if (mode == TextureMode::Solid && ex.normal)
     throw Error("a normal map needs surface mode: a solid texture has no tangent frame");
+  if (ex.graph && mode == TextureMode::Solid) throw Error("an exemplar graph needs surface mode");
+  if (ex.graph && (ex.normal || ex.roughness || ex.height))
+    throw Error("companion maps are not synthesized from an exemplar graph yet");
   requireSize(ex.normal, *ex.color, "normal");
   requireSize(ex.roughness, *ex.color, "roughness");
   requireSize(ex.height, *ex.color, "height");
@@ -88,8 +92,15 @@ double autoTextureScale(const geometry::Mesh& mesh) {
   return kAutoScaleAtlasSide * std::sqrt(kAutoScaleCoverage / area);
 }
 
-double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& o) {
-  return o.textureScale > 0 ? o.textureScale : autoTextureScale(mesh);
+double graphTextureScale(const geometry::Mesh& mesh, int rootSide) {
+  const double diagonal = geometry::boundingBox(mesh).diagonal();
+  if (!(diagonal > 0) || !std::isfinite(diagonal)) throw Error("the model has no extent to scale a texture to");
+  return rootSide / diagonal;
+}
+
+double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& o, const synthesis::GraphAnalysis* graph) {
+  if (o.textureScale > 0) return o.textureScale;
+  return graph ? graphTextureScale(mesh, graph->side) : autoTextureScale(mesh);
 }
 
 // Charts keep their surface area in UV space, so a W x H atlas has at most sqrt(W H / area) texels
@@ -165,13 +176,14 @@ void TextureJob::buildAtlas(const geometry::MeshOrientation& orientation) {
 // Scale: exemplar pixels per model unit, and per texel.
 void TextureJob::checkScale() {
   const Atlas& atlas = r_.atlas.atlas;
-  r_.textureScale = textureScaleFor(mesh_, o_);
+  r_.textureScale = textureScaleFor(mesh_, o_, ex_.graph);
   pixelsPerTexel_ = r_.textureScale / atlas.texelsPerUnit;
   const int exemplarSide = std::min(exemplar_.width, exemplar_.height);
   if (pixelsPerTexel_ > exemplarSide / 2.0)
     throw Error("the scale puts " + figure(pixelsPerTexel_) + " exemplar pixels in one texel (the exemplar is " +
                 std::to_string(exemplarSide) + " pixels): features would be smaller than a texel; lower "
                 "--texture-scale or raise --resolution");
+  if (ex_.graph) return;  // finer texels zoom into the graph's finer exemplars
   if (pixelsPerTexel_ > 2.0)
     warn("the exemplar is minified " + figure(pixelsPerTexel_) +
          "x (exemplar pixels per texel): its finest detail is lost; raise --resolution to keep it");
@@ -206,7 +218,8 @@ void TextureJob::buildDomain() {
 void TextureJob::synthesize() {
   Stage stage(ctx_, "synthesis");
   if (surface_) {
-    synthesis::SurfaceSynthesisResult s = synthesizeSurface(*ex_.analysis, domain_, o_.surface, ctx_);
+    synthesis::SurfaceSynthesisResult s = ex_.graph ? synthesizeSurfaceGraph(*ex_.graph, domain_, o_.surface, stage.inner())
+                                                    : synthesizeSurface(*ex_.analysis, domain_, o_.surface, ctx_);
     r_.coords = std::move(s.coords);
     r_.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
     r_.synthesisLevels = s.levels;
@@ -226,6 +239,7 @@ void TextureJob::synthesize() {
 
 float TextureJob::lookup(const Image& map, size_t site, int channel, bool magnified) const {
   channel = std::min(channel, map.channels - 1);
+  if (ex_.graph) return synthesis::sampleSurfaceGraph(*ex_.graph, r_.coords[site], channel);
   if (surface_) {
     const float u = synthesis::surfaceU(r_.coords[site]), v = synthesis::surfaceV(r_.coords[site]);
     const bool toroidal = ex_.analysis->wrap == synthesis::ExemplarWrap::Tile;
@@ -277,7 +291,7 @@ void TextureJob::measure() {
   const synthesis::SurfaceLevel& sites = domain_.levels[0];
   r_.measures.seams = measureSeams(sites, *r_.baseColor);
   std::string detail = "seam ratio " + figure(r_.measures.seams.ratio);
-  if (surface_) {
+  if (surface_ && !ex_.graph) {  // against one exemplar: not a graph's
     r_.measures.scale =
         measureScale(sites, r_.coords, r_.atlas.fields, ex_.analysis->width, ex_.analysis->height, r_.textureScale);
     r_.measures.fidelity = measureSurfaceFidelity(sites, *r_.baseColor, exemplar_, r_.atlas.fields, 1024, ctx_);
@@ -299,7 +313,7 @@ TextureMeshResult textureMesh(const geometry::Mesh& input, const TextureExemplar
                               const Context& ctx) {
   checkCompanionMaps(ex, o.mode);  // and that there is an exemplar
   const bool surface = o.mode == TextureMode::Surface;
-  if (surface && !ex.analysis) throw Error("texture: surface mode needs the exemplar analysis");
+  if (surface && !ex.analysis && !ex.graph) throw Error("texture: surface mode needs the exemplar analysis");
   if (!surface && !ex.solidAnalysis) throw Error("texture: solid mode needs the solid exemplar analysis");
   if (input.triangleCount() == 0) throw Error("the model has no triangles");
   if (!(o.textureScale >= 0) || !std::isfinite(o.textureScale)) throw Error("texture scale must be >= 0");

@@ -19,6 +19,7 @@
 #include "geometry/tangent_field.h"
 #include "render/surface_measures.h"
 #include "synthesis/exemplar_analysis.h"
+#include "synthesis/exemplar_graph.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 #include "synthesis/synthesize_surface.h"
@@ -45,13 +46,15 @@ struct TextureMeshOptions {
 };
 
 /// The exemplar and what synthesis knows about it. Companion maps must have the exemplar's size.
+/// With an exemplar graph (surface mode), `color` is its root exemplar and `analysis` unused.
 struct TextureExemplar {
   const Image* color = nullptr;
-  const synthesis::ExemplarAnalysis* analysis = nullptr;   ///< needed in surface mode
+  const synthesis::ExemplarAnalysis* analysis = nullptr;   ///< needed in surface mode without a graph
   const synthesis::SolidAnalysis* solidAnalysis = nullptr; ///< needed in solid mode
   const Image* normal = nullptr;    ///< tangent-space normal map, OpenGL convention (+Y up); surface mode
   const Image* roughness = nullptr; ///< first channel
   const Image* height = nullptr;    ///< first channel
+  const synthesis::GraphAnalysis* graph = nullptr; ///< multiscale synthesis (Han et al. 2008), surface mode
 };
 
 struct TextureMeasures {
@@ -78,8 +81,9 @@ struct TextureMeshResult {
   std::vector<std::string> warnings;        ///< e.g. a scale at which features are smaller than a texel
 };
 
-/// Throws texfab::Error unless the companion maps suit the mode (no normal map in solid mode) and
-/// have the exemplar's size. textureMesh() checks this too; callers may check before the analysis.
+/// Throws texfab::Error unless the companion maps suit the mode (no normal map in solid mode, none
+/// with a graph yet, a graph only in surface mode) and have the exemplar's size. textureMesh()
+/// checks this too; callers may check before the analysis.
 void checkCompanionMaps(const TextureExemplar& exemplar, TextureMode mode);
 
 /// Peak memory of textureMesh at the options' atlas size and mode, in bytes. Measured at 2048^2 on
@@ -98,8 +102,14 @@ inline constexpr int kAutoScaleAtlasSide = 2048;
 inline constexpr double kAutoScaleCoverage = 0.7;
 double autoTextureScale(const geometry::Mesh& mesh);
 
-/// options.textureScale, or autoTextureScale(mesh) where it is 0.
-double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& options);
+/// The scale at textureScale 0 with an exemplar graph: the root exemplar (`rootSide` pixels) spans
+/// the model's bounding-box diagonal once, so that its structure is the model's largest and the
+/// exemplars that detail it appear where texels are finer.
+double graphTextureScale(const geometry::Mesh& mesh, int rootSide);
+
+/// options.textureScale, or where it is 0 graphTextureScale (with `graph`) or autoTextureScale.
+double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& options,
+                       const synthesis::GraphAnalysis* graph = nullptr);
 
 /// The factor (a power of two) by which the exemplar and its maps are best analysed and synthesized
 /// smaller: where options.textureScale puts at least that many exemplar pixels in every texel,

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -26,7 +27,7 @@ namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
-constexpr uint32_t kGraphCacheVersion = 1;         // bump whenever the graph analysis changes
+constexpr uint32_t kGraphCacheVersion = 2;         // bump whenever the graph analysis changes
 
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
@@ -292,6 +293,22 @@ double graphAnalysisMemoryBytes(int nodes, int side) {
          double(kExactAnalysisPixels) * 75 * sizeof(float) * 2;
 }
 
+namespace {
+
+// Octaves from the root to each node along the shallowest path (Bellman-Ford: edges are few, all
+// of positive length).
+std::vector<int32_t> shallowestDepths(const ExemplarGraph& graph) {
+  std::vector<int32_t> depth(graph.exemplars.size(), INT32_MAX);
+  depth[0] = 0;
+  for (size_t round = 0; round < graph.exemplars.size(); ++round)
+    for (const GraphEdge& e : graph.edges)
+      if (depth[size_t(e.from)] != INT32_MAX)
+        depth[size_t(e.to)] = std::min(depth[size_t(e.to)], depth[size_t(e.from)] + e.octaves);
+  return depth;
+}
+
+} // namespace
+
 GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options, const Context& ctx) {
   graph.validate();
   options.validate();
@@ -338,6 +355,7 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
   a.candidates = candidatesOf(a, admissibleOf, options, ctx);
   candidates.finish();
 
+  a.depth = shallowestDepths(graph);
   a.key = graphAnalysisKey(graph, options);
   return a;
 }
@@ -376,6 +394,7 @@ void writeGraphAnalysis(const GraphAnalysis& a, const std::filesystem::path& pat
     w.vec(a.neighborhood);
     w.vec(a.candidates);
     w.vec(a.selfAdmissible);
+    w.vec(a.depth);
   });
 }
 
@@ -404,7 +423,11 @@ std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path
   r.vec(a.neighborhood, texels * kNeighborhoodDims);
   r.vec(a.candidates, texels * size_t(a.k));
   r.vec(a.selfAdmissible, size_t(a.nodes) * size_t(a.levels));
+  r.vec(a.depth, size_t(a.nodes));
   if (!r.ok || in.peek() != std::ifstream::traits_type::eof()) return std::nullopt;
+  if (a.depth[0] != 0) return std::nullopt;
+  for (int32_t d : a.depth)
+    if (d < 0 || d > kMaxGraphEdgeOctaves * a.nodes) return std::nullopt;
   for (uint32_t c : a.candidates)
     if (coordU(c) >= uint32_t(a.atlasWidth()) || coordV(c) >= uint32_t(a.atlasHeight())) return std::nullopt;
   return a;

@@ -96,6 +96,9 @@ struct GraphAnalysis {
   std::vector<uint32_t> candidates;  ///< per atlas texel, k packed atlas coordinates
   /// Per tile (node * levels + level): may a texel keep its level while synthesis goes finer.
   std::vector<uint8_t> selfAdmissible;
+  /// Per node: the octaves from the root along the shallowest path of edges (the root's 0), so
+  /// that a pixel of node i spans 2^-depth[i] root pixels.
+  std::vector<int32_t> depth;
   uint64_t key = 0;
 
   int atlasWidth() const { return side * levels; }

@@ -21,10 +21,8 @@ namespace texfab::synthesis {
 
 namespace {
 
+using cpu::kRowGrain;
 using cpu::LevelGrid;
-
-// Rows per task: enough work to amortize scheduling, small enough to balance two cores.
-constexpr int kRowGrain = 8;
 
 using cpu::expand;
 using cpu::parentOf;
@@ -43,7 +41,6 @@ cpu::LevelTables tablesOf(const ExemplarAnalysis& a, int level) {
 
 using Clock = std::chrono::steady_clock;
 
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // What synthesize2d derives before running a kernel: the levels it synthesizes, the padded
 // rectangle each computes (the dependency closure of the window), and each level's parameters.
@@ -136,7 +133,7 @@ std::vector<uint32_t> synthesizeOnCpu(const ExemplarAnalysis& analysis, const Pl
       stage.advance(inset, plan.subpasses);
     });
     previous.swap(current);
-    stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
+    stats.push_back({l, int64_t(grid.width) * grid.height, secondsSince(start)});
     stage.finish();
   }
   return previous;
@@ -179,7 +176,7 @@ void synthesizeOnDevice(vulkan::Device& device, const ExemplarAnalysis& analysis
     });
     commands.submit(ctx);
     previous = std::move(current);
-    stats.push_back({l, int64_t(grid.width) * grid.height, since(start)});
+    stats.push_back({l, int64_t(grid.width) * grid.height, secondsSince(start)});
     stage.finish();
   }
   const LevelGrid& grid = plan.grid(plan.finest);

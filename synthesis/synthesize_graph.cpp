@@ -6,10 +6,10 @@
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/parallel.h"
+#include "synthesis/cpu/graph_atlas.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -19,37 +19,13 @@ namespace texfab::synthesis {
 
 namespace {
 
+using cpu::GraphAtlas;
+using cpu::kRowGrain;
 using cpu::LevelGrid;
-constexpr int kRowGrain = 8;
-
-// The atlas as the kernels see it: tiles of m = 2^shift texels, level k of node i at (k m, i m).
-struct Atlas {
-  int shift = 0, finest = 0, levels = 0, width = 0, k = 0;
-  const int8_t* appearance = nullptr;
-  const int8_t* neighborhood = nullptr;
-  const uint32_t* candidates = nullptr;
-  const uint8_t* selfAdmissible = nullptr;
-
-  explicit Atlas(const GraphAnalysis& a)
-      : shift(std::countr_zero(unsigned(a.side))), finest(a.finestLevel()), levels(a.levels),
-        width(a.atlasWidth()), k(a.k), appearance(a.appearance.data()), neighborhood(a.neighborhood.data()),
-        candidates(a.candidates.data()), selfAdmissible(a.selfAdmissible.data()) {}
-
-  uint32_t mask() const { return (1u << shift) - 1; }
-  int level(uint32_t c) const { return int(coordU(c) >> shift); }
-  int tile(uint32_t c) const { return int(coordV(c) >> shift) * levels + level(c); }
-  int spacing(uint32_t c) const { return 1 << (finest - level(c)); }
-  size_t texel(uint32_t c) const { return size_t(coordV(c)) * size_t(width) + coordU(c); }
-  // c moved by (dx, dy) texels of its tile, wrapped in the tile.
-  uint32_t move(uint32_t c, int64_t dx, int64_t dy) const {
-    const uint32_t u = coordU(c), v = coordV(c);
-    return packCoord((u & ~mask()) | ((u + uint32_t(dx)) & mask()), (v & ~mask()) | ((v + uint32_t(dy)) & mask()));
-  }
-};
 
 // Upsampling: a texel at level k < L of its exemplar becomes four at level k+1, h_{k+1} apart
 // (the thesis' ⌊h Δ⌋ with the child's spacing, notes §3.2 erratum); at the finest level, magnified.
-void upsample(const Atlas& a, const uint32_t* parent, const LevelGrid& pg, uint32_t* out, const LevelGrid& g,
+void upsample(const GraphAtlas& a, const uint32_t* parent, const LevelGrid& pg, uint32_t* out, const LevelGrid& g,
               int r0, int r1) {
   for (int y = r0; y < r1; ++y) {
     const int64_t qy = g.y0 + y;
@@ -70,7 +46,7 @@ void upsample(const Atlas& a, const uint32_t* parent, const LevelGrid& pg, uint3
 
 // Jitter: S[q] += round(strength h_k H(q)), H uniform in [-1, 1)^2 from texelHash(seed, t, q), the
 // strength and h_k those of the tile S[q] points to; in integers as cpu::jitterKernel.
-void jitter(const Atlas& a, uint32_t* coords, const LevelGrid& g, uint32_t seed, int t,
+void jitter(const GraphAtlas& a, uint32_t* coords, const LevelGrid& g, uint32_t seed, int t,
             const std::vector<int64_t>& amplitude256, int r0, int r1) {
   for (int y = r0; y < r1; ++y)
     for (int x = 0; x < g.width; ++x) {
@@ -89,7 +65,7 @@ void jitter(const Atlas& a, uint32_t* coords, const LevelGrid& g, uint32_t seed,
 // S[q]'s level is admissible to itself, or at the output level (nothing finer is synthesized, so a
 // finest level may stay: the root shows its own pixels at zoom 1); ties to S[q], then to the
 // smallest coordinate.
-void correct(const Atlas& a, const uint32_t* in, uint32_t* out, const LevelGrid& g, bool outputLevel, int interleave,
+void correct(const GraphAtlas& a, const uint32_t* in, uint32_t* out, const LevelGrid& g, bool outputLevel, int interleave,
              int cx, int cy, int x0, int x1, int r0, int r1) {
   const auto w = size_t(g.width);
   const int firstX = x0 + int(cpu::floorMod(cx - (g.x0 + x0), interleave));
@@ -128,9 +104,6 @@ void correct(const Atlas& a, const uint32_t* in, uint32_t* out, const LevelGrid&
   }
 }
 
-double since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 } // namespace
 
@@ -148,6 +121,18 @@ int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions&
   return analysis.finestLevel() + options.zoomOctaves;
 }
 
+std::vector<int64_t> graphJitterAmplitudes256(const GraphAnalysis& analysis, const std::vector<float>& jitter) {
+  std::vector<float> strength = jitter.empty() ? defaultJitter(analysis.levels) : jitter;
+  strength.resize(size_t(analysis.levels), strength.back());
+  std::vector<int64_t> amplitude256;
+  for (int node = 0; node < analysis.nodes; ++node)
+    for (int k = 0; k < analysis.levels; ++k) {
+      const int step = std::clamp(k - (node == 0 ? 0 : analysis.entryLevel - 2), 0, analysis.levels - 1);
+      amplitude256.push_back(int64_t(std::lrint(double(strength[size_t(step)]) * analysis.spacing(k) * 256.0)));
+    }
+  return amplitude256;
+}
+
 double synthesizeGraphMemoryBytes(const Window& window) {
   // Three coordinate buffers of the padded finest level, then RGB floats.
   return double(window.width + 64) * double(window.height + 64) * (3 * sizeof(uint32_t) + 3 * sizeof(float));
@@ -157,7 +142,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
                                 const GraphSynthesisOptions& options, const Context& ctx) {
   options.validate(analysis);
   window.validate();
-  const Atlas atlas(analysis);
+  const GraphAtlas atlas(analysis);
   const int finest = graphOutputLevel(analysis, options);
   const int subpasses = options.passes * options.interleave * options.interleave;
 
@@ -171,14 +156,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   // enter it, as the layout above that level came from the exemplar they left (entered at the start
   // of the schedule, it lost fidelity: 1.35x the single exemplar's on rock -> stone at 16x zoom;
   // never jittered, it copied coherent squares).
-  std::vector<float> strength = options.jitter.empty() ? defaultJitter(analysis.levels) : options.jitter;
-  strength.resize(size_t(analysis.levels), strength.back());
-  std::vector<int64_t> amplitude256;  // per tile
-  for (int node = 0; node < analysis.nodes; ++node)
-    for (int k = 0; k < analysis.levels; ++k) {
-      const int step = std::clamp(k - (node == 0 ? 0 : analysis.entryLevel - 2), 0, analysis.levels - 1);
-      amplitude256.push_back(int64_t(std::lrint(double(strength[size_t(step)]) * analysis.spacing(k) * 256.0)));
-    }
+  const std::vector<int64_t> amplitude256 = graphJitterAmplitudes256(analysis, options.jitter);
 
   SynthesisResult result;
   std::vector<uint32_t> previous, current, scratch;
@@ -204,7 +182,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
           stage.advance(inset, subpasses);
         }
     previous.swap(current);
-    result.levels.push_back({t, int64_t(g.width) * g.height, since(start)});
+    result.levels.push_back({t, int64_t(g.width) * g.height, secondsSince(start)});
     stage.finish();
   }
 

@@ -54,6 +54,11 @@ struct GraphSynthesisOptions {
 /// The synthesis level of the output: L + zoomOctaves.
 int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options);
 
+/// Jitter amplitude per atlas tile (node * levels + level), in 1/256 pixels of the tile's exemplar:
+/// h_k times the strength `jitter` (as GraphSynthesisOptions::jitter; empty: defaultJitter) gives
+/// the tile's level, counted from level 0 for the root and from entryLevel - 2 for other nodes.
+std::vector<int64_t> graphJitterAmplitudes256(const GraphAnalysis& analysis, const std::vector<float>& jitter);
+
 /// Peak memory of synthesizeGraph on `window`, in bytes, with its colours resolved (applyCoords).
 double synthesizeGraphMemoryBytes(const Window& window);
 

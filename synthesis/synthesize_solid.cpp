@@ -81,7 +81,6 @@ cpu::SolidInit initOf(const SolidSynthesisOptions& o) {
   return {o.seed, int64_t(std::lrint(double(o.jitter) * 256.0)), o.offsetCells};
 }
 
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 uint64_t ownerKey(const SolidAnalysis& a, const SolidSynthesisOptions& o) {
   Fnv1a h;
@@ -581,7 +580,7 @@ struct Engine {
     SolidLevelStats& st = stats[size_t(li)];
     st.voxels += voxels;
     st.corrections += corrections;
-    st.seconds += since(started);
+    st.seconds += secondsSince(started);
   }
 
 #if TEXFAB_HAS_VULKAN
@@ -698,7 +697,7 @@ struct Engine {
       const auto started = Clock::now();
       if (li < top()) seedFromChild(li);
       dilate(li);
-      stats[size_t(li)].seconds += since(started);
+      stats[size_t(li)].seconds += secondsSince(started);
       peakBytes = std::max(peakBytes, storeBytes());
     }
     maskStage.finish();

@@ -20,19 +20,10 @@ namespace texfab::synthesis {
 
 namespace {
 
-// Sites per task.
-constexpr int kSiteGrain = 4096;
-
-template <class Fn>
-void forSites(size_t count, const Context& ctx, Fn&& fn) {
-  parallelFor(0, int((count + kSiteGrain - 1) / kSiteGrain), ctx, [&](int b, int e) {
-    fn(size_t(b) * kSiteGrain, std::min(count, size_t(e) * kSiteGrain));
-  });
-}
+using cpu::forSites;
 
 using Clock = std::chrono::steady_clock;
 
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // The levels synthesized and each one's parameters: atlas levels top..0, each at the exemplar
 // stack level closest to its scale.
@@ -98,7 +89,7 @@ std::vector<uint32_t> synthesizeOnCpu(const Plan& plan, const Context& ctx, std:
       current.swap(scratch);
     }
     previous.swap(current);
-    stats.push_back({a, int64_t(level.size()), since(start)});
+    stats.push_back({a, int64_t(level.size()), secondsSince(start)});
   }
   return previous;
 }
@@ -126,7 +117,7 @@ std::vector<uint32_t> synthesizeOnDevice(vulkan::Device& device, const Plan& pla
     }
     commands.submit(ctx);
     previous = std::move(current);
-    stats.push_back({a, int64_t(sites.count), since(start)});
+    stats.push_back({a, int64_t(sites.count), secondsSince(start)});
   }
   std::vector<uint32_t> coords(plan.domain.levels[0].size());
   commands.download(previous, 0, coords.data(), coords.size() * 4);

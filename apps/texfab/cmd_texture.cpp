@@ -12,6 +12,7 @@
 #include "geometry/io/mesh_io.h"
 #include "render/preview_renderer.h"
 #include "render/texture_mesh.h"
+#include "synthesis/graph_file.h"
 
 #include <cmath>
 #include <memory>
@@ -23,7 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct TextureJob {
-  std::string model, exemplar, output, maps, preview;
+  std::string model, exemplar, graph, output, maps, preview;
   double featureSize = 0;
   render::TextureMeshOptions options;
   geometry::MeshWriteOptions write;
@@ -60,7 +61,8 @@ CompanionFiles parseMaps(const std::string& spec) {
 
 struct Inputs {
   geometry::Mesh mesh;
-  Image exemplar;
+  Image exemplar;  ///< with a graph, its root exemplar
+  std::optional<synthesis::ExemplarGraph> graph;
   std::optional<Image> normal, roughness, height;
   render::TextureExemplar view() const {
     return {&exemplar, nullptr, nullptr, normal ? &*normal : nullptr, roughness ? &*roughness : nullptr,
@@ -71,8 +73,13 @@ struct Inputs {
 Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ctx) {
   Stage stage(ctx, "load");
   Inputs in;
-  in.exemplar = readImage(job.exemplar);
-  synthesis::validateExemplarSize(in.exemplar);
+  if (!job.graph.empty()) {
+    in.graph = synthesis::readExemplarGraph(job.graph);
+    in.exemplar = in.graph->exemplars.front();
+  } else {
+    in.exemplar = readImage(job.exemplar);
+    synthesis::validateExemplarSize(in.exemplar);
+  }
   auto read = [](const std::string& path, std::optional<Image>& slot) {
     if (!path.empty()) slot = readImage(path);
   };
@@ -82,7 +89,9 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
   if (in.normal && in.normal->channels < 3) throw Error(maps.normal + ": a normal map needs 3 channels");
   render::checkCompanionMaps(in.view(), job.options.mode);  // before the (possibly long) analysis
   in.mesh = geometry::readMesh(job.model, ctx);
-  stage.finish(job.model + ": " + counted(int64_t(in.mesh.triangleCount()), "triangle") + "; " + job.exemplar + " " +
+  stage.finish(job.model + ": " + counted(int64_t(in.mesh.triangleCount()), "triangle") + "; " +
+               (in.graph ? job.graph + ": " + counted(int64_t(in.graph->exemplars.size()), "exemplar") + " of "
+                         : job.exemplar + " ") +
                std::to_string(in.exemplar.width) + "x" + std::to_string(in.exemplar.height));
   return in;
 }
@@ -103,6 +112,46 @@ int downsampleForAnalysis(render::TextureMeshOptions& o, Inputs& in, const Run& 
   return factor;
 }
 
+// What synthesis reads: the exemplar's analysis (surface or solid mode) or the graph's, with the
+// texture scale set (a feature size or the default turned into exemplar pixels per unit).
+struct Analyses {
+  std::optional<synthesis::ExemplarAnalysis> surface;
+  std::optional<synthesis::SolidAnalysis> solid;
+  std::optional<synthesis::GraphAnalysis> graph;
+  int downsampling = 1;  ///< 1: synthesized from the exemplar as given
+  nlohmann::json report; ///< the report's "exemplar" (or "graph") part
+};
+
+Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
+  render::TextureMeshOptions& o = job.options;
+  Analyses a;
+  bool cached = false;
+  if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
+  if (in.graph) {
+    o.textureScale = o.textureScale > 0 ? o.textureScale : render::graphTextureScale(in.mesh, in.graph->side());
+    a.graph = synthesis::analyzeGraph(*in.graph, {}, run.analysisCache(), run.ctx(), &cached);
+    a.report = {{"file", job.graph}, {"exemplars", in.graph->names}, {"edges", in.graph->edges.size()},
+                {"side", in.graph->side()}, {"analysis_cached", cached}};
+    return a;
+  }
+  a.report = imageJson(job.exemplar, in.exemplar);  // as given
+  // The wrap is measured on the exemplar as given (a smaller copy hides part of its seam).
+  const WrapChoice wrap =
+      chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
+  o.textureScale = render::textureScaleFor(in.mesh, o);
+  a.downsampling = downsampleForAnalysis(o, in, run);
+  if (o.mode == render::TextureMode::Surface) {
+    synthesis::AnalysisOptions options;
+    options.wrap = chooseWrap(wrap, in.exemplar, run);
+    a.surface = analyzeExemplar(run, in.exemplar, options, cached);
+  } else {
+    a.solid = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, wrap, cached, job.method);
+  }
+  a.report["analysis_cached"] = cached;
+  a.report["downsampled"] = a.downsampling;
+  return a;
+}
+
 void runTexture(TextureJob& job) {
   Run run("texture", job.common);
   checkPrintSize(job.write, job.output);
@@ -110,6 +159,12 @@ void runTexture(TextureJob& job) {
   o.solid.method = job.method.method;
   // Everything checkable is checked, and every output reserved, before any work.
   if (o.textureScale > 0 && job.featureSize > 0) throw UsageError("give --texture-scale or --feature-size, not both");
+  if (job.exemplar.empty() == job.graph.empty())
+    throw UsageError(job.graph.empty() ? "give an exemplar (--exemplar) or an exemplar graph (--graph)"
+                                       : "give --exemplar or --graph, not both");
+  if (!job.graph.empty() && (o.mode == render::TextureMode::Solid || !job.maps.empty() || job.wrap != WrapChoice::Auto))
+    throw UsageError("--graph synthesizes colour over the surface: it does not take --mode solid, --maps or "
+                     "--exemplar-wrap yet");
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
                      " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
@@ -126,26 +181,16 @@ void runTexture(TextureJob& job) {
   o.measure = run.reporting();  // the measures (seconds on a 2048² atlas) go to the report
 
   Inputs in = load(job, maps, run.ctx());
-  const nlohmann::json exemplarReport = imageJson(job.exemplar, in.exemplar);  // as given
-  // The wrap is measured on the exemplar as given (a smaller copy hides part of its seam).
-  const WrapChoice wrap =
-      chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
-  if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
-  o.textureScale = render::textureScaleFor(in.mesh, o);
-  const int downsampling = downsampleForAnalysis(o, in, run);
-  bool cached = false;
-  std::optional<synthesis::ExemplarAnalysis> analysis;
-  std::optional<synthesis::SolidAnalysis> solidAnalysis;
-  if (o.mode == render::TextureMode::Surface) {
-    synthesis::AnalysisOptions options;
-    options.wrap = chooseWrap(wrap, in.exemplar, run);
-    analysis = analyzeExemplar(run, in.exemplar, options, cached);
-  } else {
-    solidAnalysis = analyzeSolid(run, in.exemplar, in.exemplar, in.exemplar, {}, wrap, cached, job.method);
-  }
+  if (in.graph)
+    run.checkMemory(render::textureMeshMemoryBytes(o) +
+                        synthesis::graphAnalysisMemoryBytes(int(in.graph->exemplars.size()), in.graph->side()),
+                    "a " + std::to_string(o.atlas.pack.width) + "x" + std::to_string(o.atlas.pack.height) +
+                        " atlas from a graph of " + counted(int64_t(in.graph->exemplars.size()), "exemplar"));
+  Analyses analyses = analyze(job, in, run);
   render::TextureExemplar ex = in.view();
-  ex.analysis = analysis ? &*analysis : nullptr;
-  ex.solidAnalysis = solidAnalysis ? &*solidAnalysis : nullptr;
+  ex.analysis = analyses.surface ? &*analyses.surface : nullptr;
+  ex.solidAnalysis = analyses.solid ? &*analyses.solid : nullptr;
+  ex.graph = analyses.graph ? &*analyses.graph : nullptr;
   const render::TextureMeshResult result = render::textureMesh(in.mesh, ex, o, run.ctx());
 
   Stage write(run.ctx(), "write");
@@ -164,13 +209,14 @@ void runTexture(TextureJob& job) {
 
   nlohmann::json& r = run.report();
   r["model"] = modelJson(job.model, in.mesh);
-  r["exemplar"] = exemplarReport;
-  r["exemplar"]["analysis_cached"] = cached;
-  r["exemplar"]["downsampled"] = downsampling;  // 1: synthesized from the exemplar as given
+  r[analyses.graph ? "graph" : "exemplar"] = analyses.report;
+  const int downsampling = analyses.downsampling;
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},
                      {"solid_method", synthesis::toString(o.solid.method)}, {"contrast_gain", o.solid.contrastGain},
                      {"refine_passes", o.solid.refinePasses},
-                     {"exemplar_wrap", toString(analysis ? analysis->wrap : solidAnalysis->wrap)},
+                     {"exemplar_wrap", toString(analyses.surface ? analyses.surface->wrap
+                                                : analyses.solid ? analyses.solid->wrap
+                                                                 : synthesis::ExemplarWrap::Tile)},
                      {"texture_scale", result.textureScale * downsampling},
                      {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel * downsampling}};
   r["atlas"] = toJson(result.atlas);
@@ -191,7 +237,11 @@ Command addTextureCommand(CLI::App& root) {
       "texture", "Synthesize a texture over a mesh from an exemplar and write the textured model "
                  "(surface: anisometric synthesis in the atlas; solid: the matching interior of the material)"));
   f.input("model", job->model, "Input mesh (.obj .ply .off .stl .gltf .glb .3mf)");
-  f.text("-e,--exemplar", job->exemplar, "Exemplar image (PNG, JPEG, TIFF, EXR, GIMP .pat)")->required();
+  f.text("-e,--exemplar", job->exemplar, "Exemplar image (PNG, JPEG, TIFF, EXR, GIMP .pat)");
+  f.text("--graph", job->graph,
+         "An exemplar graph instead (JSON: exemplars at several scales and the edges between them; "
+         "docs/exemplar-graphs.md): the root's structure at the model's scale, the finer exemplars where texels "
+         "are finer (surface mode, colour only; default scale: the root spans the model's diagonal)");
   f.text("-o,--output", job->output, "Textured model (.glb .gltf .obj .3mf)")->required();
   f.choice("--mode", o.mode, {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}},
            "surface (synthesis over the surface) or solid (a 3-D material, seamless)");

@@ -15,25 +15,7 @@ namespace texfab::synthesis::cpu {
 
 namespace {
 
-// Neighbor index of step (dx, dy), indexed [dy + 1][dx + 1]; -1 for (0, 0).
-constexpr int kStepIndex[3][3] = {{5, 6, 7}, {4, -1, 0}, {3, 2, 1}};
-
-inline int roundToInt(float v) { return int(std::floor(v + 0.5f)); }
-
-constexpr int kOne = 1 << kSubpixelBits;  // one exemplar pixel in subpixel units
-
-struct Offset {
-  int x, y;
-};
-
-// round(J * (vx, vy)) in subpixel units: two products, then their sum, each rounded to float.
-// Naming the products does not stop a compiler from fusing them into a multiply-add; the build's
-// -ffp-contract=off does (and `precise` in the GLSL twin).
-inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
-  const float ax = j[0] * vx, bx = j[1] * vy;
-  const float ay = j[2] * vx, by = j[3] * vy;
-  return {roundToInt((ax + bx) * float(kOne)), roundToInt((ay + by) * float(kOne))};
-}
+constexpr int kOne = kSubpixelOne;
 
 // c + (dx, dy) subpixels, wrapped to the exemplar (sizes in subpixels), or reflected into the
 // valid region `clampTo` (whole pixels) when it is given.
@@ -42,16 +24,6 @@ inline uint32_t shifted(uint32_t c, int dx, int dy, int64_t w, int64_t h, const 
     return packCoord(uint32_t(reflectInto(int64_t(coordU(c)) + dx, int64_t(clampTo->x0) * kOne, int64_t(clampTo->x1) * kOne)),
                      uint32_t(reflectInto(int64_t(coordV(c)) + dy, int64_t(clampTo->y0) * kOne, int64_t(clampTo->y1) * kOne)));
   return packCoord(uint32_t(floorMod(int64_t(coordU(c)) + dx, w)), uint32_t(floorMod(int64_t(coordV(c)) + dy, h)));
-}
-
-// The unit step (one of 8) closest in direction to (fx, fy): the rounding of errata 3 done on the
-// circle (sectors of 45° around each step).
-inline int stepToward(float fx, float fy) {
-  constexpr float kTan22_5 = 0.41421356f;
-  const float ax = std::fabs(fx), ay = std::fabs(fy);
-  const int dx = ax > kTan22_5 * ay ? (fx > 0 ? 1 : -1) : 0;
-  const int dy = ay > kTan22_5 * ax ? (fy > 0 ? 1 : -1) : 0;
-  return kStepIndex[dy + 1][dx + 1];
 }
 
 } // namespace
@@ -127,22 +99,12 @@ void correctSurfaceKernel(const SurfaceLevel& level, const uint32_t* in, uint32_
     }
 
     // The synthesized neighborhood, predicted from immediate neighbors (LH06 §5).
-    const float det = j[0] * j[3] - j[1] * j[2];
-    const float sgn = det < 0 ? -1.0f : 1.0f;
     alignas(32) int8_t target[kNeighborhoodDims];
     for (int i = 0; i < kNeighborhoodSamples; ++i) {
       const int dx = t.spacing * kDiagonalX[i], dy = t.spacing * kDiagonalY[i];
-      // φ = J⁻¹Δ up to the positive factor 1/|det|: only its direction matters.
-      const float fx = sgn * (j[3] * float(dx) - j[1] * float(dy)), fy = sgn * (j[0] * float(dy) - j[2] * float(dx));
-      const float gx = det != 0.0f ? fx : float(dx), gy = det != 0.0f ? fy : float(dy);
-      // The closest step and the next closest (the neighbouring sector on φ's side): the
-      // neighborhood sample is the mean of both estimates ("we average between several
-      // estimations taken around p + δ for improved stability", LH06 §5).
-      const int d1 = stepToward(gx, gy);
-      const int d2 = (d1 + (float(kSurfaceStepX[d1]) * gy - float(kSurfaceStepY[d1]) * gx > 0 ? 1 : 7)) % 8;
       const int8_t* estimates[2];
       int count = 0;
-      for (int d : {d1, d2}) {
+      for (int d : stepsToward(j, float(dx), float(dy))) {
         const int32_t n = nb[size_t(d)];
         if (n < 0) continue;
         const uint32_t predicted =

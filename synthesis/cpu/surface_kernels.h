@@ -8,12 +8,69 @@
 // is rounded to subpixels by floor(x + 1/2) in single precision, without fused multiply-add (the
 // build compiles every target with -ffp-contract=off; the GLSL twins mark these products precise).
 
+#include "core/context.h"
+#include "core/parallel.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/synthesize_surface.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 
 namespace texfab::synthesis::cpu {
+
+/// fn(begin, end) over the sites [0, count) in parallel tasks of kSiteGrain sites.
+inline constexpr size_t kSiteGrain = 4096;
+template <class Fn>
+void forSites(size_t count, const Context& ctx, Fn&& fn) {
+  parallelFor(0, int((count + kSiteGrain - 1) / kSiteGrain), ctx, [&](int b, int e) {
+    fn(size_t(b) * kSiteGrain, std::min(count, size_t(e) * kSiteGrain));
+  });
+}
+
+/// One exemplar pixel in subpixel units.
+inline constexpr int kSubpixelOne = 1 << kSubpixelBits;
+
+/// A rounded offset in subpixels.
+struct Offset {
+  int x, y;
+};
+
+/// round(J * (vx, vy)) in subpixel units: two products, then their sum, each rounded to float, then
+/// floor(x + 1/2). Naming the products does not stop a compiler from fusing them into a
+/// multiply-add; the build's -ffp-contract=off does (and `precise` in the GLSL twin).
+inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
+  const float ax = j[0] * vx, bx = j[1] * vy;
+  const float ay = j[2] * vx, by = j[3] * vy;
+  return {int(std::floor((ax + bx) * float(kSubpixelOne) + 0.5f)), int(std::floor((ay + by) * float(kSubpixelOne) + 0.5f))};
+}
+
+/// The unit step (index into kSurfaceStepX/Y) closest in direction to (fx, fy): the rounding of
+/// errata 3 done on the circle (sectors of 45° around each step).
+inline int stepToward(float fx, float fy) {
+  constexpr int kStepIndex[3][3] = {{5, 6, 7}, {4, -1, 0}, {3, 2, 1}};  // [dy + 1][dx + 1]
+  constexpr float kTan22_5 = 0.41421356f;
+  const float ax = std::fabs(fx), ay = std::fabs(fy);
+  const int dx = ax > kTan22_5 * ay ? (fx > 0 ? 1 : -1) : 0;
+  const int dy = ay > kTan22_5 * ax ? (fy > 0 ? 1 : -1) : 0;
+  return kStepIndex[dy + 1][dx + 1];
+}
+
+/// The two unit steps through which a neighbourhood sample at offset (dx, dy) (exemplar units) is
+/// predicted (LH06 §5, "we average between several estimations taken around p + δ"): the one
+/// closest in direction to J⁻¹(dx, dy), then the next closest (the neighbouring sector on that
+/// side). Where J is singular, the steps toward (dx, dy) itself.
+inline std::array<int, 2> stepsToward(const std::array<float, 4>& j, float dx, float dy) {
+  const float det = j[0] * j[3] - j[1] * j[2];
+  const float sgn = det < 0 ? -1.0f : 1.0f;
+  // J⁻¹(dx, dy) up to the positive factor 1/|det|: only its direction matters.
+  const float fx = sgn * (j[3] * dx - j[1] * dy), fy = sgn * (j[0] * dy - j[2] * dx);
+  const float gx = det != 0.0f ? fx : dx, gy = det != 0.0f ? fy : dy;
+  const int d1 = stepToward(gx, gy);
+  const int d2 = (d1 + (float(kSurfaceStepX[d1]) * gy - float(kSurfaceStepY[d1]) * gx > 0 ? 1 : 7)) % 8;
+  return {d1, d2};
+}
 
 // Non-toroidal exemplars: with `clampTo` (the stack level's valid region, in whole pixels), every
 // coordinate these kernels write is reflected into the region (reflectInto, in subpixels) instead

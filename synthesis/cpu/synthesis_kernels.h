@@ -25,6 +25,10 @@ struct LevelGrid {
   int height = 0;
 };
 
+/// Rows of a LevelGrid per parallel task: enough work to amortize scheduling, small enough to
+/// balance two cores.
+inline constexpr int kRowGrain = 8;
+
 /// `g` grown by `by` texels on every side.
 inline LevelGrid expand(const LevelGrid& g, int by) { return {g.x0 - by, g.y0 - by, g.width + 2 * by, g.height + 2 * by}; }
 

@@ -200,3 +200,34 @@ TEST(CliTexture, TexturesABrokenMeshAndSaysWhatWasRepaired) {
   EXPECT_NE(text.find("degenerate"), std::string::npos) << text;
   expectValidGltf(d / "out.glb");
 }
+
+// texture --graph: the elephant textured from the rock -> stone graph (the root spanning the
+// model by default) is a valid GLB, deterministic, and its report names the graph; flags the graph
+// does not take are one line and no output.
+TEST(CliTexture, ExemplarGraphOverTheSurface) {
+  TempDir d("texfab-texture-cli");
+  const fs::path photos = kSource / "models" / "exemplars" / "photos";
+  std::ofstream(d / "g.json") << R"({"exemplars": [{"name": "rock", "image": ")" << (photos / "rock.png").string()
+                              << R"("}, {"name": "stone", "image": ")" << (photos / "stone.png").string()
+                              << R"("}], "edges": [{"from": "rock", "to": "stone", "scale": 16}]})";
+  const auto common = [&] {
+    Args a;
+    a << kModel << "--graph" << d / "g.json" << "--resolution 512 -q --cache-dir" << d / "cache";
+    return a;
+  };
+  ASSERT_EQ(0, texture(common() << "-o" << d / "out.glb" << "--report" << d / "r.json").status);
+  expectValidGltf(d / "out.glb");
+  const nlohmann::json r = readJson(d / "r.json");
+  EXPECT_EQ(r["graph"]["exemplars"], nlohmann::json({"rock", "stone"}));
+  EXPECT_LT(r["parameters"]["exemplar_pixels_per_texel"].get<double>(), 1.0) << "the default scale zooms into the root";
+  ASSERT_EQ(0, texture(common() << "-o" << d / "again.glb" << "--threads 1").status);
+  EXPECT_EQ(readText(d / "out.glb"), readText(d / "again.glb"));
+
+  for (const char* extra : {"--mode solid", "--exemplar-wrap tile", "-e models/exemplars/brick.png"}) {
+    SCOPED_TRACE(extra);
+    const texfab::test::CliResult o = texture(common() << extra << "-o" << d / "bad.glb");
+    EXPECT_NE(o.status, 0);
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+    EXPECT_FALSE(fs::exists(d / "bad.glb"));
+  }
+}
