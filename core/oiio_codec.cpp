@@ -21,24 +21,29 @@ namespace texfab::detail {
 namespace {
 
 // OIIO error texts can span several lines, often repeating one another ("Read error: hit end of
-// file", then "PNG read error: IDAT: Read error: hit end of file"); texfab errors are one line:
-// the lines no other line contains, joined by "; ".
+// file", then "PNG read error: IDAT: Read error: hit end of file"), and a corrupt file can give one
+// per scanline or tile (thousands); texfab errors are one line: the first distinct lines that no
+// other contains, joined by "; ", and how many more there were.
 std::string oneLine(const std::string& text) {
+  constexpr size_t kMostLines = 16;
   std::vector<std::string> lines;
+  size_t more = 0;
   for (size_t begin = 0; begin < text.size();) {
     const size_t end = std::min(text.find('\n', begin), text.size());
     std::string line = text.substr(begin, end - begin);
-    while (!line.empty() && line.back() == ' ') line.pop_back();
-    if (!line.empty()) lines.push_back(std::move(line));
     begin = end + 1;
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    if (line.empty() || std::find(lines.begin(), lines.end(), line) != lines.end()) continue;
+    if (lines.size() < kMostLines) lines.push_back(std::move(line));
+    else ++more;
   }
   std::string joined;
   for (size_t i = 0; i < lines.size(); ++i) {
     bool repeated = false;
-    for (size_t j = 0; j < lines.size() && !repeated; ++j)
-      repeated = j != i && lines[j].find(lines[i]) != std::string::npos && (lines[j] != lines[i] || j < i);
+    for (size_t j = 0; j < lines.size() && !repeated; ++j) repeated = j != i && lines[j].find(lines[i]) != std::string::npos;
     if (!repeated) joined += (joined.empty() ? "" : "; ") + lines[i];
   }
+  if (more) joined += "; (" + std::to_string(more) + " more)";
   return joined.empty() ? std::string("unknown error") : joined;
 }
 

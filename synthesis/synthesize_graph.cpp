@@ -117,6 +117,13 @@ void GraphSynthesisOptions::validate(const GraphAnalysis& analysis) const {
   if (interleave < 1 || interleave > 3) throw Error("interleave must be 1 to 3");
 }
 
+int graphZoomOctaves(double zoom) {
+  const int octaves = std::isfinite(zoom) && zoom > 0 ? int(std::lrint(std::log2(zoom))) : 0;
+  if (!(zoom > 0) || std::ldexp(1.0, octaves) != zoom)
+    throw Error("zoom: expected a power of two (1, 2, 4, ... or 0.5, 0.25, ...)");
+  return octaves;
+}
+
 int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options) {
   return analysis.finestLevel() + options.zoomOctaves;
 }

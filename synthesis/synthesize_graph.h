@@ -51,6 +51,10 @@ struct GraphSynthesisOptions {
   void validate(const GraphAnalysis& analysis) const;
 };
 
+/// The octaves of a zoom (1, 2, 4, ... or 0.5, 0.25, ...); throws texfab::Error ("zoom: ...")
+/// for anything else.
+int graphZoomOctaves(double zoom);
+
 /// The synthesis level of the output: L + zoomOctaves.
 int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options);
 

@@ -122,9 +122,11 @@ void runGraphSynth(const SynthJob& job) {
   options.jitter = job.options.jitter;
   options.passes = job.options.passes;
   options.interleave = job.options.interleave;
-  options.zoomOctaves = int(std::lrint(std::log2(job.zoom)));
-  if (std::ldexp(1.0, options.zoomOctaves) != job.zoom)
-    throw UsageError("--zoom: expected a power of two (1, 2, 4, ... or 0.5, 0.25, ...)");
+  try {
+    options.zoomOctaves = graphZoomOctaves(job.zoom);
+  } catch (const Error& e) {
+    throw UsageError(std::string("--") + e.what());
+  }
   checkImageWritable(job.output);
   const fs::path out = run.output(job.output);
 

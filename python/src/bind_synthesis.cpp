@@ -7,7 +7,9 @@
 #include "core/memory.h"
 #include "render/solid_volume.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/graph_file.h"
 #include "synthesis/synthesize_2d.h"
+#include "synthesis/synthesize_graph.h"
 #include "synthesis/synthesize_solid.h"
 
 #include <pybind11/stl.h>
@@ -32,6 +34,22 @@ py::array coordsArray(const synthesis::CoordMap& map) {
   return coords;
 }
 
+// The window a call asks for: `window` (x, y, width, height), else (0, 0) and `size`.
+synthesis::Window windowOf(const py::object& size, const py::object& window) {
+  synthesis::Window w;
+  if (!window.is_none()) {
+    const auto v = window.cast<std::vector<int64_t>>();
+    if (v.size() != 4) throw Error("window: expected (x, y, width, height)");
+    w = {v[0], v[1], int(v[2]), int(v[3])};
+  } else {
+    const auto [width, height] = toSize(size, "size");
+    w = {0, 0, width, height};
+  }
+  if (w.width < 1 || w.height < 1 || w.width > kMaxImageSide || w.height > kMaxImageSide)
+    throw Error("size: width and height must be 1 to " + std::to_string(kMaxImageSide));
+  return w;
+}
+
 SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& size, const py::object& window,
                            uint32_t seed, std::vector<float> jitter, int passes, int interleave, int k,
                            float featureWeight, bool tileable, const std::string& wrap, const py::object& mapsLike,
@@ -46,18 +64,8 @@ SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& siz
       const std::string key = py::str(name);
       maps[key] = toImage(map, "maps['" + key + "']");
     }
-  Window w;
-  if (!window.is_none()) {
-    if (tileable) throw Error("tileable and window cannot be combined (the tile is the output size)");
-    const auto v = window.cast<std::vector<int64_t>>();
-    if (v.size() != 4) throw Error("window: expected (x, y, width, height)");
-    w = {v[0], v[1], int(v[2]), int(v[3])};
-  } else {
-    const auto [width, height] = toSize(size, "size");
-    w = {0, 0, width, height};
-  }
-  if (w.width < 1 || w.height < 1 || w.width > kMaxImageSide || w.height > kMaxImageSide)
-    throw Error("size: width and height must be 1 to " + std::to_string(kMaxImageSide));
+  if (!window.is_none() && tileable) throw Error("tileable and window cannot be combined (the tile is the output size)");
+  const Window w = windowOf(size, window);
   SynthesisOptions options;
   options.seed = seed;
   options.jitter = std::move(jitter);
@@ -98,6 +106,34 @@ SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& siz
   SynthesisOutput output{imageArray(std::move(r.image)), coordsArray(r.coords), {}, toString(analysis.wrap)};
   for (auto& [name, map] : r.maps) output.maps[py::str(name)] = imageArray(std::move(map));
   return output;
+}
+
+SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& size, const py::object& window,
+                                double zoom, uint32_t seed, std::vector<float> jitter, int passes, int interleave,
+                                int threads, const py::object& cacheDir, const py::object& progress) {
+  using namespace synthesis;
+  Call call(threads, "cpu", cacheDir, progress);
+  const Window w = windowOf(size, window);
+  GraphSynthesisOptions options;
+  options.zoomOctaves = graphZoomOctaves(zoom);
+  options.seed = seed;
+  options.jitter = std::move(jitter);
+  options.passes = passes;
+  options.interleave = interleave;
+  const ExemplarGraph graph = readExemplarGraph(toPath(graphFile));
+  checkMemory(graphAnalysisMemoryBytes(int(graph.exemplars.size()), graph.side()) + synthesizeGraphMemoryBytes(w),
+              "a " + std::to_string(w.width) + "x" + std::to_string(w.height) + " output from a graph of " +
+                  std::to_string(graph.exemplars.size()) + " exemplars");
+  auto [coords, image] = call.run([&] {
+    const GraphAnalysis a = analyzeGraph(graph, {}, call.analysisCache(), call.ctx());
+    options.validate(a);
+    Stage stage(call.ctx(), "synthesis");
+    CoordMap out = synthesizeGraph(a, w, options, stage.inner()).coords;
+    stage.finish();
+    Image colours = applyCoords(out, a.colors, call.ctx());
+    return std::pair{std::move(out), std::move(colours)};
+  });
+  return {imageArray(std::move(image)), coordsArray(coords), {}, toString(ExemplarWrap::Tile)};
 }
 
 synthesis::Voxel voxelAt(const Eigen::Vector3d& p, double voxelSize) {
@@ -196,6 +232,14 @@ void bindSynthesis(py::module_& m) {
         py::arg("cache_dir") = py::none(), py::arg("progress") = py::none(),
         "Synthesizes `size` (W, H), or the window (X, Y, W, H) of the infinite texture plane, from an exemplar "
         "(parallel appearance-space synthesis, Lefebvre & Hoppe 2005/2006); equal to `texfab synth`");
+  const synthesis::GraphSynthesisOptions gso;
+  m.def("synthesize_graph", &synthesizeGraph, py::arg("graph"), py::arg("size") = py::make_tuple(512, 512),
+        py::kw_only(), py::arg("window") = py::none(), py::arg("zoom") = 1.0, py::arg("seed") = gso.seed,
+        py::arg("jitter") = gso.jitter, py::arg("passes") = gso.passes, py::arg("interleave") = gso.interleave,
+        py::arg("threads") = 0, py::arg("cache_dir") = py::none(), py::arg("progress") = py::none(),
+        "Synthesizes `size` (W, H), or the window (X, Y, W, H), at `zoom` (a power of two: output texels are 1/zoom of "
+        "a root pixel) from an exemplar graph file (multiscale synthesis, Han et al. 2008); coords are positions in "
+        "the graph's packed exemplars. Equal to `texfab synth --graph`");
   const synthesis::SolidSynthesisOptions sso;
   m.def("solid", &solid, py::arg("exemplar"), py::kw_only(), py::arg("points") = py::none(),
         py::arg("box") = py::none(), py::arg("plane") = py::none(), py::arg("size") = py::none(),

@@ -6,7 +6,7 @@ Every function mirrors an entry of the C++ library and gives the bytes of the ma
 command. See texfab/_texfab.pyi for the signatures and help(texfab.<name>) for each."""
 from ._texfab import (  # noqa: F401
     BrokenModel, Cancelled, Error, Material, Mesh, Piece, SynthesisResult, TextureResult, __version__,
-    load_mesh, read_image, slice, solid, synthesize, texture_mesh, write_image)
+    load_mesh, read_image, slice, solid, synthesize, synthesize_graph, texture_mesh, write_image)
 from ._texfab import _break_model, _print_grid
 
 _FRACTURE_ONLY = ("pieces", "impact", "roughness", "min_volume")

@@ -57,6 +57,22 @@ def test_synthesize_equals_the_command_line(tmp_path, cache):
     assert np.array_equal(again.image, result.image)
 
 
+def test_synthesize_graph_equals_the_command_line(tmp_path, cache):
+    photos = SOURCE / "models" / "exemplars" / "photos"
+    graph = tmp_path / "g.json"
+    graph.write_text(json.dumps({"exemplars": [{"name": "rock", "image": str(photos / "rock.png")},
+                                               {"name": "stone", "image": str(photos / "stone.png")}],
+                                 "edges": [{"from": "rock", "to": "stone", "scale": 16}]}))
+    cli("synth", "--graph", graph, "--zoom", "4", "--window", "-8,5,40,32", "-o", tmp_path / "cli.png",
+        cache_dir=cache)
+    result = texfab.synthesize_graph(graph, window=(-8, 5, 40, 32), zoom=4, cache_dir=cache)
+    assert result.image.shape == (32, 40, 3) and result.coords.shape == (32, 40, 2)
+    texfab.write_image(result.image, tmp_path / "py.png")
+    assert same_bytes(tmp_path / "cli.png", tmp_path / "py.png")
+    with pytest.raises(texfab.Error, match="zoom: expected a power of two"):
+        texfab.synthesize_graph(graph, (8, 8), zoom=3)
+
+
 def test_a_window_equals_the_same_texels_of_a_larger_request(cache):
     whole = texfab.synthesize(MARBLE, (64, 64), seed=5, cache_dir=cache)
     window = texfab.synthesize(MARBLE, window=(16, 8, 24, 32), seed=5, cache_dir=cache)
