@@ -11,6 +11,7 @@
 #include "synthesis/synthesize_graph.h"
 
 #include <algorithm>
+#include <bit>
 #include <climits>
 #include <cmath>
 #include <string>
@@ -150,6 +151,14 @@ void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32
 
 } // namespace
 
+void checkSurfaceGraphSize(int nodes, int side) {
+  const int width = side * (std::countr_zero(unsigned(side)) + 1), height = side * nodes;
+  if (width > kMaxSurfaceAtlasSide || height > kMaxSurfaceAtlasSide)
+    throw Error("the graph's exemplars pack into " + std::to_string(width) + "x" + std::to_string(height) +
+                " pixels; on a surface at most " + std::to_string(kMaxSurfaceAtlasSide) +
+                " a side (exemplars of 256 pixels or fewer, at most 16 of them)");
+}
+
 int surfaceGraphOutputLevel(const GraphAnalysis& analysis, double pixelsPerTexel) {
   return analysis.finestLevel() - int(std::lround(std::log2(std::max(pixelsPerTexel, 1e-9))));
 }
@@ -157,10 +166,7 @@ int surfaceGraphOutputLevel(const GraphAnalysis& analysis, double pixelsPerTexel
 SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, const SurfaceDomain& domain,
                                               const SurfaceSynthesisOptions& options, const Context& ctx) {
   options.validate();
-  if (analysis.atlasWidth() > kMaxSurfaceAtlasSide || analysis.atlasHeight() > kMaxSurfaceAtlasSide)
-    throw Error("the graph's exemplars pack into " + std::to_string(analysis.atlasWidth()) + "x" +
-                std::to_string(analysis.atlasHeight()) + " pixels; on a surface at most " +
-                std::to_string(kMaxSurfaceAtlasSide) + " a side (exemplars of 256 pixels or fewer, at most 16)");
+  checkSurfaceGraphSize(analysis.nodes, analysis.side);
   if (domain.levels.empty() || domain.levels[0].size() == 0) throw Error("the surface has no texels to synthesize");
   if (ctx.backend == Backend::Vulkan) throw Error("graph synthesis on a surface runs on the CPU only (--backend cpu)");
 

@@ -33,6 +33,10 @@
 
 namespace texfab::synthesis {
 
+/// Throws texfab::Error unless a graph of `nodes` exemplars of `side` pixels packs into at most
+/// 4096 pixels a side (what surface coordinates address); cheap, before the analysis.
+void checkSurfaceGraphSize(int nodes, int side);
+
 /// The graph synthesis level of the finest atlas texels, for `pixelsPerTexel` root pixels per texel.
 int surfaceGraphOutputLevel(const GraphAnalysis& analysis, double pixelsPerTexel);
 

@@ -13,6 +13,7 @@
 #include "render/preview_renderer.h"
 #include "render/texture_mesh.h"
 #include "synthesis/graph_file.h"
+#include "synthesis/synthesize_surface_graph.h"
 
 #include <cmath>
 #include <memory>
@@ -181,11 +182,13 @@ void runTexture(TextureJob& job) {
   o.measure = run.reporting();  // the measures (seconds on a 2048² atlas) go to the report
 
   Inputs in = load(job, maps, run.ctx());
-  if (in.graph)
+  if (in.graph) {
+    synthesis::checkSurfaceGraphSize(int(in.graph->exemplars.size()), in.graph->side());
     run.checkMemory(render::textureMeshMemoryBytes(o) +
                         synthesis::graphAnalysisMemoryBytes(int(in.graph->exemplars.size()), in.graph->side()),
                     "a " + std::to_string(o.atlas.pack.width) + "x" + std::to_string(o.atlas.pack.height) +
                         " atlas from a graph of " + counted(int64_t(in.graph->exemplars.size()), "exemplar"));
+  }
   Analyses analyses = analyze(job, in, run);
   render::TextureExemplar ex = in.view();
   ex.analysis = analyses.surface ? &*analyses.surface : nullptr;

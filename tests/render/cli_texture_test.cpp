@@ -230,4 +230,11 @@ TEST(CliTexture, ExemplarGraphOverTheSurface) {
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
     EXPECT_FALSE(fs::exists(d / "bad.glb"));
   }
+  // 512-pixel exemplars pack into more than surface coordinates address: refused before the analysis.
+  texfab::writeImage(texfab::Image(512, 512, 3), d / "big.png");
+  std::ofstream(d / "big.json") << R"({"exemplars": [{"name": "big", "image": ")" << (d / "big.png").string() << R"("}]})";
+  const texfab::test::CliResult big = texture(Args() << kModel << "--graph" << d / "big.json" << "-q -o" << d / "bad.glb");
+  EXPECT_NE(big.status, 0);
+  EXPECT_NE(big.err.find("at most 4096 a side"), std::string::npos) << big.err;
+  EXPECT_FALSE(fs::exists(d / "bad.glb"));
 }
