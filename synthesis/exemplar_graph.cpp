@@ -27,7 +27,7 @@ namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
-constexpr uint32_t kGraphCacheVersion = 2;         // bump whenever the graph analysis changes
+constexpr uint32_t kGraphCacheVersion = 3;         // bump whenever the graph analysis changes
 
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
@@ -155,11 +155,19 @@ int64_t tileDistance2(uint32_t a, uint32_t b, int m) {
                         ExemplarWrap::Tile);
 }
 
-// Each atlas texel's candidates: itself where its level admits it, then the candidatesPerLevel
-// best of each admissible level (exact k-nearest in appearance space, spread apart), missing slots
-// repeating the first.
-std::vector<uint32_t> candidatesOf(const GraphAnalysis& a, const std::vector<std::vector<Tile>>& admissibleOf,
-                                   const GraphAnalysisOptions& options, const Context& ctx) {
+// Whether an edge from tile `from` to tile `to` covers pixel (x, y) of its source.
+bool edgeCovers(const ExemplarGraph& g, Tile from, Tile to, int x, int y, int m) {
+  return std::any_of(g.edges.begin(), g.edges.end(), [&](const GraphEdge& e) {
+    return e.from == from.node && e.to == to.node && from.level - e.octaves == to.level && e.covers(x, y, m);
+  });
+}
+
+// Each atlas texel's candidates: itself where it may stay, then the candidatesPerLevel best of each
+// admissible level whose edge covers it (exact k-nearest in appearance space, spread apart),
+// missing slots repeating the first.
+std::vector<uint32_t> candidatesOf(const ExemplarGraph& graph, const GraphAnalysis& a,
+                                   const std::vector<std::vector<Tile>>& admissibleOf, const GraphAnalysisOptions& options,
+                                   const Context& ctx) {
   const int m = a.side, aw = a.atlasWidth();
   std::vector<std::unique_ptr<LevelSearch>> searches(size_t(a.nodes * a.levels));
   for (const auto& set : admissibleOf)
@@ -181,8 +189,9 @@ std::vector<uint32_t> candidatesOf(const GraphAnalysis& a, const std::vector<std
         for (int d = 0; d < kAppearanceDims; ++d) point[size_t(d)] = v[d];
         uint32_t* slot = &candidates[(size_t(y) * aw + x) * size_t(a.k)];
         int taken = 0;
-        if (a.selfAdmissible[size_t(tile)]) slot[taken++] = self;
+        if (a.selfAdmissible[size_t(y) * aw + x]) slot[taken++] = self;
         for (const Tile& t : admissibleOf[size_t(tile)]) {
+          if (!(t == Tile{y / m, x / m}) && !edgeCovers(graph, {y / m, x / m}, t, x % m, y % m, m)) continue;
           const LevelSearch& s = *searches[size_t(t.node * a.levels + t.level)];
           const size_t found = s.tree->knnSearch(point.data(), std::min(s.sites.size(), size_t(kSearchNeighbors)),
                                                  index.data(), dist.data());
@@ -217,6 +226,9 @@ void GraphAnalysisOptions::validate() const {
 void ExemplarGraph::validate() const {
   if (exemplars.empty()) throw Error("exemplar graph: no exemplars");
   if (names.size() != exemplars.size()) throw Error("exemplar graph: one name per exemplar");
+  if (exemplars.size() > size_t(kMaxGraphNodes))
+    throw Error("exemplar graph: " + std::to_string(exemplars.size()) + " exemplars, at most " +
+                std::to_string(kMaxGraphNodes));
   const int m = side();
   for (size_t i = 0; i < exemplars.size(); ++i) {
     const Image& e = exemplars[i];
@@ -249,6 +261,10 @@ void ExemplarGraph::validate() const {
     for (size_t o = 0; o < n; ++o)
       if (edges[o].from == e.from && edges[o].to == e.to && edges[o].octaves == e.octaves)
         throw Error(what + " is given twice");
+    if (!e.region.empty() && e.region.size() != size_t(m) * size_t(m))
+      throw Error(what + ": its region must have the exemplars' " + std::to_string(m) + "x" + std::to_string(m) + " pixels");
+    if (!e.region.empty() && std::none_of(e.region.begin(), e.region.end(), [](uint8_t v) { return v != 0; }))
+      throw Error(what + ": its region is empty");
   }
   std::vector<char> reached(exemplars.size(), 0);
   std::vector<int> todo{0};
@@ -345,14 +361,28 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
   Stage candidates(ctx, "candidates");
   std::vector<std::vector<Tile>> admissibleOf(size_t(a.nodes * a.levels));
   size_t widest = 1;
+  a.selfAdmissible.assign(size_t(aw) * size_t(a.atlasHeight()), 1);
+  a.moves.assign(a.selfAdmissible.size(), 0);
   for (int i = 0; i < a.nodes; ++i)
     for (int k = 0; k < a.levels; ++k) {
       auto& set = admissibleOf[size_t(i * a.levels + k)] = admissible(graph, a.levels, {i, k}, options.minEntryLevel);
       widest = std::max(widest, set.size());
-      a.selfAdmissible.push_back(!set.empty() && set.front() == Tile{i, k});
+      for (int y = 0; y < m; ++y)
+        for (int x = 0; x < m; ++x) {
+          uint32_t& moves = a.moves[size_t(i * m + y) * aw + size_t(k * m + x)];
+          moves = 1u << i;
+          for (const Tile& t : set)
+            if (edgeCovers(graph, {i, k}, t, x, y, m)) moves |= 1u << t.node;
+        }
+      if (!set.empty() && set.front() == Tile{i, k}) continue;
+      // The finest level of a node with edges out: its texels no edge covers stay, as a leaf's.
+      for (int y = 0; y < m; ++y)
+        for (int x = 0; x < m; ++x)
+          a.selfAdmissible[size_t(i * m + y) * aw + size_t(k * m + x)] = std::none_of(
+              graph.edges.begin(), graph.edges.end(), [&](const GraphEdge& e) { return e.from == i && e.covers(x, y, m); });
     }
   a.k = 1 + options.candidatesPerLevel * int(widest);
-  a.candidates = candidatesOf(a, admissibleOf, options, ctx);
+  a.candidates = candidatesOf(graph, a, admissibleOf, options, ctx);
   candidates.finish();
 
   a.depth = shallowestDepths(graph);
@@ -372,6 +402,8 @@ uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions
     hash.add(e.from);
     hash.add(e.to);
     hash.add(e.octaves);
+    hash.add(e.region.size());
+    hash.add(e.region.data(), e.region.size());
   }
   hash.add(options.candidatesPerLevel);
   hash.add(options.minSpread);
@@ -394,6 +426,7 @@ void writeGraphAnalysis(const GraphAnalysis& a, const std::filesystem::path& pat
     w.vec(a.neighborhood);
     w.vec(a.candidates);
     w.vec(a.selfAdmissible);
+    w.vec(a.moves);
     w.vec(a.depth);
   });
 }
@@ -413,7 +446,7 @@ std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path
   r.value(a.entryLevel);
   if (!r.ok || magic != kGraphCacheMagic || version != kGraphCacheVersion || a.key != expectedKey ||
       a.side < kMinGraphExemplarSide || a.side > kMaxGraphExemplarSide || !std::has_single_bit(unsigned(a.side)) ||
-      a.nodes < 1 || a.nodes > 65535 / a.side || a.k < 1 || a.k > 1 + 4 * 64 || a.entryLevel < 0)
+      a.nodes < 1 || a.nodes > std::min(65535 / a.side, kMaxGraphNodes) || a.k < 1 || a.k > 1 + 4 * 64 || a.entryLevel < 0)
     return std::nullopt;
   a.levels = std::countr_zero(unsigned(a.side)) + 1;
   const size_t texels = size_t(a.atlasWidth()) * size_t(a.atlasHeight());
@@ -422,7 +455,8 @@ std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path
   r.vec(a.appearance, texels * kAppearanceDims);
   r.vec(a.neighborhood, texels * kNeighborhoodDims);
   r.vec(a.candidates, texels * size_t(a.k));
-  r.vec(a.selfAdmissible, size_t(a.nodes) * size_t(a.levels));
+  r.vec(a.selfAdmissible, texels);
+  r.vec(a.moves, texels);
   r.vec(a.depth, size_t(a.nodes));
   if (!r.ok || in.peek() != std::ifstream::traits_type::eof()) return std::nullopt;
   if (a.depth[0] != 0) return std::nullopt;

@@ -25,6 +25,9 @@
 //   * an edge admits only its destination's levels of 8 texels per side or more (minEntryLevel);
 //   * the finest level of an exemplar with no outgoing edge (a leaf) is admissible to itself, so
 //     that its texture can be synthesized down to its own pixels; beyond them it is magnified;
+//   * an edge's region (the thesis' edges detail a whole exemplar) restricts it to the texels of its
+//     source inside the region, at every stack level; a finest-level texel that no edge covers
+//     stays, as a leaf's does;
 //   * exemplars are toroidal (coordinates wrap in their tile), square, all of one power-of-two
 //     side m, as the thesis assumes for exposition; colour only (no companion maps yet);
 //   * no inconsistency correction (§5.3's transfer functions): exemplars of one graph should come
@@ -38,6 +41,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace texfab::synthesis {
@@ -46,9 +50,18 @@ namespace texfab::synthesis {
 /// `to`; `to` details `from` at that scale. from == to makes a self-similar (infinitely zoomable)
 /// exemplar.
 struct GraphEdge {
+  GraphEdge() = default;
+  GraphEdge(int from_, int to_, int octaves_, std::vector<uint8_t> region_ = {})
+      : from(from_), to(to_), octaves(octaves_), region(std::move(region_)) {}
+
   int from = 0;
   int to = 0;
   int octaves = 1;  ///< r >= 1: the scale ratio is 2^r
+  /// The region of `from` this edge details: side x side flags, row-major, 1 = in; empty: all of it.
+  std::vector<uint8_t> region;
+
+  /// Whether pixel (x, y) of `from` (an exemplar `side` pixels wide) is in the region.
+  bool covers(int x, int y, int side) const { return region.empty() || region[size_t(y) * size_t(side) + size_t(x)]; }
 };
 
 /// Largest side of a graph exemplar, and largest r of an edge.
@@ -56,6 +69,8 @@ inline constexpr int kMaxGraphExemplarSide = 512;
 inline constexpr int kMaxGraphEdgeOctaves = 12;
 /// Smallest side: 8 pixels, so that every level has a few distinct texels.
 inline constexpr int kMinGraphExemplarSide = 8;
+/// Most exemplars in a graph (GraphAnalysis::moves holds a bit per node).
+inline constexpr int kMaxGraphNodes = 32;
 
 struct ExemplarGraph {
   std::vector<std::string> names;  ///< one per node, for messages
@@ -65,8 +80,9 @@ struct ExemplarGraph {
   int side() const { return exemplars.empty() ? 0 : exemplars.front().width; }
   /// Throws texfab::Error, naming the node or edge, unless: at least one node; every exemplar
   /// square, of one power-of-two side in [kMinGraphExemplarSide, kMaxGraphExemplarSide], finite;
-  /// edges between existing nodes with 1 <= octaves <= kMaxGraphEdgeOctaves, no edge twice; every
-  /// node reachable from the root.
+  /// at most kMaxGraphNodes;
+  /// edges between existing nodes with 1 <= octaves <= kMaxGraphEdgeOctaves, no edge twice, a
+  /// region (where given) of side² flags with at least one set; every node reachable from the root.
   void validate() const;
   /// The finest synthesis level any output texel can need: the deepest path's total octaves plus
   /// the exemplars' levels; -1 when a cycle makes the texture infinitely deep.
@@ -94,8 +110,13 @@ struct GraphAnalysis {
   std::vector<int8_t> appearance;    ///< per atlas texel, kAppearanceDims
   std::vector<int8_t> neighborhood;  ///< per atlas texel, kNeighborhoodDims (diagonals at the level's spacing)
   std::vector<uint32_t> candidates;  ///< per atlas texel, k packed atlas coordinates
-  /// Per tile (node * levels + level): may a texel keep its level while synthesis goes finer.
+  /// Per atlas texel: may a texel keep its level while synthesis goes finer (every level but the
+  /// finest; at the finest, texels of a leaf and texels no edge's region covers).
   std::vector<uint8_t> selfAdmissible;
+  /// Per atlas texel: bit j set where a texel pointing there may take a candidate in node j: its own
+  /// node, and the destinations of the edges that cover it (thesis §5.2.1.2: candidates lie in the
+  /// texel's admissible set, whichever neighbour offers them).
+  std::vector<uint32_t> moves;
   /// Per node: the octaves from the root along the shallowest path of edges (the root's 0), so
   /// that a pixel of node i spans 2^-depth[i] root pixels.
   std::vector<int32_t> depth;

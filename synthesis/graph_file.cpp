@@ -36,6 +36,32 @@ template <class T> T get(const json& object, const char* key, const std::string&
   return v.get<T>();
 }
 
+// An edge's "region" as side x side flags: [x, y, width, height] in pixels of the source
+// (wrapping, as exemplars tile), or a mask image of the source's size (first channel >= 0.5: in).
+std::vector<uint8_t> regionOf(const json& value, int side, const std::filesystem::path& folder,
+                              const std::string& where) {
+  std::vector<uint8_t> region(size_t(side) * size_t(side), 0);
+  if (value.is_string()) {
+    const Image mask = readImage(folder / value.get<std::string>());
+    if (mask.width != side || mask.height != side)
+      throw Error(where + ": region mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                  ", the exemplars " + std::to_string(side) + "x" + std::to_string(side));
+    for (int y = 0; y < side; ++y)
+      for (int x = 0; x < side; ++x) region[size_t(y) * side + x] = mask.at(x, y, 0) >= 0.5f;
+    return region;
+  }
+  const bool rectangle = value.is_array() && value.size() == 4 &&
+                         std::all_of(value.begin(), value.end(), [](const json& v) { return v.is_number_integer(); });
+  if (!rectangle) throw Error(where + ": \"region\" must be [x, y, width, height] in pixels or a mask image");
+  const auto r = value.get<std::vector<int64_t>>();
+  if (r[2] < 1 || r[3] < 1 || r[2] > side || r[3] > side)
+    throw Error(where + ": region width and height must be 1 to " + std::to_string(side));
+  for (int64_t y = r[1]; y < r[1] + r[3]; ++y)
+    for (int64_t x = r[0]; x < r[0] + r[2]; ++x)
+      region[size_t(((y % side) + side) % side) * side + size_t(((x % side) + side) % side)] = 1;
+  return region;
+}
+
 } // namespace
 
 ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
@@ -74,11 +100,13 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
     std::rotate(graph.names.begin(), graph.names.begin() + root, graph.names.begin() + root + 1);
     std::rotate(images.begin(), images.begin() + root, images.begin() + root + 1);
   }
+  std::vector<std::pair<size_t, json>> regions;  // filled once the exemplars' side is known
   if (doc.contains("edges")) {
     for (const json& e : get<json>(doc, "edges", file)) {
       const std::string where = file + ": edge " + std::to_string(graph.edges.size() + 1);
       if (!e.is_object()) throw Error(where + ": expected {\"from\": ..., \"to\": ..., \"scale\": ...}");
-      onlyKeys(e, {"from", "to", "scale"}, where);
+      onlyKeys(e, {"from", "to", "scale", "region"}, where);
+      if (e.contains("region")) regions.emplace_back(graph.edges.size(), e.at("region"));
       const double scale = get<double>(e, "scale", where);
       if (!(scale > 1) || scale > 1e6 || scale != std::floor(scale) || !std::has_single_bit(uint64_t(scale)))
         throw Error(where + ": scale " + e.at("scale").dump() + " must be a power of two greater than 1 (2, 4, 8, ...)");
@@ -89,6 +117,9 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
   }
   const std::filesystem::path folder = path.parent_path();
   for (const std::string& image : images) graph.exemplars.push_back(readImage(folder / image));  // absolute: as is
+  for (const auto& [edge, region] : regions)
+    graph.edges[edge].region = regionOf(region, graph.exemplars.front().width, folder,
+                                        file + ": edge " + std::to_string(edge + 1));
   try {
     graph.validate();
   } catch (const Error& e) {

@@ -6,12 +6,14 @@
 //     "exemplars": [ {"name": "regions", "image": "regions.png"},
 //                    {"name": "grain", "image": "grain.png"} ],
 //     "root": "regions",
-//     "edges": [ {"from": "regions", "to": "grain", "scale": 16} ]
+//     "edges": [ {"from": "regions", "to": "grain", "scale": 16, "region": "grain-mask.png"} ]
 //   }
 //
 // Images are read relative to the file's folder. "root" is optional (default: the first
 // exemplar). An edge's "scale" is how many pixels of `to` one pixel of `from` spans: a power of two
-// from 2 up; from == to makes an exemplar self-similar (an infinite zoom).
+// from 2 up; from == to makes an exemplar self-similar (an infinite zoom). Its optional "region"
+// limits it to part of `from`: [x, y, width, height] in pixels (wrapping), or a mask image of the
+// exemplars' size whose first channel is at least 0.5 inside.
 
 #include "synthesis/exemplar_graph.h"
 

@@ -61,10 +61,10 @@ void jitter(const GraphAtlas& a, uint32_t* coords, const LevelGrid& g, uint32_t 
 }
 
 // One correction sub-pass (cpu::correctKernel's rules): each texel of the class takes the best of
-// { C_i(S[q+D]) - h D } (h of each candidate's level, wrapped in its tile) and S[q] itself where
-// S[q]'s level is admissible to itself, or at the output level (nothing finer is synthesized, so a
-// finest level may stay: the root shows its own pixels at zoom 1); ties to S[q], then to the
-// smallest coordinate.
+// { C_i(S[q+D]) - h D } (h of each candidate's level, wrapped in its tile) in a node S[q] may move
+// to (GraphAnalysis::moves), and S[q] itself where it may stay, or at the output level (nothing
+// finer is synthesized, so a finest level may stay: the root shows its own pixels at zoom 1); ties
+// to S[q], then to the smallest coordinate.
 void correct(const GraphAtlas& a, const uint32_t* in, uint32_t* out, const LevelGrid& g, bool outputLevel, int interleave,
              int cx, int cy, int x0, int x1, int r0, int r1) {
   const auto w = size_t(g.width);
@@ -82,7 +82,7 @@ void correct(const GraphAtlas& a, const uint32_t* in, uint32_t* out, const Level
       }
       const uint32_t current = row[x];
       uint32_t best = current;
-      int32_t bestDistance = outputLevel || a.selfAdmissible[a.tile(current)]
+      int32_t bestDistance = outputLevel || a.selfAdmissible[a.texel(current)]
                                  ? cpu::neighborhoodDistance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
                                  : INT32_MAX;
       for (int dy = -1; dy <= 1; ++dy)
@@ -91,7 +91,7 @@ void correct(const GraphAtlas& a, const uint32_t* in, uint32_t* out, const Level
           for (int i = 0; i < a.k; ++i) {
             const int h = a.spacing(cand[i]);
             const uint32_t c = a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy);
-            if (c == best) continue;
+            if (c == best || !a.mayTake(current, c)) continue;
             const int32_t d = cpu::neighborhoodDistance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
             if (d < bestDistance || (d == bestDistance && best != current && c < best)) {
               bestDistance = d;

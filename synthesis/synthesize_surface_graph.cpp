@@ -85,7 +85,8 @@ void jitter(const GraphAtlas& a, const LevelView& v, uint32_t* coords, uint32_t 
 // One correction sub-pass over the sites of class `cls` (cpu::correctSurfaceKernel's rules, each
 // step scaled to the stack level of the pointer it moves): the target's sample at diagonal Δ is
 // the mean appearance of S[n] + h(S[n]) Δ - 2^(t-k) J(p)δ over the two steps δ toward J⁻¹Δ;
-// candidates C_i(S[n]) - 2^(t-k_i) J(p)δ over the 8 neighbours and C_i(S[s]); S[s] itself competes
+// candidates C_i(S[n]) - 2^(t-k_i) J(p)δ over the 8 neighbours and C_i(S[s]), in nodes S[s] may
+// move to (GraphAnalysis::moves); S[s] itself competes
 // where its tile is admissible to itself or at the output level (synthesize_graph.cpp's rule).
 void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32_t* out, bool outputLevel, int cls,
              size_t b, size_t e) {
@@ -122,7 +123,7 @@ void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32
     }
 
     uint32_t best = current;
-    int32_t bestDistance = outputLevel || a.selfAdmissible[a.tile(current)]
+    int32_t bestDistance = outputLevel || a.selfAdmissible[a.texel(current)]
                                ? cpu::neighborhoodDistance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
                                : INT32_MAX;
     for (int d = 0; d <= 8; ++d) {
@@ -137,7 +138,7 @@ void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32
         const uint32_t c0 = a.fromPixel(cand[i]);
         const Offset o = d < 8 ? back(a.tile(c0), d) : Offset{0, 0};
         const uint32_t c = a.move(c0, fracX + o.x, fracY + o.y);
-        if (c == best) continue;
+        if (c == best || !a.mayTake(current, c)) continue;
         const int32_t dist = cpu::neighborhoodDistance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
         if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {
           bestDistance = dist;

@@ -21,15 +21,20 @@ struct GraphAtlas {
   const int8_t* neighborhood = nullptr;
   const uint32_t* candidates = nullptr;
   const uint8_t* selfAdmissible = nullptr;
+  const uint32_t* moves = nullptr;
 
   explicit GraphAtlas(const GraphAnalysis& a, int subpixelBits = 0)
       : bits(subpixelBits), shift(std::countr_zero(unsigned(a.side)) + subpixelBits), finest(a.finestLevel()),
         levels(a.levels), width(a.atlasWidth()), k(a.k), appearance(a.appearance.data()),
-        neighborhood(a.neighborhood.data()), candidates(a.candidates.data()), selfAdmissible(a.selfAdmissible.data()) {}
+        neighborhood(a.neighborhood.data()), candidates(a.candidates.data()), selfAdmissible(a.selfAdmissible.data()),
+        moves(a.moves.data()) {}
 
   uint32_t mask() const { return (1u << shift) - 1; }
   int level(uint32_t c) const { return int(coordU(c) >> shift); }
-  int tile(uint32_t c) const { return int(coordV(c) >> shift) * levels + level(c); }
+  int node(uint32_t c) const { return int(coordV(c) >> shift); }
+  int tile(uint32_t c) const { return node(c) * levels + level(c); }
+  /// Whether a texel pointing at `current` may take candidate `c` (GraphAnalysis::moves).
+  bool mayTake(uint32_t current, uint32_t c) const { return (moves[texel(current)] >> node(c)) & 1u; }
   /// h_k of c's level, in pixels of its exemplar.
   int spacing(uint32_t c) const { return 1 << (finest - level(c)); }
   /// The atlas pixel nearest c, wrapped in its tile, as an index into the per-texel tables.

@@ -177,14 +177,27 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
     std::ifstream report(dir / "r.json");
     EXPECT_EQ(nlohmann::json::parse(report)["graph"]["deepest_level"], 7 + 4);
   }
+  // Regions: a rectangle for one edge, a mask image for the other.
+  Image mask(128, 128, 1);
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) mask.at(x, y, 0) = x >= 64 ? 1.0f : 0.0f;
+  writeImage(mask, dir / "mask.png");
+  std::ofstream(dir / "regions.json") << R"({"exemplars": [{"name": "rock", "image": ")" << photos << R"(rock.png"},
+    {"name": "stone", "image": ")" << photos << R"(stone.png"}, {"name": "wood", "image": ")" << photos << R"(wood.png"}],
+    "edges": [{"from": "rock", "to": "stone", "scale": 16, "region": [0, 0, 64, 128]},
+              {"from": "rock", "to": "wood", "scale": 16, "region": "mask.png"}]})";
+  ASSERT_EQ(texfab("synth --graph " + (dir / "regions.json").string() + " --zoom 16 --size 64 -q -o " +
+                   (dir / "regions.png").string()).status, 0);
   const std::string out = (dir / "out.png").string();
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"--graph " + graphFile("b1.json", R"({"from": "rock", "to": "stone", "scale": 12})"),
        "scale 12 must be a power of two greater than 1"},
       {"--graph " + graphFile("b2.json", R"({"from": "rock", "to": "gravel", "scale": 4})"),
        "no exemplar is named 'gravel'"},
-      {"--graph " + graphFile("b3.json", R"({"from": "rock", "to": "stone", "scale": 2, "region": [0, 0, 8, 8]})"),
-       "unknown field 'region'"},
+      {"--graph " + graphFile("b3.json", R"({"from": "rock", "to": "stone", "scale": 2, "region": [0, 0, 0, 8]})"),
+       "region width and height must be 1 to 128"},
+      {"--graph " + graphFile("b7.json", R"({"from": "rock", "to": "stone", "scale": 2, "weight": 1})"),
+       "unknown field 'weight'"},
       {"--graph " + graphFile("b4.json", R"({"from": "rock", "to": "stone", "scale": 1})"), "greater than 1"},
       {"--graph " + graphFile("b5.json", R"({"from": "rock", "to": "stone", "scale": 32})"),
        "use exemplars of at least 256 pixels or a smaller scale"},

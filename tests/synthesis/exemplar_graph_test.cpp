@@ -116,9 +116,10 @@ TEST(ExemplarGraph, CandidatesLieInAdmissibleLevels) {
   const GraphAnalysis a = analyzeGraph(twoNodes(64, 2));  // L = 6, entry level 3
   ASSERT_EQ(a.levels, 7);
   EXPECT_EQ(a.k, 1 + 2 * 2);
-  EXPECT_FALSE(a.selfAdmissible[size_t(a.finestLevel())]);          // the root's finest level
-  EXPECT_TRUE(a.selfAdmissible[size_t(a.levels + a.finestLevel())]);  // the leaf's
   const int m = a.side;
+  const size_t aw = size_t(a.atlasWidth());
+  EXPECT_FALSE(a.selfAdmissible[size_t(a.finestLevel() * m)]);                 // the root's finest level
+  EXPECT_TRUE(a.selfAdmissible[size_t(m) * aw + size_t(a.finestLevel() * m)]);  // the leaf's
   int crossings = 0;
   for (int y = 0; y < a.atlasHeight(); ++y)
     for (int x = 0; x < a.atlasWidth(); ++x) {
@@ -128,7 +129,7 @@ TEST(ExemplarGraph, CandidatesLieInAdmissibleLevels) {
         const int cNode = int(coordV(c)) / m, cLevel = int(coordU(c)) / m;
         const bool same = cNode == node && cLevel == level;
         const bool edge = node == 0 && cNode == 1 && cLevel == level - 2 && cLevel >= 3;
-        ASSERT_TRUE((same && a.selfAdmissible[size_t(node * a.levels + level)]) || edge)
+        ASSERT_TRUE((same && a.selfAdmissible[size_t(y) * aw + size_t(x)]) || edge)
             << "texel (" << x << ", " << y << ") candidate " << i << " in node " << cNode << " level " << cLevel;
         crossings += edge;
       }
@@ -202,6 +203,56 @@ TEST(SynthesizeGraph, EachScaleIsAsFaithfulAsASingleExemplarSynthesis) {
     EXPECT_LE(ratio, 1.3) << g.names[size_t(node)] << " at zoom " << (1 << zoom);
     RecordProperty(g.names[size_t(node)] + "_fidelity_ratio", std::to_string(ratio));
   }
+}
+
+// Edge regions: a root of two regions (warm and cool stripes 16 pixels wide, textured), each
+// detailed by its own exemplar at 1/16 the scale. Zoomed 16x, a texel lies in the exemplar of the
+// region its ancestor was in at zoom 1/2 (root level L - 1, before any edge can be taken).
+TEST(SynthesizeGraph, EdgeRegionsDecideWhichExemplarDetailsWhere) {
+  ExemplarGraph g;
+  g.names = {"regions", "stone", "rock"};
+  Image regions(128, 128, 3);
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) {
+      const float grain = float(texelHash(3, 0, x / 4, y / 4, 0) >> 24) / 255.0f * 0.2f;
+      const bool warm = (x / 16) % 2 == 0;
+      regions.at(x, y, 0) = (warm ? 0.7f : 0.2f) + grain;
+      regions.at(x, y, 1) = 0.4f + grain;
+      regions.at(x, y, 2) = (warm ? 0.2f : 0.7f) + grain;
+    }
+  g.exemplars = {regions, photo("stone.png"), photo("rock.png")};
+  GraphEdge toStone{0, 1, 4}, toRock{0, 2, 4};
+  toStone.region.assign(128 * 128, 0);
+  toRock.region.assign(128 * 128, 0);
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) ((x / 16) % 2 == 0 ? toStone : toRock).region[size_t(y) * 128 + x] = 1;
+  g.edges = {toStone, toRock};
+  const GraphAnalysis a = analyzeGraph(g);
+
+  GraphSynthesisOptions options;
+  options.zoomOctaves = -1;
+  const int side = 512;
+  const Image coarse = applyCoords(synthesizeGraph(a, {0, 0, side / 32, side / 32}, options).coords, a.colors);
+  options.zoomOctaves = 4;
+  const CoordMap fine = synthesizeGraph(a, {0, 0, side, side}, options).coords;
+  int agree = 0, stone = 0;
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const bool warm = coarse.at(x >> 5, y >> 5, 0) > coarse.at(x >> 5, y >> 5, 2);
+      const int node = int(coordV(fine.coords[size_t(y) * side + x])) / a.side;
+      agree += node == (warm ? 1 : 2);
+      stone += node == 1;
+    }
+  const double agreement = agree / double(side * side), stoneShare = stone / double(side * side);
+  RecordProperty("agreement", std::to_string(agreement));
+  std::cout << "regions: " << agreement << " of texels in their region's exemplar, stone " << stoneShare << "\n";
+  EXPECT_GE(agreement, 0.9);
+  EXPECT_GT(stoneShare, 0.1);
+  EXPECT_LT(stoneShare, 0.9);
+  // Without regions the same graph has no reason to follow them.
+  g.edges[0].region.clear();
+  g.edges[1].region.clear();
+  EXPECT_NE(analyzeGraph(g).key, a.key);
 }
 
 // Radially averaged power spectrum of a square power-of-two image's luminance (mean removed), in
