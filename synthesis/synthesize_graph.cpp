@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <climits>
 #include <cmath>
 #include <string>
 
@@ -80,26 +79,16 @@ void correct(const GraphAtlas& a, const uint32_t* in, uint32_t* out, const Level
         const uint32_t s = in[size_t(y + kDiagonalY[i]) * w + size_t(x + kDiagonalX[i])];
         std::copy_n(a.appearance + a.texel(s) * kAppearanceDims, kAppearanceDims, target + i * kAppearanceDims);
       }
-      const uint32_t current = row[x];
-      uint32_t best = current;
-      int32_t bestDistance = outputLevel || a.selfAdmissible[a.texel(current)]
-                                 ? cpu::neighborhoodDistance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
-                                 : INT32_MAX;
+      cpu::GraphChoice choice(a, target, row[x], outputLevel);
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const uint32_t* cand = a.candidates + a.texel(in[size_t(y + dy) * w + size_t(x + dx)]) * size_t(a.k);
           for (int i = 0; i < a.k; ++i) {
             const int h = a.spacing(cand[i]);
-            const uint32_t c = a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy);
-            if (c == best || !a.mayTake(current, c)) continue;
-            const int32_t d = cpu::neighborhoodDistance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
-            if (d < bestDistance || (d == bestDistance && best != current && c < best)) {
-              bestDistance = d;
-              best = c;
-            }
+            choice.offer(a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy));
           }
         }
-      outRow[x] = best;
+      outRow[x] = choice.best();
     }
   }
 }

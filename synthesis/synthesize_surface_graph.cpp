@@ -12,7 +12,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <climits>
 #include <cmath>
 #include <string>
 
@@ -122,10 +121,7 @@ void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32
             count == 1 ? estimates[0][c] : int8_t((int(estimates[0][c]) + int(estimates[1][c])) >> 1);
     }
 
-    uint32_t best = current;
-    int32_t bestDistance = outputLevel || a.selfAdmissible[a.texel(current)]
-                               ? cpu::neighborhoodDistance(target, a.neighborhood + a.texel(current) * kNeighborhoodDims)
-                               : INT32_MAX;
+    cpu::GraphChoice choice(a, target, current, outputLevel);
     for (int d = 0; d <= 8; ++d) {
       const int32_t n = d < 8 ? nb[size_t(d)] : int32_t(s);
       if (n < 0) continue;
@@ -137,16 +133,10 @@ void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32
       for (int i = 0; i < a.k; ++i) {
         const uint32_t c0 = a.fromPixel(cand[i]);
         const Offset o = d < 8 ? back(a.tile(c0), d) : Offset{0, 0};
-        const uint32_t c = a.move(c0, fracX + o.x, fracY + o.y);
-        if (c == best || !a.mayTake(current, c)) continue;
-        const int32_t dist = cpu::neighborhoodDistance(target, a.neighborhood + a.texel(c) * kNeighborhoodDims);
-        if (dist < bestDistance || (dist == bestDistance && best != current && c < best)) {
-          bestDistance = dist;
-          best = c;
-        }
+        choice.offer(a.move(c0, fracX + o.x, fracY + o.y));
       }
     }
-    out[s] = best;
+    out[s] = choice.best();
   }
 }
 

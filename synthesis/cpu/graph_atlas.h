@@ -5,9 +5,11 @@
 // pixels (0 for the 2-D kernels, kSubpixelBits for the surface ones); moves wrap in the tile.
 
 #include "synthesis/coord_map.h"
+#include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/exemplar_graph.h"
 
 #include <bit>
+#include <climits>
 #include <cstddef>
 #include <cstdint>
 
@@ -52,6 +54,33 @@ struct GraphAtlas {
     const uint32_t half = bits ? 1u << (bits - 1) : 0u, pixelMask = mask() >> bits;
     return ((x & ~mask()) >> bits) | ((((x & mask()) + half) >> bits) & pixelMask);
   }
+};
+
+/// A graph texel's correction choice, by the rules of cpu::correctKernel: `current` competes
+/// where it may stay (or at the output level); a candidate in a node `current` may move to
+/// replaces the best when nearer the target neighbourhood, on a tie when it is the smaller
+/// coordinate and the best is not `current`.
+class GraphChoice {
+ public:
+  GraphChoice(const GraphAtlas& a, const int8_t* target, uint32_t current, bool outputLevel)
+      : a_(a), target_(target), current_(current), best_(current),
+        distance_(outputLevel || a.selfAdmissible[a.texel(current)] ? distanceTo(current) : INT32_MAX) {}
+
+  void offer(uint32_t c) {
+    if (c == best_ || !a_.mayTake(current_, c)) return;
+    const int32_t d = distanceTo(c);
+    if (d < distance_ || (d == distance_ && best_ != current_ && c < best_)) distance_ = d, best_ = c;
+  }
+  uint32_t best() const { return best_; }
+
+ private:
+  int32_t distanceTo(uint32_t c) const {
+    return neighborhoodDistance(target_, a_.neighborhood + a_.texel(c) * kNeighborhoodDims);
+  }
+  const GraphAtlas& a_;
+  const int8_t* target_;
+  uint32_t current_, best_;
+  int32_t distance_;
 };
 
 } // namespace texfab::synthesis::cpu
