@@ -301,20 +301,31 @@ void appendObject(PLib3MFModel* model, PLib3MFModelMeshObject* object, const MOD
 }
 
 // lib3mf 1.8 allocates and clears each archive entry's stated size before inflating it: an entry
-// that states more than deflate can expand its compressed bytes to (1032 times) is refused first.
+// that states more than deflate can expand its compressed bytes to (1032 times), or more compressed
+// bytes than the archive holds, is refused first.
 void checkEntrySizes(const fs::path& path, const std::string& where) {
+  std::error_code error;
+  const uint64_t fileSize = fs::file_size(path, error);
   int code = 0;
   zip_t* archive = zip_open(path.c_str(), ZIP_RDONLY, &code);
-  if (!archive) return;  // lib3mf says what is wrong with it
+  if (!archive || error) {
+    if (archive) zip_discard(archive);
+    return;  // lib3mf says what is wrong with it
+  }
   for (zip_int64_t i = 0, n = zip_get_num_entries(archive, 0); i < n; ++i) {
     zip_stat_t st;
     if (zip_stat_index(archive, zip_uint64_t(i), 0, &st) != 0) continue;
     const bool known = (st.valid & ZIP_STAT_SIZE) && (st.valid & ZIP_STAT_COMP_SIZE);
-    if (known && st.size > 1032 * st.comp_size + 1024) {
+    std::string problem;
+    if (known && st.comp_size > fileSize)
+      problem = std::to_string(st.comp_size) + " compressed bytes, more than the archive's " + std::to_string(fileSize);
+    else if (known && st.size > 1032 * st.comp_size + 1024)
+      problem = std::to_string(st.size) + " bytes, more than its " + std::to_string(st.comp_size) +
+                " compressed bytes can hold";
+    if (!problem.empty()) {
       const std::string name = st.name ? st.name : "?";
       zip_discard(archive);
-      throw Error(where + ": corrupt 3MF: archive entry '" + name + "' states " + std::to_string(st.size) +
-                  " bytes, more than its " + std::to_string(st.comp_size) + " compressed bytes can hold");
+      throw Error(where + ": corrupt 3MF: archive entry '" + name + "' states " + problem);
     }
   }
   zip_discard(archive);
