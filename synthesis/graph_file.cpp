@@ -10,6 +10,7 @@
 #include <bit>
 #include <fstream>
 #include <cmath>
+#include <cstdlib>
 #include <initializer_list>
 #include <type_traits>
 
@@ -56,6 +57,8 @@ std::vector<uint8_t> regionOf(const json& value, int side, const std::filesystem
   const auto r = value.get<std::vector<int64_t>>();
   if (r[2] < 1 || r[3] < 1 || r[2] > side || r[3] > side)
     throw Error(where + ": region width and height must be 1 to " + std::to_string(side));
+  if (std::llabs(r[0]) > (int64_t(1) << 30) || std::llabs(r[1]) > (int64_t(1) << 30))
+    throw Error(where + ": region x and y must be within +-2^30");
   for (int64_t y = r[1]; y < r[1] + r[3]; ++y)
     for (int64_t x = r[0]; x < r[0] + r[2]; ++x)
       region[size_t(((y % side) + side) % side) * side + size_t(((x % side) + side) % side)] = 1;
