@@ -10,6 +10,7 @@
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/exemplar_graph.h"
+#include "synthesis/graph_file.h"
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
 #include "tests/geometry/test_meshes.h"
@@ -428,6 +429,30 @@ void seedGraphCache(const fs::path& folder) {
   synthesis::writeGraphAnalysis(analysis, folder / "gradient.graph");
 }
 
+// Graph files (synth --graph): JSON naming two 16x16 exemplars and a mask beside it (in the
+// scratch folder, written once), edges with scales and regions.
+bool runGraphFile(Bytes input) {
+  static const bool images = [] {
+    writeImage(seedExemplar(), scratch() / "a.png");
+    writeImage(seedExemplar(), scratch() / "b.png");
+    Image mask(16, 16, 1);
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 8; ++x) mask.at(x, y, 0) = 1.0f;
+    writeImage(mask, scratch() / "mask.png");
+    return true;
+  }();
+  (void)images;
+  return refusalsAllowed([&] { synthesis::readExemplarGraph(inputFile(input, "graph.json")); });
+}
+
+void seedGraphFile(const fs::path& folder) {
+  writeFile(folder / "two.json", std::string_view(R"({"exemplars": [{"name": "a", "image": "a.png"},
+    {"name": "b", "image": "b.png"}], "root": "a", "edges": [{"from": "a", "to": "b", "scale": 2}]})"));
+  writeFile(folder / "regions.json", std::string_view(R"({"exemplars": [{"name": "a", "image": "a.png"},
+    {"name": "b", "image": "b.png"}], "edges": [{"from": "a", "to": "b", "scale": 2, "region": [-3, 4, 8, 16]},
+    {"from": "a", "to": "a", "scale": 2, "region": "mask.png"}]})"));
+}
+
 constexpr char kOff[] = ".off", kPly[] = ".ply", kStl[] = ".stl", kGltf[] = ".gltf", kGlb[] = ".glb", k3mf[] = ".3mf";
 
 constexpr FuzzTarget kTargets[] = {
@@ -449,6 +474,7 @@ constexpr FuzzTarget kTargets[] = {
     {"solid_cache", "readSolidAnalysis: the solid analysis cache", runSolidCache, seedSolidCache},
     {"tiles_cache", "readSolidTiles: the solid tiles cache", runTilesCache, seedTilesCache},
     {"graph_cache", "readGraphAnalysis: the exemplar graph analysis cache", runGraphCache, seedGraphCache},
+    {"graph_file", "readExemplarGraph: synth/texture --graph JSON with regions", runGraphFile, seedGraphFile},
 };
 
 } // namespace
