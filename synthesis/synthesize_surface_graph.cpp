@@ -4,7 +4,6 @@
 #include "synthesis/synthesize_surface_graph.h"
 
 #include "core/error.h"
-#include "core/hash.h"
 #include "synthesis/backend.h"
 #include "synthesis/cpu/graph_atlas.h"
 #include "synthesis/cpu/surface_kernels.h"
@@ -74,10 +73,8 @@ void jitter(const GraphAtlas& a, const LevelView& v, uint32_t* coords, uint32_t 
   for (size_t s = b; s < e; ++s) {
     const int64_t amp = amplitude256[size_t(a.tile(coords[s]))];
     if (amp == 0) continue;
-    const uint32_t chartSeed = seed ^ pcgHash(uint32_t(v.sites.chart[s]) + 0x9e3779b9u);
-    const int64_t hx = int64_t(texelHash(chartSeed, uint32_t(v.atlasLevel), v.sites.x[s], v.sites.y[s], 0) >> 16) - 32768;
-    const int64_t hy = int64_t(texelHash(chartSeed, uint32_t(v.atlasLevel), v.sites.x[s], v.sites.y[s], 1) >> 16) - 32768;
-    coords[s] = a.move(coords[s], (amp * kOne * hx + (int64_t(1) << 22)) >> 23, (amp * kOne * hy + (int64_t(1) << 22)) >> 23);
+    const Offset j = cpu::surfaceJitter(v.sites, s, seed, v.atlasLevel, amp);
+    coords[s] = a.move(coords[s], j.x, j.y);
   }
 }
 

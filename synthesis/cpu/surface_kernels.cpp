@@ -3,7 +3,6 @@
 //           docs/synthesis-notes.md#atlas-synthesis, #anisometric-step, #anisometric-candidates.
 #include "synthesis/cpu/surface_kernels.h"
 
-#include "core/hash.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
 
@@ -49,12 +48,8 @@ void jitterSurfaceKernel(const SurfaceLevel& level, uint32_t* coords, uint32_t s
                          int64_t amplitude256, int ew, int eh, size_t begin, size_t end, const ValidRegion* clampTo) {
   if (amplitude256 == 0) return;
   for (size_t s = begin; s < end; ++s) {
-    const uint32_t chartSeed = seed ^ pcgHash(uint32_t(level.chart[s]) + 0x9e3779b9u);
-    const int64_t hx = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 0) >> 16) - 32768;
-    const int64_t hy = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 1) >> 16) - 32768;
-    const int64_t jx = (amplitude256 * kOne * hx + (int64_t(1) << 22)) >> 23;  // subpixels
-    const int64_t jy = (amplitude256 * kOne * hy + (int64_t(1) << 22)) >> 23;
-    coords[s] = shifted(coords[s], int(jx), int(jy), int64_t(ew) * kOne, int64_t(eh) * kOne, clampTo);
+    const Offset j = surfaceJitter(level, s, seed, atlasLevel, amplitude256);
+    coords[s] = shifted(coords[s], j.x, j.y, int64_t(ew) * kOne, int64_t(eh) * kOne, clampTo);
   }
 }
 

@@ -9,6 +9,7 @@
 // build compiles every target with -ffp-contract=off; the GLSL twins mark these products precise).
 
 #include "core/context.h"
+#include "core/hash.h"
 #include "core/parallel.h"
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/synthesize_surface.h"
@@ -44,6 +45,16 @@ inline Offset applyJ(const std::array<float, 4>& j, float vx, float vy) {
   const float ax = j[0] * vx, bx = j[1] * vy;
   const float ay = j[2] * vx, by = j[3] * vy;
   return {int(std::floor((ax + bx) * float(kSubpixelOne) + 0.5f)), int(std::floor((ay + by) * float(kSubpixelOne) + 0.5f))};
+}
+
+/// Site s's jitter in subpixels: amplitude256 (1/256 exemplar pixels) times a hash of (seed, chart,
+/// atlas level, x, y) uniform in [-1, 1)^2, in integers as jitterKernel.
+inline Offset surfaceJitter(const SurfaceLevel& level, size_t s, uint32_t seed, int atlasLevel, int64_t amplitude256) {
+  const uint32_t chartSeed = seed ^ pcgHash(uint32_t(level.chart[s]) + 0x9e3779b9u);
+  const int64_t hx = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 0) >> 16) - 32768;
+  const int64_t hy = int64_t(texelHash(chartSeed, uint32_t(atlasLevel), level.x[s], level.y[s], 1) >> 16) - 32768;
+  return {int((amplitude256 * kSubpixelOne * hx + (int64_t(1) << 22)) >> 23),
+          int((amplitude256 * kSubpixelOne * hy + (int64_t(1) << 22)) >> 23)};
 }
 
 /// The unit step (index into kSurfaceStepX/Y) closest in direction to (fx, fy): the rounding of
