@@ -59,7 +59,7 @@ void runTexture(benchmark::State& state, render::TextureMode mode) {
     seconds["total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const auto& [stage, s] : seconds) state.counters[stage + "_s"] = s;
     state.counters["texels"] = double(r.sites.size());
-    if (mode == render::TextureMode::Solid) state.counters["voxels"] = double(r.voxelsRequested);
+    if (mode == render::TextureMode::Solid) state.counters["voxels"] = double(r.solid.voxelsRequested);
   }
   state.counters["peak_MiB"] = bench::peakMemoryMiB();
   fs::remove(out);

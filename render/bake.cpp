@@ -4,9 +4,12 @@
 #include "core/error.h"
 #include "synthesis/solid_tiles.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <span>
+#include <tuple>
 
 namespace texfab::render {
 
@@ -72,38 +75,96 @@ void rotateNormal(const std::array<float, 4>& j, const float* in, float* out) {
 }
 
 std::string SolidSites::summary(synthesis::SolidMethod method) const {
-  if (method == synthesis::SolidMethod::Tiles) return std::to_string(voxelsRequested) + " voxels read from the tiles";
-  return std::to_string(voxelsRequested) + " voxels requested, " + std::to_string(voxelsSynthesized) + " synthesized";
+  const std::string blend = trilinear() ? ", trilinear" : "";
+  if (method == synthesis::SolidMethod::Tiles) return std::to_string(voxelsRequested) + " voxels read from the tiles" + blend;
+  return std::to_string(voxelsRequested) + " voxels requested, " + std::to_string(voxelsSynthesized) + " synthesized" + blend;
 }
 
-SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
-                               const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
-                               double scale, const Context& ctx, synthesis::SolidLevelCache* cache) {
-  auto voxelAt = [&](size_t s) {
-    const atlas::Float3& p = fields.position.at(sites.x[s], sites.y[s]);
-    const synthesis::Voxel v{int64_t(std::floor(double(p.x) * scale)), int64_t(std::floor(double(p.y) * scale)),
-                             int64_t(std::floor(double(p.z) * scale))};
-    for (int64_t c : {v.x, v.y, v.z})
-      if (std::abs(c) > synthesis::kMaxSolidPosition)
-        throw Error("the scale puts the model outside the solid texture's range (|position × scale| <= 2^30)");
-    return v;
-  };
-  if (options.method == synthesis::SolidMethod::Tiles) {  // one read per site, no request to build
-    const synthesis::SolidTileSet& tiles = synthesis::requireTiles(analysis);
-    SolidSites out{std::vector<synthesis::Triple>(sites.size()), int64_t(sites.size()), 0};
-    parallelFor(0, int(sites.size()), ctx, [&](int begin, int end) {
-      synthesis::SolidTileReader read(tiles, options.seed);
-      for (int s = begin; s < end; ++s) {
-        const synthesis::Voxel v = voxelAt(size_t(s));
-        out.triples[size_t(s)] = read(v.x, v.y, v.z);
-      }
-    }, 4096);
+namespace {
+
+using synthesis::Voxel;
+
+bool voxelLess(const Voxel& a, const Voxel& b) { return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x); }
+
+void sortUnique(std::vector<Voxel>& v) {
+  std::sort(v.begin(), v.end(), voxelLess);
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+}
+
+// Corner k of the cell whose lowest corner is b (x fastest, then y, then z: SolidSites::cells).
+Voxel corner(const Voxel& b, int k) { return {b.x + (k & 1), b.y + ((k >> 1) & 1), b.z + ((k >> 2) & 1)}; }
+
+uint32_t indexIn(const std::vector<Voxel>& sorted, const Voxel& v) {
+  return uint32_t(std::lower_bound(sorted.begin(), sorted.end(), v, voxelLess) - sorted.begin());
+}
+
+// The voxel coordinate below q, with room for the trilinear cell's c + 1.
+int64_t voxelBelow(double q) {
+  const double f = std::floor(q);
+  if (!(std::fabs(f) < double(synthesis::kMaxSolidPosition)))  // also NaN
+    throw Error("the scale puts the model outside the solid texture's range (|position × scale| < 2^30)");
+  return int64_t(f);
+}
+
+// The triples of `voxels`, one request: the tiles read in parallel, or the lazy engine.
+SolidSites readVoxels(std::span<const Voxel> voxels, const synthesis::SolidAnalysis& analysis,
+                      const synthesis::SolidSynthesisOptions& options, const Context& ctx,
+                      synthesis::SolidLevelCache* cache) {
+  SolidSites out;
+  if (options.method == synthesis::SolidMethod::Tiles) {
+    out.triples.resize(voxels.size());
+    synthesis::evaluateSolidTiles(synthesis::requireTiles(analysis), options.seed, voxels, out.triples, ctx);
+    out.voxelsRequested = int64_t(voxels.size());
     return out;
   }
-  std::vector<synthesis::Voxel> voxels(sites.size());
-  for (size_t s = 0; s < sites.size(); ++s) voxels[s] = voxelAt(s);
-  synthesis::SolidSynthesisResult result = synthesizeSolid(analysis, voxels, options, cache, ctx);
-  return {std::move(result.triples), result.distinctVoxels, result.voxelsSynthesized()};
+  synthesis::SolidSynthesisResult r = synthesizeSolid(analysis, voxels, options, cache, ctx);
+  out.triples = std::move(r.triples);
+  out.voxelsRequested = r.distinctVoxels;
+  out.voxelsSynthesized = r.voxelsSynthesized();
+  return out;
+}
+
+} // namespace
+
+SolidSites solidAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
+                        const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
+                        double scale, double voxelsPerTexel, const Context& ctx, synthesis::SolidLevelCache* cache) {
+  const size_t n = sites.size();
+  const bool trilinear = voxelsPerTexel < kSolidTrilinearBelow;
+  // The site's position in voxels; trilinear reads the cell of voxel centres around it.
+  std::vector<Voxel> voxel(n);
+  std::vector<std::array<float, 3>> fraction(trilinear ? n : 0);
+  parallelFor(0, int(n), ctx, [&](int begin, int end) {
+    for (int s = begin; s < end; ++s) {
+      const atlas::Float3& p = fields.position.at(sites.x[size_t(s)], sites.y[size_t(s)]);
+      const double shift = trilinear ? 0.5 : 0.0;  // to the voxel centres' lattice
+      const double q[3] = {double(p.x) * scale - shift, double(p.y) * scale - shift, double(p.z) * scale - shift};
+      Voxel& v = voxel[size_t(s)];
+      v = {voxelBelow(q[0]), voxelBelow(q[1]), voxelBelow(q[2])};
+      if (trilinear) fraction[size_t(s)] = {float(q[0] - double(v.x)), float(q[1] - double(v.y)), float(q[2] - double(v.z))};
+    }
+  }, 4096);
+  if (!trilinear) return readVoxels(voxel, analysis, options, ctx, cache);  // one voxel per site
+
+  std::vector<Voxel> base = voxel;  // the cells' lowest corners
+  sortUnique(base);
+  std::vector<Voxel> corners;
+  corners.reserve(base.size() * 8);
+  for (const Voxel& b : base)
+    for (int k = 0; k < 8; ++k) corners.push_back(corner(b, k));
+  sortUnique(corners);
+  SolidSites out = readVoxels(corners, analysis, options, ctx, cache);
+  out.cells.resize(base.size());
+  out.cellOfSite.resize(n);
+  out.fractionOfSite = std::move(fraction);
+  parallelFor(0, int(base.size()), ctx, [&](int begin, int end) {
+    for (int c = begin; c < end; ++c)
+      for (int k = 0; k < 8; ++k) out.cells[size_t(c)][size_t(k)] = indexIn(corners, corner(base[size_t(c)], k));
+  }, 1024);
+  parallelFor(0, int(n), ctx, [&](int begin, int end) {
+    for (int s = begin; s < end; ++s) out.cellOfSite[size_t(s)] = indexIn(base, voxel[size_t(s)]);
+  }, 4096);
+  return out;
 }
 
 } // namespace texfab::render

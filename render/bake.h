@@ -46,21 +46,60 @@ Image bakeSites(int width, int height, const synthesis::SurfaceLevel& sites, int
 /// offsets to exemplar offsets): the tangential part maps back by J⁻¹ with its scale removed.
 void rotateNormal(const std::array<float, 4>& j, const float* in, float* out);
 
-/// The solid texture at the sites' 3-D positions.
+/// The solid texture at the sites' 3-D positions: each site takes its voxel (nearest) or, where a
+/// voxel spans several texels, blends the 8 voxels whose centres surround it (trilinear), so that a
+/// magnified solid texture shows no voxel squares.
 struct SolidSites {
-  std::vector<synthesis::Triple> triples;  ///< one per site
-  int64_t voxelsRequested = 0;             ///< distinct voxels among the sites' (tiles: the sites)
+  /// Nearest: one triple per site. Trilinear: one per distinct voxel read.
+  std::vector<synthesis::Triple> triples;
+  /// Trilinear only: per cell (8 voxel centres: x fastest, then y, then z) its corners' indices
+  /// into triples; per site its cell and its position inside it in [0, 1)^3.
+  std::vector<std::array<uint32_t, 8>> cells;
+  std::vector<uint32_t> cellOfSite;
+  std::vector<std::array<float, 3>> fractionOfSite;
+  int64_t voxelsRequested = 0;             ///< distinct voxels among the sites' (tiles: every read)
   int64_t voxelsSynthesized = 0;           ///< over all levels (the dependency chains)
-  /// "N voxels requested, M synthesized" (lazy), "N voxels read from the tiles" (tiles).
+
+  bool trilinear() const { return !cellOfSite.empty(); }
+  /// The value at `site` of a function of triples: `value(triple, out)` writes `channels` floats
+  /// (at most 8), blended with the trilinear weights (corners in order) where trilinear.
+  template <class Value>
+  void sample(size_t site, int channels, Value&& value, float* out) const;
+  /// "N voxels requested, M synthesized" (lazy), "N voxels read from the tiles" (tiles), and
+  /// ", trilinear" where it blends.
   std::string summary(synthesis::SolidMethod method) const;
 };
 
-/// The voxel of each site (its surface position times `scale` voxels per model unit, floored),
-/// synthesized in one request: texels sharing a voxel share its value. Throws texfab::Error when
+/// Below this many voxels per texel, solidAtSites blends trilinearly (the 2-D bakes' rule).
+inline constexpr double kSolidTrilinearBelow = 0.75;
+
+/// The solid texture at `sites`: the voxel of a site is its surface position times `scale` voxels
+/// per model unit, floored; trilinear where `voxelsPerTexel` < kSolidTrilinearBelow. Every voxel is
+/// synthesized in one request, so texels sharing a voxel share its value. Throws texfab::Error when
 /// a position times the scale leaves the solid texture's range. `cache` (may be null) serves and
 /// keeps coarse levels across requests (a single request gains nothing from it).
-SolidSites solidTriplesAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
-                               const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
-                               double scale, const Context& ctx = {}, synthesis::SolidLevelCache* cache = nullptr);
+SolidSites solidAtSites(const synthesis::SurfaceLevel& sites, const atlas::AtlasFields& fields,
+                        const synthesis::SolidAnalysis& analysis, const synthesis::SolidSynthesisOptions& options,
+                        double scale, double voxelsPerTexel, const Context& ctx = {},
+                        synthesis::SolidLevelCache* cache = nullptr);
+
+// ---- implementation of the template ----
+
+template <class Value>
+void SolidSites::sample(size_t site, int channels, Value&& value, float* out) const {
+  if (!trilinear()) {
+    value(triples[site], out);
+    return;
+  }
+  const std::array<uint32_t, 8>& corner = cells[cellOfSite[site]];
+  const std::array<float, 3>& f = fractionOfSite[site];
+  float sum[8] = {0, 0, 0, 0, 0, 0, 0, 0}, v[8];
+  for (int k = 0; k < 8; ++k) {
+    const float w = ((k & 1) ? f[0] : 1.0f - f[0]) * ((k & 2) ? f[1] : 1.0f - f[1]) * ((k & 4) ? f[2] : 1.0f - f[2]);
+    value(triples[corner[size_t(k)]], v);
+    for (int c = 0; c < channels; ++c) sum[c] += w * v[c];
+  }
+  for (int c = 0; c < channels; ++c) out[c] = sum[c];
+}
 
 } // namespace texfab::render

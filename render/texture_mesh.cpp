@@ -228,12 +228,9 @@ void TextureJob::synthesize() {
   } else {
     r_.exemplarPixelsPerTexel = pixelsPerTexel_;
     // Long on large atlases: the engine reports each level inside this stage.
-    SolidSites solid = solidTriplesAtSites(domain_.levels[0], r_.atlas.fields, *ex_.solidAnalysis, o_.solid, r_.textureScale,
-                                           stage.inner());
-    r_.triples = std::move(solid.triples);
-    r_.voxelsRequested = solid.voxelsRequested;
-    r_.voxelsSynthesized = solid.voxelsSynthesized;
-    stage.finish(solid.summary(o_.solid.method));
+    r_.solid = solidAtSites(domain_.levels[0], r_.atlas.fields, *ex_.solidAnalysis, o_.solid, r_.textureScale,
+                            pixelsPerTexel_, stage.inner());
+    stage.finish(r_.solid.summary(o_.solid.method));
   }
 }
 
@@ -247,10 +244,14 @@ float TextureJob::lookup(const Image& map, size_t site, int channel, bool magnif
     return map.at(pixelIndex(int(std::floor(u + 0.5f)), map.width, toroidal),
                   pixelIndex(int(std::floor(v + 0.5f)), map.height, toroidal), channel);
   }
-  // Solid: the mean over the three exemplar coordinates (as solidColors()).
-  float sum = 0;
-  for (uint32_t c : r_.triples[site]) sum += map.at(int(synthesis::coordU(c)), int(synthesis::coordV(c)), channel);
-  return sum / 3.0f;
+  // Solid: the mean over the three exemplar coordinates (as solidColors()), blended where trilinear.
+  float value = 0;
+  r_.solid.sample(site, 1, [&](const synthesis::Triple& t, float* out) {
+    float sum = 0;
+    for (uint32_t c : t) sum += map.at(int(synthesis::coordU(c)), int(synthesis::coordV(c)), channel);
+    *out = sum / 3.0f;
+  }, &value);
+  return value;
 }
 
 // Resolve: colours and companion maps through the same coordinates.

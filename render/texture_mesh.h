@@ -17,6 +17,7 @@
 #include "core/image.h"
 #include "geometry/mesh.h"
 #include "geometry/tangent_field.h"
+#include "render/bake.h"
 #include "render/surface_measures.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/exemplar_graph.h"
@@ -72,11 +73,10 @@ struct TextureMeshResult {
   /// neighbors are linked only when measures are asked for).
   synthesis::SurfaceLevel sites;
   std::vector<uint32_t> coords;             ///< surface mode: exemplar coordinate per site
-  std::vector<synthesis::Triple> triples;   ///< solid mode: exemplar triple per site
+  SolidSites solid;                         ///< solid mode: the solid texture at the sites
   double textureScale = 0;                  ///< exemplar pixels per model unit used
   double exemplarPixelsPerTexel = 0;
   std::vector<synthesis::LevelStats> synthesisLevels; ///< surface mode: per atlas level, coarsest first
-  int64_t voxelsRequested = 0, voxelsSynthesized = 0; ///< solid mode
   TextureMeasures measures;
   std::vector<std::string> warnings;        ///< e.g. a scale at which features are smaller than a texel
 };

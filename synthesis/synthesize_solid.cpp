@@ -944,21 +944,24 @@ Image solidColorView(const Image& image, int channels) {
   return out;
 }
 
-void solidColors(std::span<const Triple> triples, const Image& ex, const Image& ey, const Image& ez,
-                 std::vector<float>& out) {
+void solidColor(const Triple& triple, const Image& ex, const Image& ey, const Image& ez, float* out) {
   const int channels = solidColorChannels(ex, ey, ez);
   const Image* images[3] = {&ex, &ey, &ez};
-  const size_t start = out.size();
-  out.resize(start + triples.size() * size_t(channels));
-  for (size_t i = 0; i < triples.size(); ++i)
-    for (int c = 0; c < channels; ++c) {
-      float sum = 0;
-      for (int e = 0; e < 3; ++e) {
-        const Image& im = *images[e];
-        sum += im.at(int(coordU(triples[i][size_t(e)])), int(coordV(triples[i][size_t(e)])), im.channels >= 3 ? c : 0);
-      }
-      out[start + i * size_t(channels) + size_t(c)] = sum / 3.0f;
+  for (int c = 0; c < channels; ++c) {
+    float sum = 0;
+    for (int e = 0; e < 3; ++e) {
+      const Image& im = *images[e];
+      sum += im.at(int(coordU(triple[size_t(e)])), int(coordV(triple[size_t(e)])), im.channels >= 3 ? c : 0);
     }
+    out[c] = sum / 3.0f;
+  }
+}
+
+void solidColors(std::span<const Triple> triples, const Image& ex, const Image& ey, const Image& ez,
+                 std::vector<float>& out) {
+  const size_t channels = size_t(solidColorChannels(ex, ey, ez)), start = out.size();
+  out.resize(start + triples.size() * channels);
+  for (size_t i = 0; i < triples.size(); ++i) solidColor(triples[i], ex, ey, ez, &out[start + i * channels]);
 }
 
 DependencyChain dependencyChainSize(const SolidAnalysis& a, const SolidSynthesisOptions& o) {

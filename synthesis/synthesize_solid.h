@@ -227,6 +227,8 @@ int solidColorChannels(const Image& ex, const Image& ey, const Image& ez);
 Image solidColorView(const Image& image, int channels);
 void solidColors(std::span<const Triple> triples, const Image& ex, const Image& ey, const Image& ez,
                  std::vector<float>& out);
+/// The colour of one triple (solidColors): solidColorChannels(ex, ey, ez) values at out.
+void solidColor(const Triple& triple, const Image& ex, const Image& ey, const Image& ez, float* out);
 
 /// The dependency chain of one voxel: voxels synthesized per level (exact, as computed), and the
 /// paper's count (§5.2: the mask dilated by the 3-neighborhood once per pass, not per sub-pass).

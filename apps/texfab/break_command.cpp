@@ -51,7 +51,8 @@ void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const ren
     r["interior"] = {{"width", t.atlas.atlas.width}, {"height", t.atlas.atlas.height}, {"charts", t.atlas.report.charts},
                      {"utilization", t.atlas.report.utilization}, {"texels", t.sites.size()},
                      {"texels_per_unit", t.atlas.atlas.texelsPerUnit},
-                     {"voxels_requested", t.voxelsRequested}, {"voxels_synthesized", t.voxelsSynthesized}};
+                     {"voxels_requested", t.voxelsRequested}, {"voxels_synthesized", t.voxelsSynthesized},
+                     {"sampling", t.trilinear ? "trilinear" : "nearest"}};
     const render::CrackMatch match = render::measureCrackMatch(model);
     const render::CrackSeams seams = render::measureCrackSeams(model);
     r["measures"] = {{"crack_match", {{"difference", match.difference}, {"unrelated_difference", match.unrelatedDifference},

@@ -225,7 +225,9 @@ void runTexture(TextureJob& job) {
   r["atlas"] = toJson(result.atlas);
   r["measures"] = toJson(result.measures, result.textureScale);
   if (o.mode == render::TextureMode::Solid)
-    r["solid"] = {{"voxels_requested", result.voxelsRequested}, {"voxels_synthesized", result.voxelsSynthesized}};
+    r["solid"] = {{"voxels_requested", result.solid.voxelsRequested},
+                  {"voxels_synthesized", result.solid.voxelsSynthesized},
+                  {"sampling", result.solid.trilinear() ? "trilinear" : "nearest"}};
   r["synthesis_levels"] = toJson(result.synthesisLevels);
   r["warnings"] = result.warnings;
   run.finish();

@@ -7,7 +7,6 @@
 #include "render/bake.h"
 
 #include <algorithm>
-#include <cstring>
 #include <unordered_map>
 
 namespace texfab::render {
@@ -30,24 +29,6 @@ geometry::Mesh collectFaces(std::span<const geometry::Mesh> pieces, std::span<co
     }
   }
   return out;
-}
-
-// The colours of the triples (synthesis::solidColors), in parallel chunks.
-std::vector<float> tripleColors(std::span<const synthesis::Triple> triples, const Image& exemplar, int channels,
-                                const Context& ctx) {
-  constexpr int kChunk = 1 << 15;
-  std::vector<float> colors(triples.size() * size_t(channels));
-  const int chunks = int((triples.size() + kChunk - 1) / kChunk);
-  parallelFor(0, chunks, ctx, [&](int b, int e) {
-    std::vector<float> local;
-    for (int c = b; c < e; ++c) {
-      const size_t begin = size_t(c) * kChunk, n = std::min<size_t>(kChunk, triples.size() - begin);
-      local.clear();
-      synthesis::solidColors(triples.subspan(begin, n), exemplar, exemplar, exemplar, local);
-      std::memcpy(colors.data() + begin * size_t(channels), local.data(), local.size() * sizeof(float));
-    }
-  });
-  return colors;
 }
 
 } // namespace
@@ -83,18 +64,19 @@ CutFaceTexture textureCutFaces(std::span<const geometry::Mesh> pieces, std::span
 
   Stage synthesisStage(ctx, "synthesis");
   r.textureScale = o.textureScale > 0 ? o.textureScale : at.texelsPerUnit;
-  SolidSites solid = solidTriplesAtSites(r.sites, r.atlas.fields, analysis, o.solid, r.textureScale, ctx, cache);
+  const SolidSites solid = solidAtSites(r.sites, r.atlas.fields, analysis, o.solid, r.textureScale,
+                                       r.textureScale / at.texelsPerUnit, ctx, cache);
   r.voxelsRequested = solid.voxelsRequested;
   r.voxelsSynthesized = solid.voxelsSynthesized;
+  r.trilinear = solid.trilinear();
   synthesisStage.finish(solid.summary(o.solid.method));
 
   Stage resolveStage(ctx, "resolve");
   const int channels = synthesis::solidColorChannels(exemplar, exemplar, exemplar);
-  const std::vector<float> colors = tripleColors(solid.triples, exemplar, channels, ctx);
+  const auto color = [&](const synthesis::Triple& t, float* out) { synthesis::solidColor(t, exemplar, exemplar, exemplar, out); };
   r.baseColor = std::make_shared<const Image>(
-      bakeSites(at.width, at.height, r.sites, channels, o.atlas.pack.gutter, ctx, [&](size_t s, float* out) {
-        std::memcpy(out, colors.data() + s * size_t(channels), size_t(channels) * sizeof(float));
-      }));
+      bakeSites(at.width, at.height, r.sites, channels, o.atlas.pack.gutter, ctx,
+                [&](size_t s, float* out) { solid.sample(s, channels, color, out); }));
   size_t corner = 0;
   r.uvs.resize(pieces.size());
   for (size_t p = 0; p < pieces.size(); ++p)

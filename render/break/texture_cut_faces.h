@@ -38,6 +38,7 @@ struct CutFaceTexture {
   synthesis::SurfaceLevel sites;           ///< one per chart texel
   double textureScale = 0;                 ///< voxels per model unit used
   int64_t voxelsRequested = 0, voxelsSynthesized = 0;
+  bool trilinear = false;                  ///< voxels larger than texels, blended (solidAtSites)
   /// Per piece, per face given: the UVs of its three corners (glTF/OBJ style, v up).
   std::vector<std::vector<std::array<Eigen::Vector2f, 3>>> uvs;
 };

@@ -65,8 +65,8 @@ inline constexpr Stage kSolidTexture[] = {
     {"analysis", "39c22a9410faab61"}, {"atlas", "427d4aeff5f1272e"}, {"bake", "c008a90264b61740"}};
 inline constexpr Stage kGlbBytes[] = {{"bake", "42430333584d8224"}, {"encode", "dcf64f875ac17e39"}};
 inline constexpr Stage kFracture[] = {
-    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "0ef4d4fba85e697a"},
-    {"encode", "3bc6ad3f64202c3a"}};
+    {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "a6a15d52f562e627"},
+    {"encode", "4b1659ed76db330b"}};
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
 inline constexpr Stage kSliceLayers[] = {{"layers", "f5a4ceac04d174ac"}, {"manifest", "c283acca78a4fa0d"}};
 

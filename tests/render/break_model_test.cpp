@@ -148,6 +148,75 @@ TEST(BreakModel, CutFacesAreTheSolidTextureAtTheirPositions) {
       EXPECT_FLOAT_EQ(t.baseColor->at(t.sites.x[picked[i]], t.sites.y[picked[i]], c), color[i * size_t(channels) + size_t(c)]);
 }
 
+// Voxels spanning several texels: each texel blends the 8 voxels around it, so the cut face shows
+// no voxel squares (nearest voxels would make most neighbouring texels equal and the rest jump).
+TEST(BreakModel, MagnifiedCutFacesBlendTheirVoxelsTrilinearly) {
+  const geometry::Mesh sphere = makeSphere(32, 16);
+  BreakModelOptions o = fractureOptions(3);
+  o.fracture.reset();
+  o.planes = {{{0.1, 0, 0}, {1, 0.2, 0}}};
+  o.interior.textureScale = autoTextureScale(sphere) * 256 / kAutoScaleAtlasSide / 8;
+  const BrokenModel m = breakModel(sphere, {}, interior(), o);
+  const CutFaceTexture& t = *m.interior;
+  ASSERT_LT(t.textureScale / t.atlas.atlas.texelsPerUnit, 0.25);
+  EXPECT_TRUE(t.trilinear);
+
+  // Each site's nearest voxel and its 8 surrounding voxel centres, synthesized directly.
+  const size_t n = t.sites.size();
+  std::vector<synthesis::Voxel> voxels;
+  std::vector<std::array<float, 3>> fraction(n);
+  for (size_t s = 0; s < n; ++s) {
+    const atlas::Float3& p = t.atlas.fields.position.at(t.sites.x[s], t.sites.y[s]);
+    const double q[3] = {double(p.x) * t.textureScale, double(p.y) * t.textureScale, double(p.z) * t.textureScale};
+    voxels.push_back({int64_t(std::floor(q[0])), int64_t(std::floor(q[1])), int64_t(std::floor(q[2]))});
+    const double c[3] = {std::floor(q[0] - 0.5), std::floor(q[1] - 0.5), std::floor(q[2] - 0.5)};
+    for (int k = 0; k < 3; ++k) fraction[s][size_t(k)] = float(q[k] - 0.5 - c[k]);
+    for (int k = 0; k < 8; ++k)
+      voxels.push_back({int64_t(c[0]) + (k & 1), int64_t(c[1]) + ((k >> 1) & 1), int64_t(c[2]) + ((k >> 2) & 1)});
+  }
+  std::vector<float> color;
+  synthesis::solidColors(synthesis::synthesizeSolid(marble().solid, voxels, m.interiorSolid).triples, marble().image,
+                         marble().image, marble().image, color);
+  const int channels = t.baseColor->channels;
+  Image nearest(t.baseColor->width, t.baseColor->height, channels);
+  std::vector<uint8_t> isSite(size_t(nearest.width) * size_t(nearest.height), 0);
+  for (size_t s = 0; s < n; ++s) {
+    const float* v = &color[s * 9 * size_t(channels)];
+    for (int c = 0; c < channels; ++c) {
+      float blend = 0;
+      for (int k = 0; k < 8; ++k) {
+        const std::array<float, 3>& f = fraction[s];
+        const float w = ((k & 1) ? f[0] : 1 - f[0]) * ((k & 2) ? f[1] : 1 - f[1]) * ((k & 4) ? f[2] : 1 - f[2]);
+        blend += w * v[size_t(1 + k) * size_t(channels) + size_t(c)];
+      }
+      ASSERT_NEAR(t.baseColor->at(t.sites.x[s], t.sites.y[s], c), blend, 1e-5) << "site " << s;
+      nearest.at(t.sites.x[s], t.sites.y[s], c) = v[c];
+    }
+    isSite[size_t(t.sites.y[s]) * size_t(nearest.width) + size_t(t.sites.x[s])] = 1;
+  }
+  // Steps between horizontally neighbouring texels: equal pairs and the largest step.
+  auto steps = [&](const Image& image) {
+    int equal = 0, pairs = 0;
+    float largest = 0;
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x + 1 < image.width; ++x) {
+        if (!isSite[size_t(y) * size_t(image.width) + size_t(x)] || !isSite[size_t(y) * size_t(image.width) + size_t(x) + 1])
+          continue;
+        float step = 0;
+        for (int c = 0; c < channels; ++c) step = std::max(step, std::fabs(image.at(x + 1, y, c) - image.at(x, y, c)));
+        equal += step == 0;
+        largest = std::max(largest, step);
+        ++pairs;
+      }
+    return std::pair{double(equal) / std::max(pairs, 1), largest};
+  };
+  const auto [nearestEqual, nearestLargest] = steps(nearest);
+  const auto [blendEqual, blendLargest] = steps(*t.baseColor);
+  EXPECT_GT(nearestEqual, 0.6);
+  EXPECT_LT(blendEqual, 0.05);
+  EXPECT_LT(blendLargest, 0.5f * nearestLargest);
+}
+
 // z = 0 passes within 1e-16 of the sphere's equator vertices.
 TEST(BreakModel, RecutTexturesOnlyTheNewFacesAndReusesTheCache) {
   BreakModelOptions o = fractureOptions(3);

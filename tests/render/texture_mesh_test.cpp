@@ -317,7 +317,8 @@ TEST(TextureMesh, SolidModeTexelsAreTheSolidTextureAtTheirPositions) {
   o.mode = TextureMode::Solid;
   const TextureMeshResult r = textureMesh(test::makeSphere(32, 16), e, o);
   EXPECT_LE(r.measures.seams.ratio, 1.1);
-  EXPECT_GT(r.voxelsRequested, 1000);
+  EXPECT_GT(r.solid.voxelsRequested, 1000);
+  EXPECT_FALSE(r.solid.trilinear());
   // Texels against a request of just their voxels (any subset gives the same values).
   std::vector<size_t> picked;
   std::vector<synthesis::Voxel> voxels;
