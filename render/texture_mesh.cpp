@@ -79,11 +79,10 @@ void checkCompanionMaps(const TextureExemplar& ex, TextureMode mode) {
   if (mode == TextureMode::Solid && ex.normal)
     throw Error("a normal map needs surface mode: a solid texture has no tangent frame");
   if (ex.graph && mode == TextureMode::Solid) throw Error("an exemplar graph needs surface mode");
-  if (ex.graph && (ex.normal || ex.roughness || ex.height))
-    throw Error("companion maps are not synthesized from an exemplar graph yet");
-  requireSize(ex.normal, *ex.color, "normal");
-  requireSize(ex.roughness, *ex.color, "roughness");
-  requireSize(ex.height, *ex.color, "height");
+  const Image& size = ex.graph ? ex.graph->colors : *ex.color;  // a graph's maps are packed as its colours
+  requireSize(ex.normal, size, "normal");
+  requireSize(ex.roughness, size, "roughness");
+  requireSize(ex.height, size, "height");
 }
 
 double autoTextureScale(const geometry::Mesh& mesh) {
@@ -236,7 +235,7 @@ void TextureJob::synthesize() {
 
 float TextureJob::lookup(const Image& map, size_t site, int channel, bool magnified) const {
   channel = std::min(channel, map.channels - 1);
-  if (ex_.graph) return synthesis::sampleSurfaceGraph(*ex_.graph, r_.coords[site], channel);
+  if (ex_.graph) return synthesis::sampleSurfaceGraph(*ex_.graph, map, r_.coords[site], channel);
   if (surface_) {
     const float u = synthesis::surfaceU(r_.coords[site]), v = synthesis::surfaceV(r_.coords[site]);
     const bool toroidal = ex_.analysis->wrap == synthesis::ExemplarWrap::Tile;
@@ -264,11 +263,12 @@ void TextureJob::resolveMaps() {
   // Colours at the nearest exemplar pixel keep the exemplar's sharpness; bilinear filtering only
   // where the exemplar is magnified (a texel finer than its pixels), where nearest looks blocky.
   const bool magnified = r_.exemplarPixelsPerTexel < 0.75;
+  const Image& colors = ex_.graph ? ex_.graph->colors : exemplar_;
   auto bake = [&](int channels, auto&& texel) {
     return std::make_shared<const Image>(bakeSites(atlas.width, atlas.height, sites, channels, gutter, ctx_, texel));
   };
   r_.baseColor = bake(colorChannels, [&](size_t s, float* out) {
-    for (int ch = 0; ch < colorChannels; ++ch) out[ch] = lookup(exemplar_, s, ch, magnified);
+    for (int ch = 0; ch < colorChannels; ++ch) out[ch] = lookup(colors, s, ch, magnified);
   });
   if (ex_.normal)
     r_.normal = bake(3, [&](size_t s, float* out) {

@@ -52,10 +52,13 @@ struct TextureExemplar {
   const Image* color = nullptr;
   const synthesis::ExemplarAnalysis* analysis = nullptr;   ///< needed in surface mode without a graph
   const synthesis::SolidAnalysis* solidAnalysis = nullptr; ///< needed in solid mode
+  /// Companion maps, the exemplar's size; with a graph, the graph's maps packed as its colours
+  /// (synthesis::graphMapAtlas).
   const Image* normal = nullptr;    ///< tangent-space normal map, OpenGL convention (+Y up); surface mode
   const Image* roughness = nullptr; ///< first channel
   const Image* height = nullptr;    ///< first channel
-  const synthesis::GraphAnalysis* graph = nullptr; ///< multiscale synthesis (Han et al. 2008), surface mode
+  /// Multiscale synthesis (Han et al. 2008), surface mode; `color` is then its root exemplar.
+  const synthesis::GraphAnalysis* graph = nullptr;
 };
 
 struct TextureMeasures {

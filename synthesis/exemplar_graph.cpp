@@ -266,6 +266,24 @@ void ExemplarGraph::validate() const {
     if (!e.region.empty() && std::none_of(e.region.begin(), e.region.end(), [](uint8_t v) { return v != 0; }))
       throw Error(what + ": its region is empty");
   }
+  for (size_t j = 0; j < maps.size(); ++j) {
+    const GraphMap& map = maps[j];
+    if (std::none_of(std::begin(kGraphMapNames), std::end(kGraphMapNames), [&](const char* n) { return map.name == n; }))
+      throw Error("exemplar graph: unknown map '" + map.name + "' (normal, roughness or height)");
+    for (size_t o = 0; o < j; ++o)
+      if (maps[o].name == map.name) throw Error("exemplar graph: the " + map.name + " map is given twice");
+    if (map.perNode.size() != exemplars.size())
+      throw Error("exemplar graph: the " + map.name + " map must be given for every exemplar");
+    for (size_t i = 0; i < exemplars.size(); ++i) {
+      const Image& image = map.perNode[i];
+      const std::string what = "the " + map.name + " map of exemplar '" + names[i] + "'";
+      if (image.width != m || image.height != m || image.channels < 1)
+        throw Error(what + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                    ", its exemplar " + std::to_string(m) + "x" + std::to_string(m));
+      if (!std::all_of(image.pixels.begin(), image.pixels.end(), [](float v) { return std::isfinite(v); }))
+        throw Error(what + " holds values that are not finite numbers");
+    }
+  }
   std::vector<char> reached(exemplars.size(), 0);
   std::vector<int> todo{0};
   reached[0] = 1;
@@ -325,6 +343,34 @@ std::vector<int32_t> shallowestDepths(const ExemplarGraph& graph) {
 
 } // namespace
 
+const GraphMap* ExemplarGraph::map(const std::string& name) const {
+  for (const GraphMap& m : maps)
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+namespace {
+
+// Level k of stacks[i] into the m x m tile at (k m, i m).
+Image packStacks(const std::vector<std::vector<Image>>& stacks) {
+  const Image& first = stacks.front().front();
+  const int m = first.width, levels = int(stacks.front().size()), channels = first.channels;
+  Image atlas(m * levels, m * int(stacks.size()), channels);
+  for (size_t i = 0; i < stacks.size(); ++i)
+    for (int k = 0; k < levels; ++k)
+      for (int y = 0; y < m; ++y)
+        std::memcpy(atlas.pixel(k * m, int(i) * m + y), stacks[i][size_t(k)].pixel(0, y), size_t(m) * channels * sizeof(float));
+  return atlas;
+}
+
+} // namespace
+
+Image graphMapAtlas(const GraphMap& map) {
+  std::vector<std::vector<Image>> stacks;
+  for (const Image& image : map.perNode) stacks.push_back(gaussianStack(image, ExemplarWrap::Tile));
+  return packStacks(stacks);
+}
+
 GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options, const Context& ctx) {
   graph.validate();
   options.validate();
@@ -344,13 +390,8 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
 
   Stage stacks(ctx, "stacks");
   std::vector<std::vector<Image>> stack;
-  a.colors = Image(aw, a.atlasHeight(), 3);
-  for (int i = 0; i < a.nodes; ++i) {
-    stack.push_back(gaussianStack(rgbOf(graph.exemplars[size_t(i)]), ExemplarWrap::Tile));
-    for (int k = 0; k < a.levels; ++k)
-      for (int y = 0; y < m; ++y)
-        std::memcpy(a.colors.pixel(k * m, i * m + y), stack.back()[size_t(k)].pixel(0, y), size_t(m) * 3 * sizeof(float));
-  }
+  for (int i = 0; i < a.nodes; ++i) stack.push_back(gaussianStack(rgbOf(graph.exemplars[size_t(i)]), ExemplarWrap::Tile));
+  a.colors = packStacks(stack);
   stacks.finish();
 
   Stage appearance(ctx, "appearance");

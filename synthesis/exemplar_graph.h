@@ -29,7 +29,7 @@
 //     source inside the region, at every stack level; a finest-level texel that no edge covers
 //     stays, as a leaf's does;
 //   * exemplars are toroidal (coordinates wrap in their tile), square, all of one power-of-two
-//     side m, as the thesis assumes for exposition; colour only (no companion maps yet);
+//     side m, as the thesis assumes for exposition;
 //   * no inconsistency correction (§5.3's transfer functions): exemplars of one graph should come
 //     from one source or agree in colour.
 
@@ -72,17 +72,30 @@ inline constexpr int kMinGraphExemplarSide = 8;
 /// Most exemplars in a graph (GraphAnalysis::moves holds a bit per node).
 inline constexpr int kMaxGraphNodes = 32;
 
+/// A companion map of every exemplar of a graph (normal, roughness, height), resolved through the
+/// synthesized coordinates like the colours (graphMapAtlas).
+struct GraphMap {
+  std::string name;            ///< one of kGraphMapNames
+  std::vector<Image> perNode;  ///< node i's map, the size of its exemplar
+};
+inline constexpr const char* kGraphMapNames[] = {"normal", "roughness", "height"};
+
 struct ExemplarGraph {
   std::vector<std::string> names;  ///< one per node, for messages
   std::vector<Image> exemplars;    ///< node i's exemplar; node 0 is the root (the coarsest)
   std::vector<GraphEdge> edges;
+  std::vector<GraphMap> maps;      ///< companion maps (each for every node), none by default
+
+  /// The map named `name`, or null.
+  const GraphMap* map(const std::string& name) const;
 
   int side() const { return exemplars.empty() ? 0 : exemplars.front().width; }
   /// Throws texfab::Error, naming the node or edge, unless: at least one node; every exemplar
   /// square, of one power-of-two side in [kMinGraphExemplarSide, kMaxGraphExemplarSide], finite;
   /// at most kMaxGraphNodes;
   /// edges between existing nodes with 1 <= octaves <= kMaxGraphEdgeOctaves, no edge twice, a
-  /// region (where given) of side² flags with at least one set; every node reachable from the root.
+  /// region (where given) of side² flags with at least one set; every node reachable from the root;
+  /// maps of known names, each once, with a finite image of its exemplar's size for every node.
   void validate() const;
   /// The finest synthesis level any output texel can need: the deepest path's total octaves plus
   /// the exemplars' levels; -1 when a cycle makes the texture infinitely deep.
@@ -133,6 +146,12 @@ struct GraphAnalysis {
 /// options. Reports the stages "stacks", "appearance" and "candidates" through ctx.
 GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options = {},
                            const Context& ctx = {});
+
+/// A companion map packed as GraphAnalysis::colors packs the colours (level k of node i is the m x m
+/// tile at (k m, i m), the Gaussian stack of node i's map), with the map's channels: what a
+/// synthesized coordinate reads (applyCoords, sampleSurfaceGraph), so that the map follows the
+/// colours through every exemplar and level.
+Image graphMapAtlas(const GraphMap& map);
 
 /// The cache key of (graph, options).
 uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions& options);

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <initializer_list>
+#include <map>
 #include <type_traits>
 
 namespace texfab::synthesis {
@@ -65,6 +66,37 @@ std::vector<uint8_t> regionOf(const json& value, int side, const std::filesystem
   return region;
 }
 
+// An exemplar's "maps": {"normal": "n.png", ...} (kGraphMapNames).
+std::map<std::string, std::string> mapsOf(const json& exemplar, const std::string& where) {
+  std::map<std::string, std::string> files;
+  if (!exemplar.contains("maps")) return files;
+  const json& maps = exemplar.at("maps");
+  if (!maps.is_object()) throw Error(where + ": \"maps\" must be {\"normal\": image, \"roughness\": ..., \"height\": ...}");
+  onlyKeys(maps, {"normal", "roughness", "height"}, where + ": maps");
+  for (const auto& item : maps.items()) files[item.key()] = get<std::string>(maps, item.key().c_str(), where + ": maps");
+  return files;
+}
+
+// The graph's maps: each one every exemplar gives, read relative to `folder`.
+std::vector<GraphMap> readMaps(const std::vector<std::map<std::string, std::string>>& files,
+                               const std::vector<std::string>& names, const std::filesystem::path& folder,
+                               const std::string& file) {
+  std::vector<GraphMap> maps;
+  for (const char* name : kGraphMapNames) {
+    const auto has = [&](const std::map<std::string, std::string>& f) { return f.count(name) > 0; };
+    if (std::none_of(files.begin(), files.end(), has)) continue;
+    GraphMap map{name, {}};
+    for (size_t i = 0; i < files.size(); ++i) {
+      if (!has(files[i]))
+        throw Error(file + ": exemplar '" + names[i] + "' has no " + name +
+                    " map while others have one: give it for every exemplar or for none");
+      map.perNode.push_back(readImage(folder / files[i].at(name)));
+    }
+    maps.push_back(std::move(map));
+  }
+  return maps;
+}
+
 } // namespace
 
 ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
@@ -82,15 +114,17 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
 
   ExemplarGraph graph;
   std::vector<std::string> images;
+  std::vector<std::map<std::string, std::string>> mapFiles;  // per exemplar: map name -> image
   for (const json& e : get<json>(doc, "exemplars", file)) {
     const std::string where = file + ": exemplar " + std::to_string(graph.names.size() + 1);
     if (!e.is_object()) throw Error(where + ": expected {\"name\": ..., \"image\": ...}");
-    onlyKeys(e, {"name", "image"}, where);
+    onlyKeys(e, {"name", "image", "maps"}, where);
     const std::string name = get<std::string>(e, "name", where);
     if (std::find(graph.names.begin(), graph.names.end(), name) != graph.names.end())
       throw Error(file + ": exemplar '" + name + "' is named twice");
     graph.names.push_back(name);
     images.push_back(get<std::string>(e, "image", where));
+    mapFiles.push_back(mapsOf(e, where));
   }
   if (graph.names.empty()) throw Error(file + ": \"exemplars\" is empty");
   auto indexOf = [&](const std::string& name, const std::string& where) {
@@ -102,6 +136,7 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
     const int root = indexOf(get<std::string>(doc, "root", file), file + ": root");
     std::rotate(graph.names.begin(), graph.names.begin() + root, graph.names.begin() + root + 1);
     std::rotate(images.begin(), images.begin() + root, images.begin() + root + 1);
+    std::rotate(mapFiles.begin(), mapFiles.begin() + root, mapFiles.begin() + root + 1);
   }
   std::vector<std::pair<size_t, json>> regions;  // filled once the exemplars' side is known
   if (doc.contains("edges")) {
@@ -120,6 +155,7 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
   }
   const std::filesystem::path folder = path.parent_path();
   for (const std::string& image : images) graph.exemplars.push_back(readImage(folder / image));  // absolute: as is
+  graph.maps = readMaps(mapFiles, graph.names, folder, file);
   for (const auto& [edge, region] : regions)
     graph.edges[edge].region = regionOf(region, graph.exemplars.front().width, folder,
                                         file + ": edge " + std::to_string(edge + 1));

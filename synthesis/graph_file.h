@@ -3,8 +3,8 @@
 // The exemplar graph file (docs/exemplar-graphs.md#the-file):
 //
 //   {
-//     "exemplars": [ {"name": "regions", "image": "regions.png"},
-//                    {"name": "grain", "image": "grain.png"} ],
+//     "exemplars": [ {"name": "regions", "image": "regions.png", "maps": {"height": "regions-h.png"}},
+//                    {"name": "grain", "image": "grain.png", "maps": {"height": "grain-h.png"}} ],
 //     "root": "regions",
 //     "edges": [ {"from": "regions", "to": "grain", "scale": 16, "region": "grain-mask.png"} ]
 //   }
@@ -13,7 +13,8 @@
 // exemplar). An edge's "scale" is how many pixels of `to` one pixel of `from` spans: a power of two
 // from 2 up; from == to makes an exemplar self-similar (an infinite zoom). Its optional "region"
 // limits it to part of `from`: [x, y, width, height] in pixels (wrapping), or a mask image of the
-// exemplars' size whose first channel is at least 0.5 inside.
+// exemplars' size whose first channel is at least 0.5 inside. An exemplar's optional "maps" are its
+// companion maps ("normal", "roughness", "height"), each given for every exemplar or for none.
 
 #include "synthesis/exemplar_graph.h"
 

@@ -192,13 +192,12 @@ SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, con
   return result;
 }
 
-float sampleSurfaceGraph(const GraphAnalysis& analysis, uint32_t coord, int channel) {
-  const Image& colors = analysis.colors;
-  channel = std::min(channel, colors.channels - 1);
+float sampleSurfaceGraph(const GraphAnalysis& analysis, const Image& atlas, uint32_t coord, int channel) {
+  channel = std::min(channel, atlas.channels - 1);
   const int m = analysis.side;
   const int tileX = int(coordU(coord) / uint32_t(m * kOne)) * m, tileY = int(coordV(coord) / uint32_t(m * kOne)) * m;
   const float u = float(coordU(coord)) / float(kOne) - float(tileX), v = float(coordV(coord)) / float(kOne) - float(tileY);
-  const auto at = [&](int x, int y) { return colors.at(tileX + (x & (m - 1)), tileY + (y & (m - 1)), channel); };
+  const auto at = [&](int x, int y) { return atlas.at(tileX + (x & (m - 1)), tileY + (y & (m - 1)), channel); };
   if (tileX / m < analysis.finestLevel()) return at(int(std::floor(u + 0.5f)), int(std::floor(v + 0.5f)));
   const int x0 = int(std::floor(u)), y0 = int(std::floor(v));
   const float fx = u - float(x0), fy = v - float(y0);

@@ -47,9 +47,10 @@ int surfaceGraphOutputLevel(const GraphAnalysis& analysis, double pixelsPerTexel
 SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, const SurfaceDomain& domain,
                                               const SurfaceSynthesisOptions& options, const Context& ctx = {});
 
-/// Channel `channel` of the graph's colours at surface coordinate `coord`: bilinear (wrapped in the
+/// Channel `channel` (clamped to its channels) of `atlas` (the graph's colours, analysis.colors, or a
+/// companion map's graphMapAtlas) at surface coordinate `coord`: bilinear (wrapped in the
 /// coordinate's tile) at an exemplar's finest stack level, where a texel spans at most one pixel
 /// (magnified past it); the nearest pixel at coarser levels, whose texels span h_k >= 2 pixels.
-float sampleSurfaceGraph(const GraphAnalysis& analysis, uint32_t coord, int channel);
+float sampleSurfaceGraph(const GraphAnalysis& analysis, const Image& atlas, uint32_t coord, int channel);
 
 } // namespace texfab::synthesis

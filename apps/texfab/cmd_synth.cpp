@@ -42,7 +42,8 @@ struct SynthJob {
   CommonFlags common;
 };
 
-// --apply MAP:OUT: a companion map of the exemplar, resolved through the same coordinates.
+// --apply MAP:OUT: a companion map of the exemplar (with --graph: the name of the graph's map),
+// resolved through the same coordinates.
 struct Companion {
   std::string input;
   fs::path output;  // staged
@@ -115,8 +116,7 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Run& r
 void runGraphSynth(const SynthJob& job) {
   using namespace synthesis;
   Run run("synth", job.common);
-  if (job.tileable || !job.coords.empty() || !job.apply.empty())
-    throw UsageError("--graph does not take --tileable, --coords or --apply yet");
+  if (job.tileable || !job.coords.empty()) throw UsageError("--graph does not take --tileable or --coords yet");
   GraphSynthesisOptions options;
   options.seed = job.options.seed;
   options.jitter = job.options.jitter;
@@ -129,9 +129,15 @@ void runGraphSynth(const SynthJob& job) {
   }
   checkImageWritable(job.output);
   const fs::path out = run.output(job.output);
+  std::vector<Companion> companions = reserveCompanions(job, run);  // MAP: a map name of the graph
 
   Stage load(run.ctx(), "load");
   const ExemplarGraph graph = readExemplarGraph(job.graph);
+  for (Companion& c : companions) {
+    const GraphMap* map = graph.map(c.input);
+    if (!map) throw UsageError("--apply " + c.input + ": " + job.graph + " gives no '" + c.input + "' map");
+    c.map = graphMapAtlas(*map);
+  }
   run.checkMemory(graphAnalysisMemoryBytes(int(graph.exemplars.size()), graph.side()) +
                       synthesizeGraphMemoryBytes(job.window),
                   "a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) +
@@ -152,6 +158,7 @@ void runGraphSynth(const SynthJob& job) {
                figure(job.zoom));
   Stage write(run.ctx(), "write");
   writeImage(applyCoords(result.coords, analysis.colors, run.ctx()), out);
+  for (const Companion& c : companions) writeImage(applyCoords(result.coords, c.map, run.ctx()), c.output);
   write.finish(job.output);
 
   nlohmann::json& r = run.report();
@@ -275,7 +282,8 @@ Command addSynthCommand(CLI::App& root) {
   f.text("--coords", job->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
   f.app()->add_option("--apply", job->apply,
                       "MAP:OUT: apply the same coordinates to a companion map of the exemplar (normal, roughness, "
-                      "height; same size as the exemplar) and write OUT (repeatable)");
+                      "height; same size as the exemplar) and write OUT (repeatable); with --graph, MAP names a map "
+                      "the graph's exemplars give (normal, roughness or height)");
   f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runSynth(*job); }};
 }

@@ -81,14 +81,17 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
     in.exemplar = readImage(job.exemplar);
     synthesis::validateExemplarSize(in.exemplar);
   }
-  auto read = [](const std::string& path, std::optional<Image>& slot) {
+  auto read = [&](const std::string& path, const char* name, std::optional<Image>& slot) {
     if (!path.empty()) slot = readImage(path);
+    if (in.graph)
+      if (const synthesis::GraphMap* map = in.graph->map(name)) slot = synthesis::graphMapAtlas(*map);
   };
-  read(maps.normal, in.normal);
-  read(maps.roughness, in.roughness);
-  read(maps.height, in.height);
-  if (in.normal && in.normal->channels < 3) throw Error(maps.normal + ": a normal map needs 3 channels");
-  render::checkCompanionMaps(in.view(), job.options.mode);  // before the (possibly long) analysis
+  read(maps.normal, "normal", in.normal);
+  read(maps.roughness, "roughness", in.roughness);
+  read(maps.height, "height", in.height);
+  if (in.normal && in.normal->channels < 3)
+    throw Error((in.graph ? job.graph + ": the normal maps" : maps.normal) + ": a normal map needs 3 channels");
+  if (!in.graph) render::checkCompanionMaps(in.view(), job.options.mode);  // before the (possibly long) analysis
   in.mesh = geometry::readMesh(job.model, ctx);
   stage.finish(job.model + ": " + counted(int64_t(in.mesh.triangleCount()), "triangle") + "; " +
                (in.graph ? job.graph + ": " + counted(int64_t(in.graph->exemplars.size()), "exemplar") + " of "
@@ -164,8 +167,8 @@ void runTexture(TextureJob& job) {
     throw UsageError(job.graph.empty() ? "give an exemplar (--exemplar) or an exemplar graph (--graph)"
                                        : "give --exemplar or --graph, not both");
   if (!job.graph.empty() && (o.mode == render::TextureMode::Solid || !job.maps.empty() || job.wrap != WrapChoice::Auto))
-    throw UsageError("--graph synthesizes colour over the surface: it does not take --mode solid, --maps or "
-                     "--exemplar-wrap yet");
+    throw UsageError("--graph synthesizes over the surface, with the companion maps its file gives: it does not take "
+                     "--mode solid, --maps or --exemplar-wrap");
   if (!geometry::meshFormatCarriesTextures(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": " + geometry::meshFormatName(geometry::meshFormatOf(job.output)) +
                      " files cannot carry the texture; write .glb, .gltf, .obj or .3mf");
@@ -173,9 +176,10 @@ void runTexture(TextureJob& job) {
                                                          std::to_string(o.atlas.pack.height) + " atlas");
   const CompanionFiles maps = parseMaps(job.maps);
   const fs::path out = run.output(job.output);
-  const fs::path heightOut =
-      maps.height.empty() ? fs::path()
-                          : run.output(fs::path(job.output).replace_filename(fs::path(job.output).stem().string() + "_height.png"));
+  const auto reserveHeight = [&] {
+    return run.output(fs::path(job.output).replace_filename(fs::path(job.output).stem().string() + "_height.png"));
+  };
+  fs::path heightOut = maps.height.empty() ? fs::path() : reserveHeight();
   if (!job.preview.empty()) checkImageWritable(job.preview);
   const fs::path previewOut = job.preview.empty() ? fs::path() : run.output(job.preview);
   o.solid.seed = o.surface.seed;
@@ -183,6 +187,7 @@ void runTexture(TextureJob& job) {
 
   Inputs in = load(job, maps, run.ctx());
   if (in.graph) {
+    if (in.height) heightOut = reserveHeight();  // the graph's height maps
     synthesis::checkSurfaceGraphSize(int(in.graph->exemplars.size()), in.graph->side());
     run.checkMemory(render::textureMeshMemoryBytes(o) +
                         synthesis::graphAnalysisMemoryBytes(int(in.graph->exemplars.size()), in.graph->side()),
@@ -246,7 +251,8 @@ Command addTextureCommand(CLI::App& root) {
   f.text("--graph", job->graph,
          "An exemplar graph instead (JSON: exemplars at several scales and the edges between them; "
          "docs/exemplar-graphs.md): the root's structure at the model's scale, the finer exemplars where texels "
-         "are finer (surface mode, colour only; default scale: the root spans the model's diagonal)");
+         "are finer (surface mode; with the companion maps the file gives; default scale: the root spans the model's "
+         "diagonal)");
   f.text("-o,--output", job->output, "Textured model (.glb .gltf .obj .3mf)")->required();
   f.choice("--mode", o.mode, {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}},
            "surface (synthesis over the surface) or solid (a 3-D material, seamless)");
@@ -270,7 +276,8 @@ Command addTextureCommand(CLI::App& root) {
   solidFidelityFlags(f, job->method, o.solid.contrastGain, o.solid.refinePasses, " (--mode solid)");
   f.text("--maps", job->maps,
          "Companion maps of the exemplar's size, synthesized with the same coordinates: "
-         "normal=N.png,roughness=R.png,height=H.png (height is written as OUTPUT_height.png)");
+         "normal=N.png,roughness=R.png,height=H.png (height is written as OUTPUT_height.png); with --graph, the "
+         "maps its exemplars give (docs/exemplar-graphs.md)");
   f.modelOutput(job->write);
   f.printSize(job->write);
   f.text("--preview", job->preview, "Also render the textured model to this image");

@@ -34,6 +34,19 @@ py::array coordsArray(const synthesis::CoordMap& map) {
   return coords;
 }
 
+// What a synthesis call computes (without the GIL), and its Python form.
+struct Synthesized {
+  synthesis::CoordMap coords;
+  Image image;
+  std::map<std::string, Image> maps;  ///< companion maps through the same coordinates
+};
+
+SynthesisOutput outputOf(Synthesized&& r, synthesis::ExemplarWrap wrap) {
+  SynthesisOutput output{imageArray(std::move(r.image)), coordsArray(r.coords), {}, toString(wrap)};
+  for (auto& [name, map] : r.maps) output.maps[py::str(name)] = imageArray(std::move(map));
+  return output;
+}
+
 // The window a call asks for: `window` (x, y, width, height), else (0, 0) and `size`.
 synthesis::Window windowOf(const py::object& size, const py::object& window) {
   synthesis::Window w;
@@ -88,13 +101,8 @@ SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& siz
                   analysisMemoryBytes(exemplar.width, exemplar.height, analysis),
               "a " + std::to_string(w.width) + "x" + std::to_string(w.height) + " output from a " +
                   std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) + " exemplar");
-  struct Result {
-    CoordMap coords;
-    Image image;
-    std::map<std::string, Image> maps;
-  };
-  Result r = call.run([&] {
-    Result out;
+  Synthesized r = call.run([&] {
+    Synthesized out;
     const ExemplarAnalysis a = analyze2d(call, exemplar, analysis);
     Stage stage(call.ctx(), "synthesis");
     out.coords = synthesize2d(a, w, options, stage.inner()).coords;
@@ -103,9 +111,7 @@ SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& siz
     for (const auto& [name, map] : maps) out.maps[name] = applyCoords(out.coords, map, call.ctx());
     return out;
   });
-  SynthesisOutput output{imageArray(std::move(r.image)), coordsArray(r.coords), {}, toString(analysis.wrap)};
-  for (auto& [name, map] : r.maps) output.maps[py::str(name)] = imageArray(std::move(map));
-  return output;
+  return outputOf(std::move(r), analysis.wrap);
 }
 
 SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& size, const py::object& window,
@@ -124,16 +130,18 @@ SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& s
   checkMemory(graphAnalysisMemoryBytes(int(graph.exemplars.size()), graph.side()) + synthesizeGraphMemoryBytes(w),
               "a " + std::to_string(w.width) + "x" + std::to_string(w.height) + " output from a graph of " +
                   std::to_string(graph.exemplars.size()) + " exemplars");
-  auto [coords, image] = call.run([&] {
+  Synthesized r = call.run([&] {
+    Synthesized out;
     const GraphAnalysis a = analyzeGraph(graph, {}, call.analysisCache(), call.ctx());
     options.validate(a);
     Stage stage(call.ctx(), "synthesis");
-    CoordMap out = synthesizeGraph(a, w, options, stage.inner()).coords;
+    out.coords = synthesizeGraph(a, w, options, stage.inner()).coords;
     stage.finish();
-    Image colours = applyCoords(out, a.colors, call.ctx());
-    return std::pair{std::move(out), std::move(colours)};
+    out.image = applyCoords(out.coords, a.colors, call.ctx());
+    for (const GraphMap& map : graph.maps) out.maps[map.name] = applyCoords(out.coords, graphMapAtlas(map), call.ctx());
+    return out;
   });
-  return {imageArray(std::move(image)), coordsArray(coords), {}, toString(ExemplarWrap::Tile)};
+  return outputOf(std::move(r), ExemplarWrap::Tile);
 }
 
 synthesis::Voxel voxelAt(const Eigen::Vector3d& p, double voxelSize) {
@@ -239,7 +247,8 @@ void bindSynthesis(py::module_& m) {
         py::arg("threads") = 0, py::arg("cache_dir") = py::none(), py::arg("progress") = py::none(),
         "Synthesizes `size` (W, H), or the window (X, Y, W, H), at `zoom` (a power of two: output texels are 1/zoom of "
         "a root pixel) from an exemplar graph file (multiscale synthesis, Han et al. 2008); coords are positions in "
-        "the graph's packed exemplars. Equal to `texfab synth --graph`");
+        "the graph's packed exemplars; maps: the companion maps the graph's exemplars give. Equal to `texfab synth "
+        "--graph`");
   const synthesis::SolidSynthesisOptions sso;
   m.def("solid", &solid, py::arg("exemplar"), py::kw_only(), py::arg("points") = py::none(),
         py::arg("box") = py::none(), py::arg("plane") = py::none(), py::arg("size") = py::none(),

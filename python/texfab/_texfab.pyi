@@ -80,7 +80,8 @@ def synthesize_graph(graph: PathLike, size: tuple[int, int] = (512, 512), *,
                      threads: int = 0, cache_dir: CacheDir = None,
                      progress: Optional[Progress] = None) -> SynthesisResult:
     """Multiscale synthesis from an exemplar graph file (docs/exemplar-graphs.md) at `zoom` (a
-    power of two: output texels are 1/zoom of a root pixel); equal to `texfab synth --graph`."""
+    power of two: output texels are 1/zoom of a root pixel); equal to `texfab synth --graph`.
+    `maps` holds the companion maps the graph's exemplars give ("normal", "roughness", "height")."""
 
 def solid(exemplar: ImageLike, *, points: Optional[npt.ArrayLike] = None,
           box: Optional[tuple[int, int, int, int, int, int]] = None,

@@ -451,6 +451,9 @@ void seedGraphFile(const fs::path& folder) {
   writeFile(folder / "regions.json", std::string_view(R"({"exemplars": [{"name": "a", "image": "a.png"},
     {"name": "b", "image": "b.png"}], "edges": [{"from": "a", "to": "b", "scale": 2, "region": [-3, 4, 8, 16]},
     {"from": "a", "to": "a", "scale": 2, "region": "mask.png"}]})"));
+  writeFile(folder / "maps.json", std::string_view(R"({"exemplars": [{"name": "a", "image": "a.png",
+    "maps": {"normal": "b.png", "height": "mask.png"}}, {"name": "b", "image": "b.png",
+    "maps": {"normal": "a.png", "height": "a.png"}}], "edges": [{"from": "a", "to": "b", "scale": 2}]})"));
 }
 
 constexpr char kOff[] = ".off", kPly[] = ".ply", kStl[] = ".stl", kGltf[] = ".gltf", kGlb[] = ".glb", k3mf[] = ".3mf";

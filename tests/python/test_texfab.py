@@ -60,15 +60,19 @@ def test_synthesize_equals_the_command_line(tmp_path, cache):
 def test_synthesize_graph_equals_the_command_line(tmp_path, cache):
     photos = SOURCE / "models" / "exemplars" / "photos"
     graph = tmp_path / "g.json"
-    graph.write_text(json.dumps({"exemplars": [{"name": "rock", "image": str(photos / "rock.png")},
-                                               {"name": "stone", "image": str(photos / "stone.png")}],
+    # Each exemplar's own image as its normal map: the synthesized normal map is the colour output.
+    exemplar = lambda name: {"name": name, "image": str(photos / f"{name}.png"),
+                             "maps": {"normal": str(photos / f"{name}.png")}}
+    graph.write_text(json.dumps({"exemplars": [exemplar("rock"), exemplar("stone")],
                                  "edges": [{"from": "rock", "to": "stone", "scale": 16}]}))
     cli("synth", "--graph", graph, "--zoom", "4", "--window", "-8,5,40,32", "-o", tmp_path / "cli.png",
-        cache_dir=cache)
+        "--apply", f"normal:{tmp_path / 'cli_n.png'}", cache_dir=cache)
     result = texfab.synthesize_graph(graph, window=(-8, 5, 40, 32), zoom=4, cache_dir=cache)
     assert result.image.shape == (32, 40, 3) and result.coords.shape == (32, 40, 2)
+    assert np.array_equal(result.maps["normal"], result.image)
     texfab.write_image(result.image, tmp_path / "py.png")
     assert same_bytes(tmp_path / "cli.png", tmp_path / "py.png")
+    assert same_bytes(tmp_path / "cli_n.png", tmp_path / "py.png")
     with pytest.raises(texfab.Error, match="zoom: expected a power of two"):
         texfab.synthesize_graph(graph, (8, 8), zoom=3)
 

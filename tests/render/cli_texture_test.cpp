@@ -223,7 +223,27 @@ TEST(CliTexture, ExemplarGraphOverTheSurface) {
   ASSERT_EQ(0, texture(common() << "-o" << d / "again.glb" << "--threads 1").status);
   EXPECT_EQ(readText(d / "out.glb"), readText(d / "again.glb"));
 
-  for (const char* extra : {"--mode solid", "--exemplar-wrap tile", "-e models/exemplars/brick.png"}) {
+  // The graph's companion maps: its exemplars' normal and height maps, through the same coordinates.
+  const texfab::Image flat = [] {
+    texfab::Image n(128, 128, 3);
+    for (size_t i = 0; i < n.pixels.size(); ++i) n.pixels[i] = i % 3 == 2 ? 1.0f : 0.5f;
+    return n;
+  }();
+  texfab::writeImage(flat, d / "flat.png");
+  std::ofstream(d / "maps.json") << R"({"exemplars": [{"name": "rock", "image": ")" << (photos / "rock.png").string()
+                                 << R"(", "maps": {"normal": "flat.png", "height": ")" << (photos / "rock.png").string()
+                                 << R"("}}, {"name": "stone", "image": ")" << (photos / "stone.png").string()
+                                 << R"(", "maps": {"normal": "flat.png", "height": ")" << (photos / "stone.png").string()
+                                 << R"("}}], "edges": [{"from": "rock", "to": "stone", "scale": 16}]})";
+  ASSERT_EQ(0, texture(Args() << kModel << "--graph" << d / "maps.json" << "--resolution 256 -q --no-cache -o"
+                              << d / "maps.glb").status);
+  expectValidGltf(d / "maps.glb");
+  const texfab::Image height = texfab::readImage(d / "maps_height.png");
+  EXPECT_EQ(height.width, 256);
+  EXPECT_NE(readText(d / "maps.glb").find("normalTexture"), std::string::npos);
+
+  for (const char* extra : {"--mode solid", "--exemplar-wrap tile", "-e models/exemplars/brick.png",
+                            "--maps height=models/exemplars/brick.png"}) {
     SCOPED_TRACE(extra);
     const texfab::test::CliResult o = texture(common() << extra << "-o" << d / "bad.glb");
     EXPECT_NE(o.status, 0);

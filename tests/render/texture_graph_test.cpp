@@ -115,6 +115,33 @@ TEST(TextureGraph, ThreadsDoNotChangeTheTextureAndTheSeedDoes) {
   EXPECT_NE(textureMesh(sphere(), rs.view(), o).coords, one.coords);
 }
 
+// A companion map follows the colours through both exemplars and every level: with each exemplar's
+// red channel as its roughness, every texel's roughness is its colour's red.
+TEST(TextureGraph, CompanionMapsFollowTheColoursThroughEveryExemplar) {
+  const RockStone rs;
+  synthesis::GraphMap red{"roughness", {}};
+  for (const Image& e : rs.graph.exemplars) {
+    Image r(e.width, e.height, 1);
+    for (int y = 0; y < e.height; ++y)
+      for (int x = 0; x < e.width; ++x) r.at(x, y, 0) = e.at(x, y, 0);
+    red.perNode.push_back(r);
+  }
+  const Image roughness = synthesis::graphMapAtlas(red);
+  TextureExemplar e = rs.view();
+  e.roughness = &roughness;
+  TextureMeshOptions o = sphereOptions();
+  o.atlas.pack.width = o.atlas.pack.height = 256;
+  o.measure = false;
+  o.textureScale = scaleFor(1) / 2;
+  const TextureMeshResult r = textureMesh(sphere(), e, o);
+  EXPECT_GT(shareOfNode(r, rs.analysis, 0), 0.05);
+  EXPECT_GT(shareOfNode(r, rs.analysis, 1), 0.05);
+  ASSERT_TRUE(r.metallicRoughness);
+  for (size_t s = 0; s < r.sites.size(); ++s)
+    ASSERT_EQ(r.metallicRoughness->at(r.sites.x[s], r.sites.y[s], 1), r.baseColor->at(r.sites.x[s], r.sites.y[s], 0))
+        << "site " << s;
+}
+
 TEST(TextureGraph, RefusesWhatItCannotDo) {
   const RockStone rs;
   TextureMeshOptions o = sphereOptions();
@@ -122,7 +149,7 @@ TEST(TextureGraph, RefusesWhatItCannotDo) {
   EXPECT_THROW(textureMesh(sphere(), rs.view(), o), Error);
   o.mode = TextureMode::Surface;
   TextureExemplar withMaps = rs.view();
-  withMaps.height = &rs.graph.exemplars[1];
+  withMaps.height = &rs.graph.exemplars[1];  // not packed as the graph's colours (graphMapAtlas)
   EXPECT_THROW(textureMesh(sphere(), withMaps, o), Error);
   EXPECT_THROW(textureMesh(sphere(), rs.view(), o, Context{.backend = Backend::Vulkan}), Error);
 }

@@ -218,6 +218,58 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
   }
 }
 
+// synth --graph --apply: a graph's companion maps follow the colours. With each exemplar's own image
+// as its "normal" map and its red channel as its "height" map, the applied maps are the output's
+// colours and their red channel, at a coarse and a fine zoom. Maps missing on one exemplar, of
+// another size or of an unknown kind, and a map the graph does not give, are refused.
+TEST(CliSynth, ExemplarGraphCompanionMapsFollowTheColours) {
+  TempDir dir;
+  const std::string photos = std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/photos/";
+  for (const char* name : {"rock", "stone"}) {
+    const Image e = readImage(photos + name + ".png");
+    Image red(e.width, e.height, 1);
+    for (int y = 0; y < e.height; ++y)
+      for (int x = 0; x < e.width; ++x) red.at(x, y, 0) = e.at(x, y, 0);
+    writeImage(red, dir / (std::string(name) + "-h.png"));
+  }
+  auto graphFile = [&](const std::string& name, const std::string& rockMaps, const std::string& stoneMaps) {
+    std::ofstream(dir / name) << R"({"exemplars": [{"name": "rock", "image": ")" << photos << R"(rock.png", "maps": )"
+                              << rockMaps << R"(}, {"name": "stone", "image": ")" << photos << R"(stone.png", "maps": )"
+                              << stoneMaps << R"(}], "edges": [{"from": "rock", "to": "stone", "scale": 16}]})";
+    return (dir / name).string();
+  };
+  const std::string graph = graphFile("g.json", R"({"normal": ")" + photos + R"(rock.png", "height": "rock-h.png"})",
+                                      R"({"normal": ")" + photos + R"(stone.png", "height": "stone-h.png"})");
+  for (const char* zoom : {"1", "16"}) {
+    SCOPED_TRACE(zoom);
+    const Outcome o = texfab("synth --graph " + graph + " --zoom " + zoom + " --size 96 -q -o " +
+                             (dir / "c.png").string() + " --apply normal:" + (dir / "n.png").string() +
+                             " --apply height:" + (dir / "h.png").string());
+    ASSERT_EQ(o.status, 0) << o.err;
+    const Image c = readImage(dir / "c.png"), n = readImage(dir / "n.png"), h = readImage(dir / "h.png");
+    EXPECT_EQ(n.pixels, c.pixels);
+    ASSERT_EQ(h.channels, 1);
+    for (int y = 0; y < c.height; ++y)
+      for (int x = 0; x < c.width; ++x) ASSERT_EQ(h.at(x, y, 0), c.at(x, y, 0)) << x << "," << y;
+  }
+  const std::string out = (dir / "out.png").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {graphFile("m1.json", R"({"height": "rock-h.png"})", "{}"), "'stone' has no height map while others have one"},
+      {graphFile("m2.json", R"({"height": "rock-h.png"})", R"({"height": ")" + photos + R"(dune.png"})"),
+       "the height map of exemplar 'stone' is 128x96, its exemplar 128x128"},
+      {graphFile("m3.json", R"({"gloss": "rock-h.png"})", R"({"gloss": "stone-h.png"})"), "unknown field 'gloss'"},
+      {graph + " --apply roughness:" + (dir / "r.png").string(), "gives no 'roughness' map"},
+  };
+  for (const auto& [args, mention] : cases) {
+    SCOPED_TRACE(args);
+    const Outcome o = texfab("synth --graph " + args + " --size 16 -q -o " + out);
+    EXPECT_NE(o.status, 0);
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+    EXPECT_NE(o.err.find(mention), std::string::npos) << o.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+  }
+}
+
 // --backend: an unknown name is a usage error; Vulkan without the device asked for is one line
 // (exit 2, no output); auto falls back to the CPU and says so; with a usable device, vulkan writes
 // the CPU's bytes. info --devices lists what the loader finds.
