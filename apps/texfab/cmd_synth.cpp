@@ -116,7 +116,7 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Run& r
 void runGraphSynth(const SynthJob& job) {
   using namespace synthesis;
   Run run("synth", job.common);
-  if (job.tileable || !job.coords.empty()) throw UsageError("--graph does not take --tileable or --coords yet");
+  if (job.tileable) throw UsageError("--graph does not take --tileable yet");
   GraphSynthesisOptions options;
   options.seed = job.options.seed;
   options.jitter = job.options.jitter;
@@ -129,6 +129,8 @@ void runGraphSynth(const SynthJob& job) {
   }
   checkImageWritable(job.output);
   const fs::path out = run.output(job.output);
+  if (!job.coords.empty()) checkImageWritable(job.coords);
+  const fs::path coordsOut = job.coords.empty() ? fs::path() : run.output(job.coords);
   std::vector<Companion> companions = reserveCompanions(job, run);  // MAP: a map name of the graph
 
   Stage load(run.ctx(), "load");
@@ -158,6 +160,7 @@ void runGraphSynth(const SynthJob& job) {
                figure(job.zoom));
   Stage write(run.ctx(), "write");
   writeImage(applyCoords(result.coords, analysis.colors, run.ctx()), out);
+  if (!coordsOut.empty()) writeCoordMap(result.coords, coordsOut);  // positions in the packed exemplars
   for (const Companion& c : companions) writeImage(applyCoords(result.coords, c.map, run.ctx()), c.output);
   write.finish(job.output);
 

@@ -3,6 +3,7 @@
 #include "core/image_io.h"
 #include "synthesis/backend.h"
 #include "synthesis/coord_map.h"
+#include "synthesis/graph_file.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -204,7 +205,7 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
       {"--graph " + graphFile("b6.json", ""), "'stone' is not reached from the root 'rock'"},
       {"--graph " + (dir / "none.json").string(), "cannot open the graph file"},
       {"--graph " + graph + " --zoom 3", "--zoom: expected a power of two"},
-      {"--graph " + graph + " --coords " + (dir / "c.exr").string(), "--graph does not take"},
+      {"--graph " + graph + " --tileable", "--graph does not take"},
       {kBrick + " --graph " + graph, "not both"},
       {kBrick + " --zoom 2", "--zoom needs --graph"},
   };
@@ -220,7 +221,7 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
 
 // synth --graph --apply: a graph's companion maps follow the colours. With each exemplar's own image
 // as its "normal" map and its red channel as its "height" map, the applied maps are the output's
-// colours and their red channel, at a coarse and a fine zoom. Maps missing on one exemplar, of
+// colours and their red channel, at a coarse and a fine zoom; --coords gives them again. Maps missing on one exemplar, of
 // another size or of an unknown kind, and a map the graph does not give, are refused.
 TEST(CliSynth, ExemplarGraphCompanionMapsFollowTheColours) {
   TempDir dir;
@@ -244,10 +245,16 @@ TEST(CliSynth, ExemplarGraphCompanionMapsFollowTheColours) {
     SCOPED_TRACE(zoom);
     const Outcome o = texfab("synth --graph " + graph + " --zoom " + zoom + " --size 96 -q -o " +
                              (dir / "c.png").string() + " --apply normal:" + (dir / "n.png").string() +
-                             " --apply height:" + (dir / "h.png").string());
+                             " --apply height:" + (dir / "h.png").string() + " --coords " + (dir / "xy.png").string());
     ASSERT_EQ(o.status, 0) << o.err;
     const Image c = readImage(dir / "c.png"), n = readImage(dir / "n.png"), h = readImage(dir / "h.png");
     EXPECT_EQ(n.pixels, c.pixels);
+    // The coordinate map names positions in the packed exemplars: it gives the colours again.
+    const synthesis::ExemplarGraph g = synthesis::readExemplarGraph(graph);
+    const Image atlas = synthesis::graphMapAtlas(*g.map("normal"));
+    writeImage(synthesis::applyCoords(synthesis::readCoordMap(dir / "xy.png", atlas.width, atlas.height), atlas),
+               dir / "again.png");
+    EXPECT_EQ(readImage(dir / "again.png").pixels, c.pixels);
     ASSERT_EQ(h.channels, 1);
     for (int y = 0; y < c.height; ++y)
       for (int x = 0; x < c.width; ++x) ASSERT_EQ(h.at(x, y, 0), c.at(x, y, 0)) << x << "," << y;
