@@ -371,6 +371,11 @@ Image graphMapAtlas(const GraphMap& map) {
   return packStacks(stacks);
 }
 
+std::optional<Image> graphMapAtlas(const ExemplarGraph& graph, const std::string& name) {
+  if (const GraphMap* map = graph.map(name)) return graphMapAtlas(*map);
+  return std::nullopt;
+}
+
 GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOptions& options, const Context& ctx) {
   graph.validate();
   options.validate();

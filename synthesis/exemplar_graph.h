@@ -152,6 +152,8 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
 /// synthesized coordinate reads (applyCoords, sampleSurfaceGraph), so that the map follows the
 /// colours through every exemplar and level.
 Image graphMapAtlas(const GraphMap& map);
+/// graphMapAtlas of the graph's map `name`, or nothing where the graph gives none.
+std::optional<Image> graphMapAtlas(const ExemplarGraph& graph, const std::string& name);
 
 /// The cache key of (graph, options).
 uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions& options);

@@ -83,8 +83,7 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
   }
   auto read = [&](const std::string& path, const char* name, std::optional<Image>& slot) {
     if (!path.empty()) slot = readImage(path);
-    if (in.graph)
-      if (const synthesis::GraphMap* map = in.graph->map(name)) slot = synthesis::graphMapAtlas(*map);
+    if (in.graph) slot = synthesis::graphMapAtlas(*in.graph, name);
   };
   read(maps.normal, "normal", in.normal);
   read(maps.roughness, "roughness", in.roughness);

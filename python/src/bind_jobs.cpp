@@ -10,6 +10,8 @@
 #include "geometry/io/mesh_io.h"
 #include "render/break/break_model.h"
 #include "render/texture_mesh.h"
+#include "synthesis/graph_file.h"
+#include "synthesis/synthesize_surface_graph.h"
 
 #include <pybind11/stl.h>
 
@@ -61,12 +63,58 @@ TextureInputs textureInputs(const py::object& exemplar, const py::object& maps) 
   return in;
 }
 
+// texture_mesh(graph=...): as `texfab texture --graph`, the graph's own maps through its coordinates.
+struct GraphInputs {
+  synthesis::ExemplarGraph graph;
+  std::optional<Image> normal, roughness, height;
+  explicit GraphInputs(const py::object& file) : graph(synthesis::readExemplarGraph(toPath(file))) {
+    synthesis::checkSurfaceGraphSize(int(graph.exemplars.size()), graph.side());
+    normal = synthesis::graphMapAtlas(graph, "normal");
+    roughness = synthesis::graphMapAtlas(graph, "roughness");
+    height = synthesis::graphMapAtlas(graph, "height");
+  }
+  render::TextureExemplar view(const synthesis::GraphAnalysis& analysis) const {
+    render::TextureExemplar e{&graph.exemplars.front(), nullptr, nullptr, normal ? &*normal : nullptr,
+                              roughness ? &*roughness : nullptr, height ? &*height : nullptr};
+    e.graph = &analysis;
+    return e;
+  }
+};
+
+TextureOutput textureOutput(render::TextureMeshResult&& r, int downsampling) {
+  return {py::cast(std::move(r.mesh)),
+          imageArray(r.baseColor),
+          optionalImageArray(r.normal),
+          optionalImageArray(r.metallicRoughness),
+          optionalImageArray(r.height),
+          r.textureScale * downsampling,
+          r.atlas.report.charts,
+          r.warnings};
+}
+
+TextureOutput textureMeshFromGraph(const py::object& meshLike, const py::object& graphFile, double featureSize,
+                                   render::TextureMeshOptions o, Call& call) {
+  const GraphInputs in(graphFile);
+  if (featureSize > 0) o.textureScale = in.graph.side() / featureSize;  // the root spans featureSize
+  checkMemory(render::textureMeshMemoryBytes(o) +
+                  synthesis::graphAnalysisMemoryBytes(int(in.graph.exemplars.size()), in.graph.side()),
+              "a " + std::to_string(o.atlas.pack.width) + "x" + std::to_string(o.atlas.pack.height) +
+                  " atlas from a graph of " + std::to_string(in.graph.exemplars.size()) + " exemplars");
+  const geometry::Mesh mesh = toMesh(meshLike);
+  render::TextureMeshResult r = call.run([&] {
+    const synthesis::GraphAnalysis analysis = synthesis::analyzeGraph(in.graph, {}, call.analysisCache(), call.ctx());
+    return render::textureMesh(mesh, in.view(analysis), o, call.ctx());
+  });
+  return textureOutput(std::move(r), 1);
+}
+
 TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplarLike, const std::string& mode,
                           const py::object& resolution, int gutter, double textureScale, double featureSize,
                           uint32_t seed, const std::array<float, 3>& direction, const std::string& field,
-                          const py::object& maps, const std::string& wrap, const std::string& method, int tileSide,
-                          float contrastGain, int refine, int threads, const std::string& backend,
-                          const py::object& cacheDir, const py::object& progress) {
+                          const py::object& maps, const py::object& graph, const std::string& wrap,
+                          const std::string& method, int tileSide, float contrastGain, int refine, int threads,
+                          const std::string& backend, const py::object& cacheDir, const py::object& progress) {
+  if (exemplarLike.is_none() == graph.is_none()) throw Error("give an exemplar or a graph, one of them");
   Call call(threads, backend, cacheDir, progress);
   render::TextureMeshOptions o;
   o.mode = choose<render::TextureMode>(mode, "mode", {{"surface", render::TextureMode::Surface}, {"solid", render::TextureMode::Solid}});
@@ -79,6 +127,12 @@ TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplar
   o.surface.seed = seed;
   o.solid = solidOptions(seed, method, contrastGain, refine);
   o.measure = false;
+  if (!graph.is_none()) {
+    if (o.mode != render::TextureMode::Surface || !maps.is_none() || wrap != "auto")
+      throw Error("graph: synthesized over the surface with the graph's own maps (no solid mode, maps or wrap)");
+    o.textureScale = textureScale;
+    return textureMeshFromGraph(meshLike, graph, featureSize, o, call);
+  }
   checkMemory(render::textureMeshMemoryBytes(o), "a " + std::to_string(o.atlas.pack.width) + "x" +
                                                      std::to_string(o.atlas.pack.height) + " atlas");
   TextureInputs in = textureInputs(exemplarLike, maps);
@@ -109,14 +163,7 @@ TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplar
     }
     return render::textureMesh(mesh, ex, o, call.ctx());
   });
-  return {py::cast(std::move(r.mesh)),
-          imageArray(r.baseColor),
-          optionalImageArray(r.normal),
-          optionalImageArray(r.metallicRoughness),
-          optionalImageArray(r.height),
-          r.textureScale * factor,
-          r.atlas.report.charts,
-          r.warnings};
+  return textureOutput(std::move(r), factor);
 }
 
 struct PieceOutput {
@@ -208,15 +255,16 @@ void bindJobs(py::module_& m) {
 
   const render::TextureMeshOptions to;
   const synthesis::SolidSynthesisOptions so;
-  m.def("texture_mesh", &textureMesh, py::arg("mesh"), py::arg("exemplar"), py::kw_only(), py::arg("mode") = "surface",
+  m.def("texture_mesh", &textureMesh, py::arg("mesh"), py::arg("exemplar") = py::none(), py::kw_only(), py::arg("mode") = "surface",
         py::arg("resolution") = to.atlas.pack.width, py::arg("gutter") = to.atlas.pack.gutter,
         py::arg("texture_scale") = 0.0, py::arg("feature_size") = 0.0, py::arg("seed") = to.surface.seed,
-        py::arg("direction") = std::array<float, 3>{to.field.direction.x(), to.field.direction.y(), to.field.direction.z()}, py::arg("field") = "direction", py::arg("maps") = py::none(),
+        py::arg("direction") = std::array<float, 3>{to.field.direction.x(), to.field.direction.y(), to.field.direction.z()}, py::arg("field") = "direction", py::arg("maps") = py::none(), py::arg("graph") = py::none(),
         py::arg("wrap") = "auto", py::arg("solid_method") = "lazy", py::arg("tile_size") = 32,
         py::arg("contrast_gain") = so.contrastGain, py::arg("refine") = so.refinePasses, py::arg("threads") = 0,
         py::arg("backend") = "cpu", py::arg("cache_dir") = py::none(), py::arg("progress") = py::none(),
         "Synthesizes a texture over a mesh (surface: anisometric synthesis in the atlas; solid: the material's "
-        "interior) and returns the mesh with its atlas and maps; equal to `texfab texture`");
+        "interior) and returns the mesh with its atlas and maps; equal to `texfab texture`. graph: an exemplar "
+        "graph file instead of the exemplar (`texfab texture --graph`)");
 
   py::class_<PieceOutput>(m, "Piece", "A piece of a broken model")
       .def_readonly("name", &PieceOutput::name)

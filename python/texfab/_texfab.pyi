@@ -106,16 +106,18 @@ class TextureResult:
     def save(self, path: PathLike, *, up: Up = "y", draco: bool = False, embed: bool = False,
              texture_format: str = "keep") -> None: ...   # as Mesh.save
 
-def texture_mesh(mesh: Union[Mesh, PathLike], exemplar: ImageLike, *,
+def texture_mesh(mesh: Union[Mesh, PathLike], exemplar: Optional[ImageLike] = None, *,
                  mode: Literal["surface", "solid"] = "surface",
                  resolution: Union[int, tuple[int, int]] = 2048, gutter: int = 4,
                  texture_scale: float = 0.0, feature_size: float = 0.0, seed: int = 1,
                  direction: tuple[float, float, float] = ..., field: Literal["direction", "curvature"] = "direction",
-                 maps: Optional[Mapping[str, ImageLike]] = None, wrap: Wrap = "auto",
-                 solid_method: SolidMethod = "lazy", tile_size: int = 32,
+                 maps: Optional[Mapping[str, ImageLike]] = None, graph: Optional[PathLike] = None,
+                 wrap: Wrap = "auto", solid_method: SolidMethod = "lazy", tile_size: int = 32,
                  contrast_gain: float = 2.0, refine: int = 0, threads: int = 0,
                  backend: Backend = "cpu", cache_dir: CacheDir = None,
-                 progress: Optional[Progress] = None) -> TextureResult: ...
+                 progress: Optional[Progress] = None) -> TextureResult:
+    """`graph`: an exemplar graph file instead of `exemplar` (`texfab texture --graph`), surface
+    mode, with the companion maps its exemplars give."""
 
 class Piece:
     name: str

@@ -116,6 +116,25 @@ def test_texture_mesh_equals_the_command_line(tmp_path, cache):
     assert np.array_equal(again.base_color, result.base_color)
 
 
+def test_texture_mesh_from_a_graph_equals_the_command_line(tmp_path, cache):
+    photos = SOURCE / "models" / "exemplars" / "photos"
+    exemplar = lambda name: {"name": name, "image": str(photos / f"{name}.png"),
+                             "maps": {"roughness": str(photos / f"{name}.png")}}
+    graph = tmp_path / "g.json"
+    graph.write_text(json.dumps({"exemplars": [exemplar("rock"), exemplar("stone")],
+                                 "edges": [{"from": "rock", "to": "stone", "scale": 16}]}))
+    cli("texture", ELEPHANT, "--graph", graph, "--resolution", "256", "-o", tmp_path / "cli.glb", cache_dir=cache)
+    result = texfab.texture_mesh(ELEPHANT, graph=graph, resolution=256, cache_dir=cache)
+    result.save(tmp_path / "py.glb")
+    assert same_bytes(tmp_path / "cli.glb", tmp_path / "py.glb")
+    # The roughness map is each exemplar's red channel: it follows the colours.
+    assert np.array_equal(result.metallic_roughness[..., 1], result.base_color[..., 0])
+    with pytest.raises(texfab.Error, match="give an exemplar or a graph"):
+        texfab.texture_mesh(ELEPHANT, BRICK, graph=graph)
+    with pytest.raises(texfab.Error, match="no solid mode"):
+        texfab.texture_mesh(ELEPHANT, graph=graph, mode="solid")
+
+
 def test_fracture_equals_the_command_line(tmp_path, cache):
     cli("fracture", ELEPHANT, "--interior", MARBLE, "--pieces", "3", "--interior-resolution", "128", "-o",
         tmp_path / "cli.glb", cache_dir=cache)
