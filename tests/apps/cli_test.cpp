@@ -342,6 +342,27 @@ struct SignalJob {
   std::vector<std::string> outputs;
 };
 
+// A 400 x 400 grid (320,000 triangles) as OFF, written once: converting it with Draco takes about a
+// second, so a signal after its first stage line finds convert at work (the elephant's write takes
+// 20 ms, which scheduling on a loaded machine can outlast).
+const fs::path& bigGrid() {
+  static const TempDir dir("texfab-cli-grid");
+  static const fs::path path = [] {
+    constexpr int n = 400;
+    std::ofstream off(dir / "grid.off");
+    off << "OFF\n" << (n + 1) * (n + 1) << " " << 2 * n * n << " 0\n";
+    for (int y = 0; y <= n; ++y)
+      for (int x = 0; x <= n; ++x) off << x << " " << y << " " << (x * 7 + y * 13) % 5 << "\n";
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const int a = y * (n + 1) + x, c = a + n + 1;
+        off << "3 " << a << " " << a + 1 << " " << c + 1 << "\n3 " << a << " " << c + 1 << " " << c << "\n";
+      }
+    return dir / "grid.off";
+  }();
+  return path;
+}
+
 std::vector<SignalJob> signalJobs() {
   const std::string model = kModel.string(), exemplar = kExemplar.string();
   return {
@@ -356,7 +377,7 @@ std::vector<SignalJob> signalJobs() {
       {"slice", {model, "-o", "{}/layers", "--height", "20", "--dpi", "100", "--layer", "0.1", "--preview", "{}/l.png"},
        {"layers", "l.png"}},
       {"render", {model, "-o", "{}/r.png", "--size", "300"}, {"r.png"}},
-      {"convert", {model, "{}/m.glb", "--draco"}, {"m.glb"}},
+      {"convert", {bigGrid().string(), "{}/m.glb", "--draco"}, {"m.glb"}},
   };
 }
 
