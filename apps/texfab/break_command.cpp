@@ -25,7 +25,8 @@ nlohmann::json piecesJson(const render::BrokenModel& model) {
   return pieces;
 }
 
-void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const render::BrokenModel& model) {
+void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const render::BrokenModel& model,
+            int downsampling) {
   nlohmann::json& r = run.report();
   r["model"] = modelJson(job.model, mesh);
   r["model"]["volume"] = model.modelVolume;
@@ -44,7 +45,8 @@ void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const ren
                      {"refine_passes", job.refinePasses},
                      {"mode", job.exemplar.empty() ? "own"
                               : job.options.outer.mode == render::TextureMode::Solid ? "solid" : "surface"},
-                     {"interior_scale", model.interiorScale}};
+                     {"interior_scale", model.interiorScale * downsampling},  // in the given image's pixels
+                     {"downsampled", downsampling}};
   if (model.outer) r["atlas"] = toJson(model.outer->atlas);
   if (model.interior) {
     const render::CutFaceTexture& t = *model.interior;
@@ -143,8 +145,11 @@ void runBreak(const std::string& command, BreakJob& job) {
   if (!job.exemplar.empty()) ex.outer = readImage(job.exemplar);
   if (!job.interior.empty()) ex.interior = readImage(job.interior);
   load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle"));
-  ex.analyze(o, [&](const Image& image) { return chooseWrap(job.wrap, image, run); }, job.solid.tiles,
+  ex.analyze(mesh, o, [&](const Image& image) { return chooseWrap(job.wrap, image, run); }, job.solid.tiles,
              run.analysisCache(), run.ctx());
+  if (ex.downsampling > 1)
+    run.note("the scale puts at least " + std::to_string(ex.downsampling) + " exemplar pixels in every texel: the " +
+             "textures are synthesized from copies " + std::to_string(ex.downsampling) + " times smaller");
 
   const render::BrokenModel model = render::breakModel(mesh, ex.outerView, ex.interiorView, o, run.ctx());
   for (const std::string& repair : model.repairs) run.ctx().warn("repaired: " + repair);
@@ -170,7 +175,7 @@ void runBreak(const std::string& command, BreakJob& job) {
     stage.finish(job.preview);
   }
   run.note(counted(int64_t(model.pieces.size()), "piece") + " in " + job.output);
-  if (run.reporting()) report(run, job, mesh, model);
+  if (run.reporting()) report(run, job, mesh, model, ex.downsampling);
   run.finish();
 }
 

@@ -176,6 +176,7 @@ struct PieceOutput {
 struct BrokenOutput {
   std::shared_ptr<const render::BrokenModel> model;
   std::vector<PieceOutput> pieces;
+  int downsampling = 1;  ///< render::BreakExemplars::downsampling
 };
 
 // The break job with the command line's policies: its exemplars analysed as `texfab fracture` and
@@ -225,10 +226,11 @@ BrokenOutput breakModel(const py::object& meshLike, const py::object& planes, in
   auto model = std::make_shared<const render::BrokenModel>(call.run([&] {
     synthesis::SolidTileOptions tiles;
     tiles.tileSide = tileSide;
-    ex.analyze(o, [&](const Image& image) { return chooseWrap(wrap, image); }, tiles, call.analysisCache(), call.ctx());
+    ex.analyze(mesh, o, [&](const Image& image) { return chooseWrap(wrap, image); }, tiles, call.analysisCache(),
+               call.ctx());
     return render::breakModel(mesh, ex.outerView, ex.interiorView, o, call.ctx());
   }));
-  BrokenOutput out{model, {}};
+  BrokenOutput out{model, {}, ex.downsampling};
   for (const render::Piece& p : model->pieces)
     out.pieces.push_back({p.name, py::cast(p.mesh), {p.centroid.x(), p.centroid.y(), p.centroid.z()}, p.volume, p.cutArea});
   return out;
@@ -275,7 +277,8 @@ void bindJobs(py::module_& m) {
   py::class_<BrokenOutput> broken(m, "BrokenModel", "The pieces of fracture() or cut()");
   broken.def_readonly("pieces", &BrokenOutput::pieces)
       .def_property_readonly("model_volume", [](const BrokenOutput& s) { return s.model->modelVolume; })
-      .def_property_readonly("interior_scale", [](const BrokenOutput& s) { return s.model->interiorScale; })
+      .def_property_readonly("interior_scale",
+                             [](const BrokenOutput& s) { return s.model->interiorScale * s.downsampling; })
       .def_property_readonly("notes", [](const BrokenOutput& s) { return s.model->notes; })
       .def_property_readonly("repairs", [](const BrokenOutput& s) { return s.model->repairs; })
       .def(

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "render/break/break_model.h"
 
+#include "core/downsample.h"
+
 #include "core/error.h"
 #include "geometry/fracture/measure_solid.h"
 
@@ -111,7 +113,23 @@ void BreakModelOptions::shareTextureSettings(uint32_t seed, const synthesis::Sol
   outer.surface.seed = outer.solid.seed = interior.solid.seed = seed;
 }
 
-void BreakExemplars::analyze(const BreakModelOptions& o, const std::function<synthesis::ExemplarWrap(const Image&)>& wrapOf,
+void BreakExemplars::downsampleForScale(const geometry::Mesh& model, BreakModelOptions& o) {
+  const CutFaceTextureOptions& in = o.interior;
+  const bool interiorAuto = in.atlas.pack.width == 0 && in.atlas.pack.height == 0 && in.atlas.pack.texelsPerUnit == 0;
+  if (!outer || !interiorAuto) return;
+  int factor = analysisDownsampling(model, o.outer, *outer);
+  while (factor > 1 && interior && std::min(interior->width, interior->height) / factor < kMinAnalysedSide) factor /= 2;
+  if (factor == 1) return;
+  const double scale = textureScaleFor(model, o.outer);
+  o.outer.textureScale = scale / factor;
+  o.interior.textureScale = (o.interior.textureScale > 0 ? o.interior.textureScale : scale) / factor;
+  for (std::optional<Image>* image : {&outer, &interior})
+    if (*image) **image = downsample(**image, factor);
+  downsampling = factor;
+}
+
+void BreakExemplars::analyze(const geometry::Mesh& model, BreakModelOptions& o,
+                             const std::function<synthesis::ExemplarWrap(const Image&)>& wrapOf,
                              const synthesis::SolidTileOptions& tiles, const synthesis::AnalysisCacheSettings& cache,
                              const Context& ctx) {
   const auto solidOf = [&](const Image& image, synthesis::ExemplarWrap wrap) {
@@ -120,22 +138,25 @@ void BreakExemplars::analyze(const BreakModelOptions& o, const std::function<syn
     options.wrap = wrap;
     return synthesis::analyzeSolid(image, image, image, options, o.interior.solid.method, tiles, cache, ctx);
   };
-  // Each image's wrap is chosen once, though the outer one may need two analyses.
-  const std::optional<synthesis::ExemplarWrap> outerWrap = outer ? std::optional(wrapOf(*outer)) : std::nullopt;
+  // Each image's wrap is chosen once, on the image as given (a smaller copy hides part of its seam),
+  // though the outer one may need two analyses.
+  const synthesis::ExemplarWrap outerWrap = outer ? wrapOf(*outer) : synthesis::ExemplarWrap::Tile;
+  const synthesis::ExemplarWrap interiorWrap = interior ? wrapOf(*interior) : synthesis::ExemplarWrap::Tile;
+  downsampleForScale(model, o);
   if (outer) {
     outerView.color = &*outer;
     if (o.outer.mode == TextureMode::Surface) {
       synthesis::AnalysisOptions options;
-      options.wrap = *outerWrap;
+      options.wrap = outerWrap;
       outerView.analysis = &surface.emplace(synthesis::analyzeExemplar(*outer, options, cache, ctx));
     } else {
-      outerView.solidAnalysis = &outerSolid.emplace(solidOf(*outer, *outerWrap));
+      outerView.solidAnalysis = &outerSolid.emplace(solidOf(*outer, outerWrap));
     }
   }
   if (interior) {
-    interiorView = {&*interior, &interiorSolid.emplace(solidOf(*interior, wrapOf(*interior)))};
+    interiorView = {&*interior, &interiorSolid.emplace(solidOf(*interior, interiorWrap))};
   } else if (outer) {
-    if (!outerSolid) outerSolid.emplace(solidOf(*outer, *outerWrap));
+    if (!outerSolid) outerSolid.emplace(solidOf(*outer, outerWrap));
     interiorView = {&*outer, &*outerSolid};
   }
 }

@@ -55,16 +55,29 @@ struct BreakExemplars {
   std::optional<synthesis::SolidAnalysis> outerSolid, interiorSolid;
   TextureExemplar outerView;
   InteriorExemplar interiorView;
+  /// The images are this many times smaller than given (analyze); scales are in their pixels, so a
+  /// scale in the given images' pixels is this times larger.
+  int downsampling = 1;
 
   BreakExemplars() = default;
   BreakExemplars(const BreakExemplars&) = delete;
   BreakExemplars& operator=(const BreakExemplars&) = delete;
 
   /// Analyses what `options` needs (synthesis::analyzeExemplar and analyzeSolid: "analysis" and
-  /// "tiles" stages through `cache`). `wrapOf(image)` chooses each image's wrap, once per image.
-  void analyze(const BreakModelOptions& options, const std::function<synthesis::ExemplarWrap(const Image&)>& wrapOf,
+  /// "tiles" stages through `cache`). `wrapOf(image)` chooses each image's wrap, once per image, on
+  /// the image as given. As `texfab texture` does, where the outer texture's scale puts 2 or more
+  /// exemplar pixels in every texel of its atlas (analysisDownsampling), the images are first
+  /// replaced by copies that many times smaller and both scales of `options` set in their pixels, so
+  /// that the textures are prefiltered (no aliasing) and cheaper; only when the cut faces take the
+  /// outer density (their atlas size automatic), which the same copies then suit, and never below
+  /// kMinAnalysedSide pixels a side.
+  void analyze(const geometry::Mesh& model, BreakModelOptions& options,
+               const std::function<synthesis::ExemplarWrap(const Image&)>& wrapOf,
                const synthesis::SolidTileOptions& tiles, const synthesis::AnalysisCacheSettings& cache,
                const Context& ctx);
+
+private:
+  void downsampleForScale(const geometry::Mesh& model, BreakModelOptions& options);
 };
 
 struct Piece {

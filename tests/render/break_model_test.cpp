@@ -289,6 +289,44 @@ TEST(BreakModel, ExplodedViewShowsEveryPiece) {
   for (size_t i = 0; i < n; ++i) EXPECT_GT(pixels[i], 40) << m.pieces[i].name << " is not visible";
 }
 
+// As the texture job: where the outer texture's scale puts several exemplar pixels in every texel,
+// the exemplars are analysed from smaller copies and both scales follow, so that the outer surface
+// and the cut faces (at the outer density) are minified that many times less; an interior atlas of
+// a size given keeps the exemplars as they are.
+TEST(BreakModel, MinifiedTexturesAreSynthesizedFromSmallerCopies) {
+  const geometry::Mesh sphere = makeSphere(32, 16);
+  const Image full = readImage(std::filesystem::path(TEXFAB_SOURCE_DIR) / "models" / "exemplars" / "marble.png");
+  BreakModelOptions o = fractureOptions(3, 128);
+  o.fracture.reset();
+  o.planes = {{{0.1, 0, 0}, {1, 0.2, 0}}};
+  o.interior.atlas.pack.width = o.interior.atlas.pack.height = 0;  // auto: the outer density
+  const double scale = textureScaleFor(sphere, o.outer);
+  const int factor = analysisDownsampling(sphere, o.outer, full);
+  ASSERT_GE(factor, 2) << "a 128^2 atlas at the default scale minifies the exemplar";
+  BreakExemplars ex;
+  ex.outer = full;
+  const auto tile = [](const Image&) { return synthesis::ExemplarWrap::Tile; };
+  BreakModelOptions given = o;
+  ex.analyze(sphere, given, tile, {}, {}, {});
+  EXPECT_EQ(ex.downsampling, factor);
+  EXPECT_EQ(ex.outer->width, full.width / factor);
+  EXPECT_DOUBLE_EQ(given.outer.textureScale, scale / factor);
+  EXPECT_DOUBLE_EQ(given.interior.textureScale, scale / factor);
+  const BrokenModel m = breakModel(sphere, ex.outerView, ex.interiorView, given);
+  EXPECT_DOUBLE_EQ(m.outer->textureScale, scale / factor);
+  EXPECT_DOUBLE_EQ(m.interiorScale, scale / factor);
+  EXPECT_NEAR(m.interior->atlas.atlas.texelsPerUnit, m.outer->atlas.atlas.texelsPerUnit,
+              0.01 * m.outer->atlas.atlas.texelsPerUnit);
+
+  BreakExemplars sized;
+  sized.outer = full;
+  BreakModelOptions fixed = o;
+  fixed.interior.atlas.pack.width = fixed.interior.atlas.pack.height = 128;
+  sized.analyze(sphere, fixed, tile, {}, {}, {});
+  EXPECT_EQ(sized.downsampling, 1);
+  EXPECT_EQ(sized.outer->width, full.width);
+}
+
 TEST(BreakModel, RefusesBadInput) {
   BreakModelOptions both = fractureOptions(3);
   both.planes = {{{0, 0, 0}, {0, 0, 1}}};
