@@ -14,6 +14,7 @@
 #include "synthesis/refine_solid.h"
 #include "synthesis/solid_tiles.h"
 #if TEXFAB_HAS_VULKAN
+#include "synthesis/vulkan/solid_kernels.h"
 #include "synthesis/vulkan/solid_level.h"
 #endif
 
@@ -885,7 +886,12 @@ SolidSynthesisResult synthesizeSolidBox(const SolidAnalysis& a, const VoxelBox& 
   if (o.method == SolidMethod::Tiles) {
     SolidSynthesisResult result;
     result.triples.resize(size_t(box.count()));
-    evaluateSolidTilesBox(requireTiles(a), o.seed, box, result.triples, ctx);
+#if TEXFAB_HAS_VULKAN
+    if (const auto device = deviceFor(ctx))
+      vulkan::evaluateSolidTilesBox(*device, requireTiles(a), o.seed, box, result.triples, ctx);
+    else
+#endif
+      evaluateSolidTilesBox(requireTiles(a), o.seed, box, result.triples, ctx);
     result.distinctVoxels = box.count();
     return result;
   }

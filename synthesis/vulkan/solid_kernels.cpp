@@ -34,6 +34,9 @@ constexpr uint32_t kCommitSpirv[] =
 constexpr uint32_t kGatherSpirv[] =
 #include "synthesis/vulkan/shaders/solid_gather_kernel.spv.inc"
     ;
+constexpr uint32_t kTilesSpirv[] =
+#include "synthesis/vulkan/shaders/solid_tiles_kernel.spv.inc"
+    ;
 
 const Kernel kInit{"solidInitKernel", kInitSpirv, {1, 1, 1, 1}, sizeof(SolidParams)};
 const Kernel kUpsample{"solidUpsampleKernel", kUpsampleSpirv, {1, 1, 1}, sizeof(SolidParams)};
@@ -41,6 +44,9 @@ const Kernel kColor{"solidColorKernel", kColorSpirv, {1, 1, 1, 3, 1}, sizeof(Sol
 const Kernel kCorrect{"solidCorrectKernel", kCorrectSpirv, {1, 1, 1, 1, 1, 1, 3, 3, 3, 3, 3, 1, 1}, sizeof(SolidParams)};
 const Kernel kCommit{"solidCommitKernel", kCommitSpirv, {1, 1, 1, 1, 1}, sizeof(SolidParams)};
 const Kernel kGather{"solidGatherKernel", kGatherSpirv, {1, 1, 1}, sizeof(GatherParams)};
+const Kernel kTiles{"solidTilesKernel", kTilesSpirv, {1, 1}, sizeof(TilesParams)};
+
+constexpr uint64_t kTilesResidentSalt = 0x54494c4553ull;  // "TILES": a tile set's key among the resident data
 
 constexpr int kPlaneInputs = 3 * 25;
 constexpr int kCrossInputs = 3 * kSolidCrossVoxels;
@@ -212,6 +218,34 @@ void solidCommitKernel(Commands& commands, const SolidChunks& c, int interleave,
 void solidGatherKernel(Commands& commands, const SolidChunks& c, const Buffer& listed, uint32_t count,
                        const Buffer& packed) {
   commands.dispatch(kGather, GatherParams{count}, {listed, c.triples, packed}, count);
+}
+
+void evaluateSolidTilesBox(Device& device, const SolidTileSet& tiles, uint32_t seed, const VoxelBox& box,
+                           std::span<Triple> out, const Context& ctx, uint64_t slabVoxels) {
+  if (int64_t(out.size()) != box.count()) throw Error("evaluateSolidTilesBox: one output per voxel");
+  const SolidTileLayout& layout = tiles.layout;
+  const auto elements = device.resident<Buffer>(tiles.key ^ kTilesResidentSalt, [&] {
+    Commands commands(device);
+    auto b = std::make_shared<const Buffer>(commands.uploaded(std::span<const Triple>(tiles.elements)));
+    commands.submit(ctx);
+    return std::pair{b, b->bytes()};
+  });
+  // Slabs of whole layers whose triples fit one binding.
+  const uint64_t layer = uint64_t(box.nx) * uint64_t(box.ny);
+  const uint64_t perSlab = std::min<uint64_t>(device.maxRangeBytes() / sizeof(Triple), slabVoxels);
+  if (layer > perSlab) throw Error("evaluateSolidTilesBox: a layer of the box exceeds the device's binding range");
+  const int layers = int(std::min<uint64_t>(uint64_t(box.nz), perSlab / layer));
+  for (int z = 0; z < box.nz; z += layers) {
+    const int nz = std::min(layers, box.nz - z);
+    const uint32_t count = uint32_t(layer * uint64_t(nz));
+    Commands commands(device);
+    Buffer triples(device, uint64_t(count) * sizeof(Triple));
+    const TilesParams params{int32_t(box.x), int32_t(box.y), int32_t(box.z + z), box.nx, box.ny, nz, seed,
+                             layout.shift, layout.variants, uint32_t(layout.faces), uint32_t(layout.interiors), count};
+    commands.dispatch(kTiles, params, {*elements, triples}, count);
+    commands.download(triples, 0, out.data() + layer * uint64_t(z), uint64_t(count) * sizeof(Triple));
+    commands.submit(ctx);
+  }
 }
 
 } // namespace texfab::synthesis::vulkan

@@ -7,6 +7,7 @@
 // neighbours; the masks and their dilation stay on the CPU (solidDilateKernel).
 
 #include "synthesis/cpu/solid_kernels.h"
+#include "synthesis/solid_tiles.h"
 #include "synthesis/vulkan/runtime.h"
 
 #include <array>
@@ -80,5 +81,12 @@ void solidCommitKernel(Commands& commands, const SolidChunks& chunks, int interl
 /// 4096 + local index): what a level's caller reads, without the rest of the chunks. No CPU twin.
 void solidGatherKernel(Commands& commands, const SolidChunks& chunks, const Buffer& listed, uint32_t count,
                        const Buffer& packed);
+
+/// The triples of every voxel of `box` (x fastest, then y, then z) read from `tiles` in the
+/// arrangement of `seed`: the GLSL twin of evaluateSolidTilesBox (SolidTileReader), the same bytes,
+/// one voxel per invocation, in slabs of whole z layers of at most `slabVoxels` voxels (and one
+/// binding range). The tile set stays resident on the device under its key.
+void evaluateSolidTilesBox(Device& device, const SolidTileSet& tiles, uint32_t seed, const VoxelBox& box,
+                           std::span<Triple> out, const Context& ctx = {}, uint64_t slabVoxels = uint64_t(1) << 26);
 
 } // namespace texfab::synthesis::vulkan

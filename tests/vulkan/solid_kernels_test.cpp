@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 namespace texfab::synthesis {
 namespace {
 
@@ -207,6 +209,33 @@ TEST(VulkanKernels, SolidKernelsEqualTheCpu) {
                         Case{12, 40, 9, 1, 1, 5, 8, 2}}) {
     SCOPED_TRACE("exemplar " + std::to_string(c.w) + "x" + std::to_string(c.h) + ", dims " + std::to_string(c.dims));
     checkCase(*d.device, r, c);
+  }
+}
+
+// The tile kernel against SolidTileReader: random tile sets of two and three face variants, boxes
+// across cells on both sides of the origin, several seeds, in slabs of a few layers.
+TEST(VulkanKernels, SolidTilesKernelReadsTheCpusTriples) {
+  VulkanDevice d;
+  TEXFAB_REQUIRE_VULKAN(d);
+  Random r(9);
+  for (int variants : {2, 3}) {
+    SolidTileSet tiles;
+    tiles.width = tiles.height = 64;
+    tiles.layout = SolidTileLayout(8, variants);
+    tiles.key = 0x5eed0000u + uint64_t(variants);
+    tiles.elements.resize(tiles.layout.elements);
+    const std::vector<uint32_t> coords = r.coords(tiles.layout.elements * 3, 64, 64);
+    std::memcpy(tiles.elements.data(), coords.data(), coords.size() * sizeof(uint32_t));
+    for (const VoxelBox& box : {VoxelBox{-13, -7, -21, 37, 29, 23}, VoxelBox{1000, -2000, 5, 17, 9, 40}}) {
+      for (uint32_t seed : {1u, 5u}) {
+        SCOPED_TRACE(std::to_string(variants) + " variants, seed " + std::to_string(seed) + ", box at " +
+                     std::to_string(box.x));
+        std::vector<Triple> cpu(size_t(box.count())), gpu(size_t(box.count()));
+        evaluateSolidTilesBox(tiles, seed, box, cpu);
+        vulkan::evaluateSolidTilesBox(*d.device, tiles, seed, box, gpu, {}, uint64_t(box.nx) * uint64_t(box.ny) * 3);
+        ASSERT_EQ(gpu, cpu);
+      }
+    }
   }
 }
 

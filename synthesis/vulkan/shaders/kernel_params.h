@@ -141,6 +141,24 @@ struct GatherParams {
   uint32_t count;
 };
 
+/// solidTilesKernel: the voxels of the box (x0, y0, z0) + [0, nx) x [0, ny) x [0, nz), x fastest,
+/// from a tile set of SolidTileLayout (side = 1 << shift, V variants, its face and interior
+/// element offsets).
+struct TilesParams {
+  int32_t x0;
+  int32_t y0;
+  int32_t z0;
+  int32_t nx;
+  int32_t ny;
+  int32_t nz;
+  uint32_t seed;
+  int32_t shift;
+  int32_t variants;
+  uint32_t faces;
+  uint32_t interiors;
+  uint32_t count;
+};
+
 #ifdef __cplusplus
 static_assert(sizeof(GridParams) == 24 && alignof(GridParams) == 8);
 static_assert(sizeof(RegionParams) == 20 && alignof(RegionParams) == 4);
@@ -152,6 +170,7 @@ static_assert(sizeof(SurfaceParams) == 56);
 static_assert(sizeof(CorrectSurfaceParams) == 48);
 static_assert(sizeof(SolidParams) == 80);
 static_assert(sizeof(GatherParams) == 4);
+static_assert(sizeof(TilesParams) == 48);
 } // namespace texfab::synthesis::vulkan
 #endif
 #undef TEXFAB_CONST
