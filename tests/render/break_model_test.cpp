@@ -335,6 +335,19 @@ TEST(BreakModel, RefusesBadInput) {
   EXPECT_THROW(breakModel(makeSphere(16, 8), {}, InteriorExemplar{}, fractureOptions(3)), Error);
   BreakModelOptions zero = fractureOptions(0);
   EXPECT_THROW(breakModel(makeSphere(16, 8), {}, interior(), zero), Error);
+  // Cut faces beyond the solid texture's range (2^30 voxels from the origin).
+  for (double voxelsPerUnit : {2e9, 1e12}) {
+    BreakModelOptions far = fractureOptions(3);
+    far.fracture.reset();
+    far.planes = {{{0.1, 0, 0}, {1, 0, 0}}};
+    far.interior.textureScale = voxelsPerUnit;
+    try {
+      breakModel(makeSphere(16, 8), {}, interior(), far);
+      ADD_FAILURE() << voxelsPerUnit << " voxels per unit: no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("outside the solid texture's range"), std::string::npos) << e.what();
+    }
+  }
 }
 
 } // namespace
