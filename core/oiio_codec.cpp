@@ -168,10 +168,12 @@ Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t sourceBytes
 // OpenEXR 3.1 allocates and clears the chunk-offset table its header implies before reading it: a
 // few hundred corrupt bytes that claim 10^9 scanlines cost seconds. The table holds 8 bytes per chunk,
 // so a file too small for it is refused here, as is an attribute longer than the file (which OpenEXR
-// would allocate before finding the file too short). Parses the first part's header as far as `head` holds
-// it (OpenEXR file layout, "Header Attributes" and "Offset Tables"); returns quietly where it
-// cannot decide, leaving the verdict to OpenEXR.
-void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
+// would allocate before finding the file too short), and a data window wider or taller than texfab
+// reads (a 266-byte file claiming 8388617 x 7 pixels, zip-compressed, cost OpenEXR's open 35 s of
+// line buffers). Parses the first part's header as far as `head` holds it (OpenEXR file layout,
+// "Header Attributes" and "Offset Tables"); returns quietly where it cannot decide, leaving the
+// verdict to OpenEXR.
+void checkExrHeader(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
   if (head.size() < 8 || std::memcmp(head.data(), "\x76\x2f\x31\x01", 4) != 0) return;
   auto int32At = [&](size_t at) {
     int32_t v;
@@ -198,6 +200,7 @@ void checkExrChunkTable(std::span<const uint8_t> head, uint64_t fileSize, const 
     if (attribute == "dataWindow" && size == 16) {
       width = int32At(value + 8) - int32At(value) + 1;
       height = int32At(value + 12) - int32At(value + 4) + 1;
+      checkImageSize(width, height, name);
     } else if (attribute == "tiles" && size == 9) {
       tileWidth = uint32_t(int32At(value));
       tileHeight = uint32_t(int32At(value + 4));
@@ -234,7 +237,7 @@ void checkGifScreen(std::span<const uint8_t> head, uint64_t fileSize, const std:
 
 // The checks above, on what a file's or a buffer's first bytes claim.
 void checkClaims(std::span<const uint8_t> head, uint64_t size, const std::string& name) {
-  checkExrChunkTable(head, size, name);
+  checkExrHeader(head, size, name);
   checkGifScreen(head, size, name);
 }
 

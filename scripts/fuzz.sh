@@ -42,13 +42,12 @@ work="$repo/build-fuzz/fuzz"
 if [ ${#targets[@]} -eq 0 ]; then
   mapfile -t targets < <(TEXFAB_FUZZ_TARGET= "$fuzzer" 2>&1 | awk 'NR > 1 { print $1 }')
 fi
-rm -rf "$work/seeds" "$work/logs"
-mkdir -p "$work/seeds" "$work/logs"
-"$repo/$build/tests/fuzz/texfab_fuzz_seeds" "$work/seeds" "${targets[@]}"
-
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:symbolize=1"
 export LSAN_OPTIONS="suppressions=$repo/tests/fuzz/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+rm -rf "$work/seeds" "$work/logs"
+mkdir -p "$work/seeds" "$work/logs"
+"$repo/$build/tests/fuzz/texfab_fuzz_seeds" "$work/seeds" "${targets[@]}"
 limit=(-runs="$runs")
 [ -n "$seconds" ] && limit+=(-max_total_time="$seconds")
 

@@ -23,14 +23,14 @@ scripts/install-deps.sh --fuzz >/dev/null
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTEXFAB_SANITIZE=ON -DTEXFAB_BUILD_BENCH=OFF \
   -DTEXFAB_PYTHON=OFF -DTEXFAB_VULKAN=OFF >/dev/null
 cmake --build build-asan --parallel "$(nproc)" --target core_tests geometry_tests fuzz_regression_tests
-export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
 # use_tls=0: GCC 12's LeakSanitizer misreads glibc 2.36's dynamic TLS blocks of dlopen'ed libraries
 # (OpenImageIO's) and crashes at exit ("Tracer caught signal 11", "DTLS ... at 0x1d24"); without TLS
-# scanning, what libraries keep only in thread-local storage counts as leaked (lsan.supp).
-export LSAN_OPTIONS="suppressions=$(pwd)/tests/fuzz/lsan.supp:print_suppressions=0:use_tls=0"
-export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# scanning, what libraries keep only in thread-local storage counts as leaked (lsan.supp). The
+# options are the GCC build's only: scripts/fuzz.sh (clang) sets its own.
 for suite in core_tests geometry_tests fuzz_regression_tests; do
   echo "sanitize.sh: $suite"
-  "build-asan/tests/$suite" --gtest_brief=1
+  ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" \
+    LSAN_OPTIONS="suppressions=$(pwd)/tests/fuzz/lsan.supp:print_suppressions=0:use_tls=0" \
+    UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" "build-asan/tests/$suite" --gtest_brief=1
 done
 if [ "$seconds" -gt 0 ]; then scripts/fuzz.sh --runs 1000000000 --time "$seconds"; fi
