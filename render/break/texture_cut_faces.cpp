@@ -3,10 +3,8 @@
 
 #include "atlas/surface_domain.h"
 #include "core/error.h"
-#include "core/parallel.h"
 #include "render/bake.h"
 
-#include <algorithm>
 #include <unordered_map>
 
 namespace texfab::render {
