@@ -1,9 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "print/print_job.h"
 
-#include "core/text.h"
-#include "geometry/repair/close_holes.h"
-#include "geometry/repair/orient_mesh.h"
 #include "print/voxel_colors.h"
 #include "render/texture_mesh.h"
 #include "synthesis/refine_solid.h"
@@ -56,15 +53,18 @@ PrintJob::PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Co
     : mesh_(std::move(mesh)), options_(options) {
   options_.validate();
   options_.solid.seed = options_.seed;
-  // Wound one way, outward, as texture and fracture do (a flipped triangle is no hole).
-  if (const std::string repair = geometry::describeRepair(geometry::orientMesh(mesh_)); !repair.empty())
-    ctx.warn(repair);
+  if (mesh_.triangles.empty()) throw Error("the model has no triangles");
   // The scale of the model as given (texture's), not of its closed copy.
   if (options_.colors != PrintColors::Model && options_.textureScale == 0 && options_.featureSize == 0)
     options_.textureScale = render::autoTextureScale(mesh_);
-  if (const geometry::CloseHolesReport holes = geometry::closeHoles(mesh_); holes.holes > 0)
-    ctx.warn("closed " + counted(int64_t(holes.holes), "hole") + " (" +
-             counted(int64_t(holes.boundaryEdges), "boundary edge") + ") with fans of triangles");
+  // Prepared as every job prepares its model; a surface that must be rebuilt from its volume is
+  // rebuilt at the print's finest pitch (up to kMaxRebuildVoxels along its longest side).
+  geometry::PrepareMeshOptions prepare(geometry::MeshUse::Print);
+  const geometry::BoundingBox box = geometry::boundingBox(mesh_);
+  const double finest = print::printGrid(box, options_.grid).pitch.minCoeff();
+  prepare.remesh.resolution = int(std::clamp(std::ceil(double((box.max - box.min).maxCoeff()) / finest), 16.0,
+                                             double(kMaxRebuildVoxels)));
+  preparation_ = geometry::prepareMesh(mesh_, prepare, ctx);
   grid_ = print::printGrid(geometry::boundingBox(mesh_), options_.grid);
 }
 

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// The print job (`texfab slice`, texfab.slice in Python): a model made printable (wound outward,
-// holes closed), its print grid, the colour of its voxels (the model's own materials, the solid
-// texture, or a surface synthesized first) and the slices of a layer range (slice_model.h)
-// committed with their manifest. Callers make the exemplar's analyses (through their cache).
+// The print job (`texfab slice`, texfab.slice in Python): a model made printable
+// (geometry::prepareMesh: wound outward, holes closed), its print grid, the colour of its voxels
+// (the model's own materials, the solid texture, or a surface synthesized first) and the slices of
+// a layer range (slice_model.h) committed with their manifest. Callers make the exemplar's analyses (through their cache).
 
 #include "core/context.h"
 #include "core/image.h"
 #include "geometry/mesh.h"
+#include "geometry/repair/prepare_mesh.h"
 #include "print/print_grid.h"
 #include "print/slice_model.h"
 #include "print/slice_writer.h"
@@ -63,6 +64,8 @@ public:
 
   const print::PrintGrid& grid() const { return grid_; }
   const geometry::Mesh& mesh() const { return mesh_; }
+  /// What made the model printable (geometry::prepareMesh, MeshUse::Print).
+  const geometry::MeshPreparation& preparation() const { return preparation_; }
   /// Memory the slicing needs at worst, with a layer in flight per thread of `ctx`.
   double memoryBytes(const Context& ctx) const;
   /// Slices layers [first, first + count) (count -1: through the last) into `writer` and seals it
@@ -71,7 +74,11 @@ public:
                        const std::string& modelName, const Context& ctx = {}) const;
 
 private:
+  /// The finest grid of a volume rebuild (OpenVDB's narrow band grows with its square).
+  static constexpr int kMaxRebuildVoxels = 1024;
+
   geometry::Mesh mesh_;
+  geometry::MeshPreparation preparation_;
   PrintJobOptions options_;
   print::PrintGrid grid_;
 };

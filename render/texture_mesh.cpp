@@ -8,7 +8,6 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/text.h"
-#include "geometry/repair/orient_mesh.h"
 #include "render/bake.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/refine_solid.h"
@@ -129,7 +128,7 @@ class TextureJob {
   TextureJob(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o, const Context& ctx)
       : mesh_(mesh), ex_(ex), o_(o), ctx_(ctx), exemplar_(*ex.color), surface_(o.mode == TextureMode::Surface) {}
 
-  void buildAtlas(const geometry::MeshOrientation& orientation);
+  void buildAtlas(geometry::MeshPreparation preparation);
   void checkScale();
   void buildDomain();
   void synthesize();
@@ -157,13 +156,11 @@ class TextureJob {
   synthesis::SurfaceDomain domain_; ///< its finest level: the sites (texels) every map is baked at
 };
 
-void TextureJob::buildAtlas(const geometry::MeshOrientation& orientation) {
+void TextureJob::buildAtlas(geometry::MeshPreparation preparation) {
+  r_.preparation = std::move(preparation);
+  r_.warnings = r_.preparation.warnings;  // ctx has them already
   Stage stage(ctx_, "atlas");
   r_.atlas = generateAtlas(mesh_, o_.atlas, ctx_.nested());
-  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
-    r_.atlas.report.repairs.insert(r_.atlas.report.repairs.begin(), repair);
-  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty())
-    r_.warnings.push_back(warning);
   const AtlasReport& ar = r_.atlas.report;
   if (ar.flippedTriangles || ar.overlappingTexels)
     throw Error("internal: the atlas has flipped triangles or overlaps; please report this mesh");
@@ -310,31 +307,30 @@ TextureMeshResult TextureJob::finish() {
 
 } // namespace
 
-TextureMeshResult textureMesh(const geometry::Mesh& input, const TextureExemplar& ex, const TextureMeshOptions& o,
-                              const Context& ctx) {
+TextureMeshResult textureMesh(const geometry::PreparedMesh& model, const TextureExemplar& ex,
+                              const TextureMeshOptions& o, const Context& ctx) {
   checkCompanionMaps(ex, o.mode);  // and that there is an exemplar
   const bool surface = o.mode == TextureMode::Surface;
   if (surface && !ex.analysis && !ex.graph) throw Error("texture: surface mode needs the exemplar analysis");
   if (!surface && !ex.solidAnalysis) throw Error("texture: solid mode needs the solid exemplar analysis");
-  if (input.triangleCount() == 0) throw Error("the model has no triangles");
+  if (model.mesh.triangleCount() == 0) throw Error("the model has no triangles");
   if (!(o.textureScale >= 0) || !std::isfinite(o.textureScale)) throw Error("texture scale must be >= 0");
   o.surface.validate();
   o.solid.validate();
 
-  // A consistently wound copy where the input is not: charts, frames and the output follow it.
-  const geometry::MeshOrientation orientation =
-      geometry::computeOrientation(input, geometry::computeConnectivity(input));
-  std::optional<geometry::Mesh> oriented;
-  if (!orientation.flip.empty()) geometry::flipTriangles(oriented.emplace(input), orientation.flip);
-
-  TextureJob job(oriented ? *oriented : input, ex, o, ctx);
-  job.buildAtlas(orientation);
+  TextureJob job(model.mesh, ex, o, ctx);
+  job.buildAtlas(model.preparation);
   job.checkScale();
   job.buildDomain();
   job.synthesize();
   job.resolveMaps();
   if (o.measure) job.measure();
   return job.finish();
+}
+
+TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o,
+                              const Context& ctx) {
+  return textureMesh(geometry::preparedCopy(mesh, geometry::MeshUse::Surface, ctx), ex, o, ctx);
 }
 
 } // namespace texfab::render

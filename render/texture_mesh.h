@@ -16,6 +16,7 @@
 #include "core/context.h"
 #include "core/image.h"
 #include "geometry/mesh.h"
+#include "geometry/repair/prepare_mesh.h"
 #include "geometry/tangent_field.h"
 #include "render/bake.h"
 #include "render/surface_measures.h"
@@ -71,6 +72,7 @@ struct TextureMeshResult {
   geometry::Mesh mesh;                      ///< the input with atlas UVs and one material with the maps
   std::shared_ptr<const Image> baseColor;   ///< atlas-sized maps (also referenced by mesh.materials[0])
   std::shared_ptr<const Image> normal, metallicRoughness, height; ///< null unless requested
+  geometry::MeshPreparation preparation;  ///< what made the input a surface to texture (prepareMesh)
   atlas::GenerateAtlasResult atlas;
   /// The finest level of the surface domain (one site per chart texel; in solid mode its
   /// neighbors are linked only when measures are asked for).
@@ -125,6 +127,11 @@ int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& o
 /// Stages reported through ctx: atlas, tangent field (surface mode), fields, synthesis (solid mode:
 /// each level inside it), resolve, measures. Throws texfab::Error on bad input (no triangles, a
 /// missing analysis, maps of the wrong size, a scale that puts a whole exemplar inside one texel).
+/// `model`: prepared for any use (a solid is a surface too); callers that analyse the exemplar
+/// first prepare it before (geometry::preparedCopy with MeshUse::Surface).
+TextureMeshResult textureMesh(const geometry::PreparedMesh& model, const TextureExemplar& exemplar,
+                              const TextureMeshOptions& options, const Context& ctx = {});
+/// The same, with the model prepared first (stage: preparation).
 TextureMeshResult textureMesh(const geometry::Mesh& mesh, const TextureExemplar& exemplar,
                               const TextureMeshOptions& options, const Context& ctx = {});
 

@@ -30,7 +30,7 @@ void report(Run& run, const BreakJob& job, const geometry::Mesh& mesh, const ren
   nlohmann::json& r = run.report();
   r["model"] = modelJson(job.model, mesh);
   r["model"]["volume"] = model.modelVolume;
-  r["model"]["repairs"] = model.repairs;
+  r["model"]["preparation"] = toJson(model.preparation);
   double volumeSum = 0, cutArea = 0;
   for (const render::Piece& p : model.pieces) volumeSum += p.volume, cutArea += p.cutArea;
   r["pieces"] = piecesJson(model);
@@ -145,14 +145,14 @@ void runBreak(const std::string& command, BreakJob& job) {
   if (!job.exemplar.empty()) ex.outer = readImage(job.exemplar);
   if (!job.interior.empty()) ex.interior = readImage(job.interior);
   load.finish(job.model + ": " + counted(int64_t(mesh.triangleCount()), "triangle"));
-  ex.analyze(mesh, o, [&](const Image& image) { return chooseWrap(job.wrap, image, run); }, job.solid.tiles,
+  const geometry::PreparedMesh prepared = render::prepareBreakSolid(mesh, o, run.ctx());  // its repairs before the analyses
+  ex.analyze(prepared.mesh, o, [&](const Image& image) { return chooseWrap(job.wrap, image, run); }, job.solid.tiles,
              run.analysisCache(), run.ctx());
   if (ex.downsampling > 1)
     run.note("the scale puts at least " + std::to_string(ex.downsampling) + " exemplar pixels in every texel: the " +
              "textures are synthesized from copies " + std::to_string(ex.downsampling) + " times smaller");
 
-  const render::BrokenModel model = render::breakModel(mesh, ex.outerView, ex.interiorView, o, run.ctx());
-  for (const std::string& repair : model.repairs) run.ctx().warn("repaired: " + repair);
+  const render::BrokenModel model = render::breakModel(prepared, ex.outerView, ex.interiorView, o, run.ctx());
   for (const std::string& note : model.notes) run.ctx().warn(note);
 
   Stage write(run.ctx(), "write");

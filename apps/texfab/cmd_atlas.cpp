@@ -12,7 +12,7 @@
 #include "core/memory.h"
 #include "core/text.h"
 #include "geometry/io/mesh_io.h"
-#include "geometry/repair/orient_mesh.h"
+#include "geometry/repair/prepare_mesh.h"
 #include "geometry/tangent_field.h"
 #include "render/texture_mesh.h"
 
@@ -134,13 +134,10 @@ void runAtlas(AtlasJob& job) {
   geometry::Mesh mesh = geometry::readMesh(job.model, run.ctx());
   read.finish(job.model + ": " + counted(int64_t(mesh.vertexCount()), "vertex", "vertices") + ", " +
               counted(int64_t(mesh.triangleCount()), "triangle"));
-  const geometry::MeshOrientation orientation = geometry::orientMesh(mesh);
-  if (const std::string warning = geometry::describeWarning(orientation); !warning.empty()) run.ctx().warn(warning);
+  const geometry::MeshPreparation preparation = geometry::prepareMesh(mesh, geometry::MeshUse::Surface, run.ctx());
 
   Stage stage(run.ctx(), "atlas");
   atlas::GenerateAtlasResult result = atlas::generateAtlas(mesh, job.options, stage.inner());
-  if (const std::string repair = geometry::describeRepair(orientation); !repair.empty())
-    result.report.repairs.insert(result.report.repairs.begin(), repair);
   const atlas::AtlasReport& r = result.report;
   stage.finish(counted(int64_t(r.charts), "chart") + ", utilization " + figure(r.utilization) + ", L2 stretch " +
                figure(r.l2Stretch) + ", max " + figure(r.maxStretch));
@@ -170,6 +167,7 @@ void runAtlas(AtlasJob& job) {
 
   nlohmann::json& report = run.report();
   report["model"] = modelJson(job.model, mesh);
+  report["model"]["preparation"] = toJson(preparation);
   report["atlas"] = toJson(result);
   report["parameters"] = {{"texture_scale", textureScale}};
   report["tangent_field"] = {{"singularities", field.singularTriangles.size()}, {"total_index", field.totalIndex()}};

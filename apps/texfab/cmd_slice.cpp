@@ -5,6 +5,7 @@
 #include "apps/texfab/analysis.h"
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
+#include "apps/texfab/report_json.h"
 #include "core/image_io.h"
 #include "core/memory.h"
 #include "core/text.h"
@@ -129,6 +130,8 @@ void runSlice(SliceJob& job) {
   nlohmann::json& report = run.report();
   if (run.reporting())  // the print block as the manifest has it
     report["print"] = nlohmann::json::parse(print::readSliceManifest(writer.staging())["print"].dump());
+  report["model"] = modelJson(job.model, print.mesh());
+  report["model"]["preparation"] = toJson(print.preparation());
   report["layers"] = {{"first", first}, {"count", count}, {"total", grid.layers}};
   report["voxels"] = {{"inside", r.insideVoxels}, {"shell", r.shellVoxels}, {"per_layer", grid.voxelsPerLayer()}};
   if (o.colors == print::PrintColors::Solid)

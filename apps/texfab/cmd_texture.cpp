@@ -61,7 +61,7 @@ CompanionFiles parseMaps(const std::string& spec) {
 }
 
 struct Inputs {
-  geometry::Mesh mesh;
+  geometry::PreparedMesh model;
   Image exemplar;  ///< with a graph, its root exemplar
   std::optional<synthesis::ExemplarGraph> graph;
   std::optional<Image> normal, roughness, height;
@@ -91,8 +91,8 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
   if (in.normal && in.normal->channels < 3)
     throw Error((in.graph ? job.graph + ": the normal maps" : maps.normal) + ": a normal map needs 3 channels");
   if (!in.graph) render::checkCompanionMaps(in.view(), job.options.mode);  // before the (possibly long) analysis
-  in.mesh = geometry::readMesh(job.model, ctx);
-  stage.finish(job.model + ": " + counted(int64_t(in.mesh.triangleCount()), "triangle") + "; " +
+  in.model.mesh = geometry::readMesh(job.model, ctx);
+  stage.finish(job.model + ": " + counted(int64_t(in.model.mesh.triangleCount()), "triangle") + "; " +
                (in.graph ? job.graph + ": " + counted(int64_t(in.graph->exemplars.size()), "exemplar") + " of "
                          : job.exemplar + " ") +
                std::to_string(in.exemplar.width) + "x" + std::to_string(in.exemplar.height));
@@ -102,7 +102,7 @@ Inputs load(const TextureJob& job, const CompanionFiles& maps, const Context& ct
 // Replaces the exemplar and its maps by the copy render::analysisDownsampling asks for (and the scale by
 // the copy's), says so, and returns the factor.
 int downsampleForAnalysis(render::TextureMeshOptions& o, Inputs& in, const Run& run) {
-  const int factor = render::analysisDownsampling(in.mesh, o, in.exemplar);
+  const int factor = render::analysisDownsampling(in.model.mesh, o, in.exemplar);
   if (factor == 1) return 1;
   for (std::optional<Image>* map : {&in.normal, &in.roughness, &in.height})
     if (*map) **map = downsample(**map, factor);
@@ -131,7 +131,7 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
   bool cached = false;
   if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
   if (in.graph) {
-    o.textureScale = o.textureScale > 0 ? o.textureScale : render::graphTextureScale(in.mesh, in.graph->side());
+    o.textureScale = o.textureScale > 0 ? o.textureScale : render::graphTextureScale(in.model.mesh, in.graph->side());
     a.graph = synthesis::analyzeGraph(*in.graph, {}, run.analysisCache(), run.ctx(), &cached);
     a.report = {{"file", job.graph}, {"exemplars", in.graph->names}, {"edges", in.graph->edges.size()},
                 {"side", in.graph->side()}, {"analysis_cached", cached}};
@@ -141,7 +141,7 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
   // The wrap is measured on the exemplar as given (a smaller copy hides part of its seam).
   const WrapChoice wrap =
       chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
-  o.textureScale = render::textureScaleFor(in.mesh, o);
+  o.textureScale = render::textureScaleFor(in.model.mesh, o);
   a.downsampling = downsampleForAnalysis(o, in, run);
   if (o.mode == render::TextureMode::Surface) {
     synthesis::AnalysisOptions options;
@@ -185,6 +185,7 @@ void runTexture(TextureJob& job) {
   o.measure = run.reporting();  // the measures (seconds on a 2048² atlas) go to the report
 
   Inputs in = load(job, maps, run.ctx());
+  in.model.preparation = geometry::prepareMesh(in.model.mesh, geometry::MeshUse::Surface, run.ctx());  // before the analysis
   if (in.graph) {
     if (in.height) heightOut = reserveHeight();  // the graph's height maps
     synthesis::checkSurfaceGraphSize(int(in.graph->exemplars.size()), in.graph->side());
@@ -198,7 +199,7 @@ void runTexture(TextureJob& job) {
   ex.analysis = analyses.surface ? &*analyses.surface : nullptr;
   ex.solidAnalysis = analyses.solid ? &*analyses.solid : nullptr;
   ex.graph = analyses.graph ? &*analyses.graph : nullptr;
-  const render::TextureMeshResult result = render::textureMesh(in.mesh, ex, o, run.ctx());
+  const render::TextureMeshResult result = render::textureMesh(in.model, ex, o, run.ctx());
 
   Stage write(run.ctx(), "write");
   job.write.up = geometry::upVector(upAxisFor(job.up, job.model));
@@ -215,7 +216,8 @@ void runTexture(TextureJob& job) {
   }
 
   nlohmann::json& r = run.report();
-  r["model"] = modelJson(job.model, in.mesh);
+  r["model"] = modelJson(job.model, in.model.mesh);
+  r["model"]["preparation"] = toJson(result.preparation);
   r[analyses.graph ? "graph" : "exemplar"] = analyses.report;
   const int downsampling = analyses.downsampling;
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},

@@ -14,6 +14,10 @@ json imageJson(const std::string& path, const Image& image) {
   return {{"path", path}, {"width", image.width}, {"height", image.height}, {"channels", image.channels}};
 }
 
+json toJson(const geometry::MeshPreparation& p) {
+  return {{"use", geometry::meshUseName(p.use)}, {"repairs", p.repairs}, {"warnings", p.warnings}, {"rebuilt", p.rebuilt}};
+}
+
 json toJson(const atlas::GenerateAtlasResult& result) {
   const atlas::AtlasReport& r = result.report;
   const double texels = double(result.atlas.width) * double(result.atlas.height);

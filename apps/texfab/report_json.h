@@ -5,6 +5,7 @@
 // the library's documentation of the field.
 
 #include "atlas/generate_atlas.h"
+#include "geometry/repair/prepare_mesh.h"
 #include "render/texture_mesh.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_2d.h"
@@ -22,6 +23,8 @@ nlohmann::json modelJson(const std::string& path, const geometry::Mesh& mesh);
 /// {path, width, height, channels}
 nlohmann::json imageJson(const std::string& path, const Image& image);
 
+/// {use, repairs, warnings, rebuilt}
+nlohmann::json toJson(const geometry::MeshPreparation& preparation);
 nlohmann::json toJson(const atlas::GenerateAtlasResult& atlas);
 nlohmann::json toJson(const render::TextureMeasures& measures, double requestedPixelsPerUnit);
 nlohmann::json toJson(const synthesis::QualityReport& quality);

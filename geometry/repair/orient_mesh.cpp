@@ -76,18 +76,28 @@ double windingNumber(const Mesh& mesh, const Part& part, const std::vector<uint8
   return sum / (4 * std::numbers::pi);
 }
 
-/// How many of the other closed parts contain a point of closed part i.
+bool boxInside(const BoundingBox& inner, const BoundingBox& outer) {
+  return (inner.min.array() >= outer.min.array()).all() && (inner.max.array() <= outer.max.array()).all();
+}
+
+/// How many of the other closed parts contain closed part i: its box lies in theirs, and so do the
+/// centroid of its largest triangle and up to 16 of its corners spread over its triangles. One
+/// point alone would take a shell that overlaps another (an eye set into a head) for a cavity.
 int nestingDepth(const Mesh& mesh, const std::vector<Part>& parts, const std::vector<BoundingBox>& boxes, size_t i,
                  const std::vector<uint8_t>& flip, const std::vector<double>& area) {
-  const uint32_t largest = *std::max_element(parts[i].triangles.begin(), parts[i].triangles.end(),
-                                              [&](uint32_t a, uint32_t b) { return area[a] < area[b]; });
-  const Eigen::Vector3d p = (cornerOf(mesh, largest, 0) + cornerOf(mesh, largest, 1) + cornerOf(mesh, largest, 2)) / 3;
+  const std::vector<uint32_t>& tris = parts[i].triangles;
+  const uint32_t largest =
+      *std::max_element(tris.begin(), tris.end(), [&](uint32_t a, uint32_t b) { return area[a] < area[b]; });
+  std::vector<Eigen::Vector3d> points{(cornerOf(mesh, largest, 0) + cornerOf(mesh, largest, 1) + cornerOf(mesh, largest, 2)) / 3};
+  const size_t samples = std::min<size_t>(16, tris.size());
+  for (size_t s = 0; s < samples; ++s) points.push_back(cornerOf(mesh, tris[s * tris.size() / samples], 0));
   int depth = 0;
   for (size_t j = 0; j < parts.size(); ++j) {
-    if (j == i || !parts[j].closed || !parts[j].orientable) continue;
-    const Eigen::Vector3f q = p.cast<float>();
-    if ((q.array() < boxes[j].min.array()).any() || (q.array() > boxes[j].max.array()).any()) continue;
-    if (std::abs(windingNumber(mesh, parts[j], flip, p)) > 0.5) ++depth;
+    if (j == i || !parts[j].closed || !parts[j].orientable || !boxInside(boxes[i], boxes[j])) continue;
+    const bool inside = std::all_of(points.begin(), points.end(), [&](const Eigen::Vector3d& p) {
+      return std::abs(windingNumber(mesh, parts[j], flip, p)) > 0.5;
+    });
+    depth += inside;
   }
   return depth;
 }

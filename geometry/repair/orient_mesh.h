@@ -7,9 +7,11 @@
 // walked breadth-first from its smallest triangle id; a triangle whose winding disagrees with the
 // neighbour it is reached from is flipped. Then the part's side is chosen:
 //  - closed parts (no edge without a mate): positive signed volume (outward normals), or negative
-//    for a cavity, a part that lies inside an odd number of other closed parts (generalized winding
-//    number of one of its points, A. Jacobson, L. Kavan, O. Sorkine-Hornung, "Robust
-//    Inside-Outside Segmentation using Generalized Winding Numbers", SIGGRAPH 2013);
+//    for a cavity, a part that lies inside an odd number of other closed parts (its box inside
+//    theirs and the generalized winding number of 17 of its points: a shell that only overlaps
+//    another stays outward, so that a print's winding rule takes their union; A. Jacobson,
+//    L. Kavan, O. Sorkine-Hornung, "Robust Inside-Outside Segmentation using Generalized Winding
+//    Numbers", SIGGRAPH 2013);
 //  - open parts: the side most of the part's area already faced (ties: keep the first triangle's).
 // A part where some edge cannot agree whatever the flips (a Möbius strip) is not orientable: its
 // walk's flips are kept and the edges left inconsistent are counted; the atlas cuts along them.

@@ -28,47 +28,6 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 
 Point toPoint(const Eigen::Vector3f& p) { return {double(p.x()), double(p.y()), double(p.z())}; }
 
-// Keeps the triangles for which keep(t) holds, with their attributes.
-template <class Keep>
-size_t keepTriangles(Mesh& mesh, Keep&& keep) {
-  size_t out = 0;
-  const size_t n = mesh.triangles.size();
-  for (size_t t = 0; t < n; ++t) {
-    if (!keep(t)) continue;
-    mesh.triangles[out] = mesh.triangles[t];
-    for (int k = 0; k < 3; ++k) {
-      if (mesh.hasUvs()) mesh.uvs[3 * out + size_t(k)] = mesh.uvs[3 * t + size_t(k)];
-      if (mesh.hasNormals()) mesh.normals[3 * out + size_t(k)] = mesh.normals[3 * t + size_t(k)];
-      if (mesh.hasTangents()) mesh.tangents[3 * out + size_t(k)] = mesh.tangents[3 * t + size_t(k)];
-    }
-    if (!mesh.faceMaterials.empty()) mesh.faceMaterials[out] = mesh.faceMaterials[t];
-    if (!mesh.faceTags.empty()) mesh.faceTags[out] = mesh.faceTags[t];
-    ++out;
-  }
-  mesh.triangles.resize(out);
-  if (mesh.hasUvs()) mesh.uvs.resize(3 * out);
-  if (mesh.hasNormals()) mesh.normals.resize(3 * out);
-  if (mesh.hasTangents()) mesh.tangents.resize(3 * out);
-  if (!mesh.faceMaterials.empty()) mesh.faceMaterials.resize(out);
-  if (!mesh.faceTags.empty()) mesh.faceTags.resize(out);
-  return n - out;
-}
-
-void weldAndClean(Mesh& mesh, RepairSolidReport& r) {
-  const size_t before = mesh.positions.size();
-  weldPositions(mesh);
-  removeUnusedVertices(mesh);
-  if (mesh.positions.size() < before)
-    r.repairs.push_back("welded " + std::to_string(before - mesh.positions.size()) + " repeated vertices");
-  const size_t removed = keepTriangles(mesh, [&](size_t t) {
-    const auto& c = mesh.triangles[t];
-    return c[0] != c[1] && c[1] != c[2] && c[0] != c[2];
-  });
-  if (removed) r.repairs.push_back("removed " + std::to_string(removed) + " triangles with a repeated corner");
-  removeUnusedVertices(mesh);
-  if (mesh.triangles.empty()) throw Error("the model has no triangles with three distinct corners");
-}
-
 // The mesh as a surface mesh, face i = triangle i; false when it is not an oriented manifold.
 bool toSurfaceMesh(const Mesh& mesh, SurfaceMesh& sm) {
   sm.clear();
@@ -148,7 +107,7 @@ void fillHoles(Mesh& mesh, SurfaceMesh& sm, const RepairSolidOptions& o, RepairS
   mesh.faceTags.resize(n, 0);
   std::fill(mesh.faceTags.begin() + std::ptrdiff_t(first), mesh.faceTags.end(), o.holeTag);
   r.holeTriangles = added;
-  r.repairs.push_back("filled " + std::to_string(cycles.size()) + " holes with " + std::to_string(added) + " triangles");
+  r.repairs.push_back("filled " + counted(int64_t(cycles.size()), "hole") + " with " + counted(int64_t(added), "triangle"));
 }
 
 // A one-line description of the mesh's self-intersections, or "" when it has none. On
@@ -196,6 +155,7 @@ std::string closeSurface(Mesh& mesh, SurfaceMesh& sm, const RepairSolidOptions& 
     if (!toSurfaceMesh(mesh, sm)) return "the model is not a manifold and could not be oriented";
   }
   fillHoles(mesh, sm, o, r);
+  if (o.allowSelfIntersections) return {};
   Stage check(ctx, "self-intersections");
   std::string fault = selfIntersections(sm, check.inner());
   check.finish();
@@ -219,6 +179,7 @@ void rebuildFromVolume(Mesh& mesh, SurfaceMesh& sm, const std::string& fault, co
   mesh = std::move(rebuilt);
   if (!materials.empty()) mesh.materials = {std::move(materials.front())};
   r.holeTriangles = 0;
+  r.rebuilt = true;
   RepairSolidReport again;
   const std::string left = closeSurface(mesh, sm, o, again, stage.inner());
   if (!left.empty()) throw Error(fault + ", and the rebuilt volume is not a solid either: repair it in a mesh editor");
@@ -231,10 +192,8 @@ void rebuildFromVolume(Mesh& mesh, SurfaceMesh& sm, const std::string& fault, co
 } // namespace
 
 RepairSolidReport repairSolid(Mesh& mesh, const RepairSolidOptions& o, const Context& ctx) {
-  validateMesh(mesh, "the model");
   Stage stage(ctx, "repair");
   RepairSolidReport r;
-  weldAndClean(mesh, r);
   SurfaceMesh sm;
   const Context inner = stage.inner();
   if (const std::string fault = closeSurface(mesh, sm, o, r, inner); !fault.empty())
@@ -242,7 +201,7 @@ RepairSolidReport repairSolid(Mesh& mesh, const RepairSolidOptions& o, const Con
   Stage outward(inner, "orientation");
   orientOutward(mesh, sm, r);
   outward.finish();
-  stage.finish(r.repairs.empty() ? "a closed solid" : std::to_string(r.repairs.size()) + " repairs");
+  stage.finish(r.repairs.empty() ? "a closed solid" : counted(int64_t(r.repairs.size()), "repair"));
   return r;
 }
 

@@ -37,7 +37,7 @@ struct TextureOutput {
   py::object baseColor, normal, metallicRoughness, height;
   double textureScale = 0;
   size_t charts = 0;
-  std::vector<std::string> warnings;
+  std::vector<std::string> repairs, warnings;
 };
 
 struct TextureInputs {
@@ -89,6 +89,7 @@ TextureOutput textureOutput(render::TextureMeshResult&& r, int downsampling) {
           optionalImageArray(r.height),
           r.textureScale * downsampling,
           r.atlas.report.charts,
+          r.preparation.repairs,
           r.warnings};
 }
 
@@ -102,8 +103,9 @@ TextureOutput textureMeshFromGraph(const py::object& meshLike, const py::object&
                   " atlas from a graph of " + std::to_string(in.graph.exemplars.size()) + " exemplars");
   const geometry::Mesh mesh = toMesh(meshLike);
   render::TextureMeshResult r = call.run([&] {
+    const geometry::PreparedMesh model = geometry::preparedCopy(mesh, geometry::MeshUse::Surface, call.ctx());
     const synthesis::GraphAnalysis analysis = synthesis::analyzeGraph(in.graph, {}, call.analysisCache(), call.ctx());
-    return render::textureMesh(mesh, in.view(analysis), o, call.ctx());
+    return render::textureMesh(model, in.view(analysis), o, call.ctx());
   });
   return textureOutput(std::move(r), 1);
 }
@@ -151,6 +153,7 @@ TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplar
     o.textureScale /= factor;
   }
   render::TextureMeshResult r = call.run([&] {
+    const geometry::PreparedMesh model = geometry::preparedCopy(mesh, geometry::MeshUse::Surface, call.ctx());
     std::optional<synthesis::ExemplarAnalysis> analysis;
     std::optional<synthesis::SolidAnalysis> solid;
     render::TextureExemplar ex = in.view();
@@ -161,7 +164,7 @@ TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplar
     } else {
       ex.solidAnalysis = &solid.emplace(analyzeSolid(call, in.exemplar, exemplarWrap, o.solid.method, tileSide));
     }
-    return render::textureMesh(mesh, ex, o, call.ctx());
+    return render::textureMesh(model, ex, o, call.ctx());
   });
   return textureOutput(std::move(r), factor);
 }
@@ -226,9 +229,10 @@ BrokenOutput breakModel(const py::object& meshLike, const py::object& planes, in
   auto model = std::make_shared<const render::BrokenModel>(call.run([&] {
     synthesis::SolidTileOptions tiles;
     tiles.tileSide = tileSide;
-    ex.analyze(mesh, o, [&](const Image& image) { return chooseWrap(wrap, image); }, tiles, call.analysisCache(),
+    const geometry::PreparedMesh solid = render::prepareBreakSolid(mesh, o, call.ctx());  // its repairs before the analyses
+    ex.analyze(solid.mesh, o, [&](const Image& image) { return chooseWrap(wrap, image); }, tiles, call.analysisCache(),
                call.ctx());
-    return render::breakModel(mesh, ex.outerView, ex.interiorView, o, call.ctx());
+    return render::breakModel(solid, ex.outerView, ex.interiorView, o, call.ctx());
   }));
   BrokenOutput out{model, {}, ex.downsampling};
   for (const render::Piece& p : model->pieces)
@@ -247,6 +251,7 @@ void bindJobs(py::module_& m) {
       .def_readonly("height", &TextureOutput::height)
       .def_readonly("texture_scale", &TextureOutput::textureScale, "exemplar pixels per model unit used")
       .def_readonly("charts", &TextureOutput::charts)
+      .def_readonly("repairs", &TextureOutput::repairs, "what made the input a surface to texture, one line each")
       .def_readonly("warnings", &TextureOutput::warnings);
   defSave(texture, [](const TextureOutput& s, const py::object& path, const geometry::MeshWriteOptions& o) {
     const geometry::Mesh& mesh = s.mesh.cast<const geometry::Mesh&>();
@@ -280,7 +285,7 @@ void bindJobs(py::module_& m) {
       .def_property_readonly("interior_scale",
                              [](const BrokenOutput& s) { return s.model->interiorScale * s.downsampling; })
       .def_property_readonly("notes", [](const BrokenOutput& s) { return s.model->notes; })
-      .def_property_readonly("repairs", [](const BrokenOutput& s) { return s.model->repairs; })
+      .def_property_readonly("repairs", [](const BrokenOutput& s) { return s.model->preparation.repairs; })
       .def(
           "save",
           [](const BrokenOutput& s, const py::object& path, double explode, const std::string& up, bool draco,

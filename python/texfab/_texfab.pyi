@@ -102,6 +102,7 @@ class TextureResult:
     height: Optional[npt.NDArray[np.float32]]
     texture_scale: float                               # exemplar pixels per model unit used
     charts: int
+    repairs: list[str]                                 # what made the input a surface to texture
     warnings: list[str]
     def save(self, path: PathLike, *, up: Up = "y", draco: bool = False, embed: bool = False,
              texture_format: str = "keep") -> None: ...   # as Mesh.save

@@ -12,7 +12,7 @@
 namespace texfab::render {
 namespace {
 
-constexpr uint32_t kCutTag = 1;  // faceTags of cut faces and filled holes (RepairSolidOptions::holeTag)
+constexpr uint32_t kCutTag = 1;  // faceTags of cut faces and filled holes (PrepareMeshOptions::holeTag)
 
 std::string pieceName(size_t i) {
   char name[32];
@@ -60,17 +60,18 @@ void applyInterior(std::vector<Piece>& pieces, const std::vector<std::vector<uin
   }
 }
 
-// The solid the job cuts, with its outer texture: repaired, then textured when an exemplar is given.
-geometry::Mesh outerSolid(const geometry::Mesh& model, const TextureExemplar& outer, const BreakModelOptions& o,
+// The solid the job cuts, with its outer texture when an exemplar is given.
+geometry::Mesh outerSolid(const geometry::PreparedMesh& solid, const TextureExemplar& outer, const BreakModelOptions& o,
                           const Context& ctx, BrokenModel& r) {
-  geometry::Mesh mesh = model;
-  r.repairs = geometry::repairSolid(mesh, o.repair, ctx).repairs;
+  geometry::Mesh mesh;
   if (outer.color) {
     Stage stage(ctx, "texture");
-    r.outer = textureMesh(mesh, outer, o.outer, stage.inner());
+    r.outer = textureMesh(solid, outer, o.outer, stage.inner());
     mesh = std::move(r.outer->mesh);
     r.outer->mesh = {};
     stage.finish();
+  } else {
+    mesh = solid.mesh;
   }
   if (mesh.materials.empty()) {
     geometry::Material m;
@@ -173,12 +174,24 @@ double breakModelMemoryBytes(const BreakModelOptions& options, bool texturesOuts
   return textureMeshMemoryBytes(interior) + (texturesOutside ? textureMeshMemoryBytes(options.outer) : 0.0);
 }
 
+geometry::PreparedMesh prepareBreakSolid(const geometry::Mesh& model, const BreakModelOptions& o, const Context& ctx) {
+  geometry::PrepareMeshOptions solid = o.preparation;
+  solid.use = geometry::MeshUse::Solid;
+  return geometry::preparedCopy(model, solid, ctx);
+}
+
 BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer, const InteriorExemplar& interior,
+                       const BreakModelOptions& o, const Context& ctx, synthesis::SolidLevelCache* cache) {
+  return breakModel(prepareBreakSolid(model, o, ctx), outer, interior, o, ctx, cache);
+}
+
+BrokenModel breakModel(const geometry::PreparedMesh& prepared, const TextureExemplar& outer, const InteriorExemplar& interior,
                        const BreakModelOptions& o, const Context& ctx, synthesis::SolidLevelCache* cache) {
   if (o.planes.empty() == !o.fracture) throw Error("break: give cutting planes or fracture options (one of the two)");
   if (o.fracture) o.fracture->validate();
   BrokenModel r;
-  const geometry::Mesh solid = outerSolid(model, outer, o, ctx, r);
+  r.preparation = prepared.preparation;
+  const geometry::Mesh solid = outerSolid(prepared, outer, o, ctx, r);
   r.modelVolume = geometry::measureSolid(solid).volume;
   const uint32_t interiorIndex = uint32_t(solid.materials.size());
   r.pieces = splitSolid(solid, o, interiorIndex, ctx, r);
@@ -191,7 +204,7 @@ BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer
   // The cut faces' solid texture: the scale given, else the outer texture's, else the model's default.
   r.interiorScale = o.interior.textureScale > 0 ? o.interior.textureScale
                     : r.outer                  ? r.outer->textureScale
-                                               : autoTextureScale(model);
+                                               : autoTextureScale(solid);
   if (count) {
     if (!interior.color || !interior.analysis) throw Error("the cut faces need an interior exemplar (--interior or --exemplar)");
     CutFaceTextureOptions io = o.interior;

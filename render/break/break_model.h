@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The jobs that break a model (`texfab fracture`, `texfab cut`): the model made a solid
-// (geometry/repair_solid.h), its outer faces textured (its own material, or the texture job),
+// (geometry/repair/prepare_mesh.h), its outer faces textured (its own material, or the texture job),
 // broken by Voronoi cells or cut by planes (geometry/fracture_mesh.h, geometry/cut_mesh.h), and
 // the new faces textured from the solid texture in the outer texture's frame
 // (texture_cut_faces.h); and the interactive re-cut, which cuts the pieces again and textures
@@ -12,7 +12,7 @@
 #include "geometry/fracture/fracture_mesh.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/mesh.h"
-#include "geometry/repair/repair_solid.h"
+#include "geometry/repair/prepare_mesh.h"
 #include "render/break/texture_cut_faces.h"
 #include "render/texture_mesh.h"
 #include "synthesis/analyze_exemplar.h"
@@ -29,7 +29,8 @@ namespace texfab::render {
 struct BreakModelOptions {
   std::vector<geometry::CutPlane> planes;            ///< cut by these planes, in turn ...
   std::optional<geometry::FractureOptions> fracture;  ///< ... or fracture (exactly one of the two)
-  geometry::RepairSolidOptions repair;
+  /// How the model is made a solid; its use is always MeshUse::Solid.
+  geometry::PrepareMeshOptions preparation;
   TextureMeshOptions outer;          ///< the outer texture, when an outer exemplar is given
   /// The cut faces' atlas and solid texture. Its textureScale 0 = the outer texture's scale when
   /// the job textures the outside, else autoTextureScale of the model.
@@ -96,7 +97,7 @@ struct BrokenModel {
   double interiorScale = 0;
   synthesis::SolidSynthesisOptions interiorSolid;
   // Figures for reports.
-  std::vector<std::string> repairs;
+  geometry::MeshPreparation preparation;  ///< what made the model a solid
   std::vector<std::string> notes;  ///< e.g. "plane 2 misses the model"
   std::optional<geometry::FractureReport> fracture;
   geometry::IntersectCellsReport intersect;
@@ -109,10 +110,19 @@ struct BrokenModel {
 /// outer atlas per side, or 2048^2), plus the outer texture's when `texturesOutside`.
 double breakModelMemoryBytes(const BreakModelOptions& options, bool texturesOutside);
 
-/// Throws texfab::Error for bad options (neither or both of planes and fracture), a model that
-/// cannot be made a solid, or a missing interior exemplar when there are faces to texture.
-/// `outer.color` null keeps the model's own materials and UVs on the outer faces. Stages: repair,
-/// texture (its own stages inside), sites/cells/intersect or intersect per plane, interior.
+/// The job's first stage, the model made a solid: geometry::prepareMesh with options.preparation as
+/// MeshUse::Solid. Callers that analyse exemplars first run it before. Stage: preparation.
+geometry::PreparedMesh prepareBreakSolid(const geometry::Mesh& model, const BreakModelOptions& options,
+                                         const Context& ctx = {});
+
+/// Throws texfab::Error for bad options (neither or both of planes and fracture) or a missing
+/// interior exemplar when there are faces to texture. `outer.color` null keeps the model's own
+/// materials and UVs on the outer faces. Stages: texture (its own stages inside),
+/// sites/cells/intersect or intersect per plane, interior.
+BrokenModel breakModel(const geometry::PreparedMesh& solid, const TextureExemplar& outer, const InteriorExemplar& interior,
+                       const BreakModelOptions& options, const Context& ctx = {},
+                       synthesis::SolidLevelCache* cache = nullptr);
+/// Both stages (prepareBreakSolid, then the job); also throws when the model cannot be made a solid.
 BrokenModel breakModel(const geometry::Mesh& model, const TextureExemplar& outer, const InteriorExemplar& interior,
                        const BreakModelOptions& options, const Context& ctx = {},
                        synthesis::SolidLevelCache* cache = nullptr);

@@ -202,6 +202,49 @@ TEST(Cli, TextureChoosesTheExemplarWrap) {
   EXPECT_EQ(nlohmann::json::parse(readFile(d / "b.json"))["parameters"]["exemplar_wrap"], "clamp");
 }
 
+// A box (2 x 6 x 1) with two triangles wound the wrong way and a hole where one triangle is missing.
+fs::path flawedBox(const fs::path& dir) {
+  const fs::path p = dir / "flawed.obj";
+  std::ofstream(p) << "v 0 0 0\nv 2 0 0\nv 2 6 0\nv 0 6 0\nv 0 0 1\nv 2 0 1\nv 2 6 1\nv 0 6 1\n"
+                   << "f 1 3 4\nf 1 2 3\n"  // flipped
+                   << "f 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\n";  // hole
+  return p;
+}
+
+// Every command prepares its model with the one preparation, as far as its use needs: texture
+// re-orients the surface and keeps the hole, slice closes it with a fan, fracture fills it as a cut
+// face; each says so before its long work and in its report.
+TEST(Cli, EveryCommandPreparesTheModelAlike) {
+  TempDir d("texfab-cli");
+  const fs::path model = flawedBox(d.path());
+  const std::string in = quote(model) + " -e " + quote(kExemplar) + " --no-cache --seed 2";
+  struct Job {
+    std::string command, use, closing, longWork;  // longWork: what the job prints once its long work began
+  };
+  const Job jobs[] = {
+      {"texture " + in + " --resolution 128 -o " + quote(d / "t.glb"), "surface", "", "exemplar wrap:"},
+      {"slice " + quote(model) + " --height 6 --dpi 25.4 --layer 0.5 -o " + quote(d / "s"), "print",
+       "closed 1 hole (3 boundary edges) with fans of triangles", " slice "},
+      {"fracture " + in + " --pieces 2 --resolution 128 -o " + quote(d / "f.glb"), "solid",
+       "filled 1 hole with 1 triangle", "exemplar wrap:"},
+  };
+  for (const Job& job : jobs) {
+    const CliResult r = runCli(job.command + " --report " + quote(d / "r.json"));
+    ASSERT_EQ(r.status, 0) << job.command << "\n" << r.err;
+    const nlohmann::json p = nlohmann::json::parse(readFile(d / "r.json"))["model"]["preparation"];
+    EXPECT_EQ(p["use"], job.use);
+    ASSERT_EQ(p["repairs"].size(), job.closing.empty() ? 1u : 2u) << p.dump();
+    EXPECT_EQ(p["repairs"][0], "re-oriented 2 triangles (consistent winding)");
+    if (!job.closing.empty()) {
+      EXPECT_EQ(p["repairs"][1], job.closing);
+    }
+    // Said before the long work (the exemplar's analysis, the slices).
+    const size_t said = r.err.find("warning: repaired: re-oriented 2 triangles");
+    ASSERT_NE(said, std::string::npos) << r.err;
+    EXPECT_LT(said, r.err.find(job.longWork)) << r.err;
+  }
+}
+
 // Every output location is checked before any work, and outputs appear only together.
 TEST(Cli, OutputsAreCheckedBeforeTheWorkAndCommittedTogether) {
   TempDir d("texfab-cli");

@@ -8,10 +8,11 @@
 #include "geometry/fracture/fracture_mesh.h"
 #include "geometry/fracture/measure_solid.h"
 #include "geometry/mesh_connectivity.h"
-#include "geometry/repair/repair_solid.h"
+#include "geometry/repair/prepare_mesh.h"
 #include "tests/atlas/test_meshes.h"
 #include "tests/geometry/test_meshes.h"
 
+#include <algorithm>
 #include <cmath>
 
 using namespace texfab;
@@ -282,8 +283,7 @@ TEST(FractureMesh, MoreSitesThanAThinModelHolds) {
   Mesh rod = makeCylinder(8, 1, 0.004f, 1.7f);
   const Eigen::Matrix3f turn = Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitY(), Eigen::Vector3f(1, 1, 1)).toRotationMatrix();
   for (auto& p : rod.positions) p = turn * p;
-  RepairSolidOptions fill;
-  repairSolid(rod, fill);  // caps the open cylinder
+  prepareMesh(rod, MeshUse::Solid);  // caps the open cylinder
   FractureOptions o;
   o.pieces = 1000;
   EXPECT_NE(errorOf([&] { fractureMesh(rod, o); }).find("holds only"), std::string::npos);
@@ -301,9 +301,14 @@ Mesh unwelded(const Mesh& m) {
   return out;
 }
 
+MeshPreparation prepareSolid(Mesh& m, PrepareMeshOptions o = {}, const Context& ctx = {}) {
+  o.use = MeshUse::Solid;
+  return prepareMesh(m, o, ctx);
+}
+
 void expectRepairedSolid(Mesh m, const std::string& says) {
   const double volume = measureSolid(cube()).volume;
-  const RepairSolidReport r = repairSolid(m);
+  const MeshPreparation r = prepareSolid(m);
   std::string all;
   for (const auto& line : r.repairs) all += line + "; ";
   EXPECT_NE(all.find(says), std::string::npos) << all;
@@ -312,20 +317,20 @@ void expectRepairedSolid(Mesh m, const std::string& says) {
   EXPECT_NEAR(measureSolid(m).volume, volume, 1e-9) << all;
 }
 
-TEST(RepairSolid, WeldsFillsReorientsAndTurnsOutward) {
+TEST(PrepareMesh, SolidWeldsFillsReorientsAndTurnsOutward) {
   expectRepairedSolid(unwelded(cube()), "welded");
   Mesh holed = cube();
   holed.triangles.pop_back(), holed.uvs.resize(holed.uvs.size() - 3), holed.normals.resize(holed.normals.size() - 3);
   holed.faceMaterials.pop_back(), holed.faceTags.pop_back();
-  expectRepairedSolid(holed, "filled 1 holes");
+  expectRepairedSolid(holed, "filled 1 hole with 1 triangle");
   Mesh flipped = cube();
   std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
   expectRepairedSolid(flipped, "consistent");
   Mesh insideOut = cube();
   for (auto& t : insideOut.triangles) std::swap(t[1], t[2]);
-  expectRepairedSolid(insideOut, "outward");
+  expectRepairedSolid(insideOut, "inside-out parts turned over");
   Mesh solid = cube();
-  EXPECT_TRUE(repairSolid(solid).repairs.empty());
+  EXPECT_TRUE(prepareSolid(solid).repairs.empty());
 }
 
 // Two cubes that overlap, as one self-intersecting mesh.
@@ -348,46 +353,114 @@ Mesh finnedCube() {
   return m;
 }
 
-TEST(RepairSolid, RebuildsSurfacesThatCannotBoundASolidFromTheirVolume) {
+TEST(PrepareMesh, SolidRebuildsSurfacesThatCannotBoundASolidFromTheirVolume) {
   // The union of the two cubes: 2 * 8 - 1.5 * 1.7 * 1.8.
   const double unionVolume = 16 - 1.5 * 1.7 * 1.8;
-  RepairSolidOptions coarse;  // voxels of 3.5 / 96 units
+  PrepareMeshOptions coarse;  // voxels of 3.5 / 96 units
   coarse.remesh.resolution = 96;
   Mesh one = overlappingCubes(), two = overlappingCubes();
-  const RepairSolidReport r = repairSolid(one, coarse, Context{.threads = 1});
+  const MeshPreparation r = prepareSolid(one, coarse, Context{.threads = 1});
   ASSERT_EQ(r.repairs.size(), 1u);
   EXPECT_NE(r.repairs[0].find("intersects itself"), std::string::npos) << r.repairs[0];
   EXPECT_NE(r.repairs[0].find("rebuilt as the volume it encloses"), std::string::npos) << r.repairs[0];
+  EXPECT_TRUE(r.rebuilt);
   const MeshConnectivity t = computeConnectivity(one);
   EXPECT_TRUE(t.closed && t.manifold && t.oriented);
   EXPECT_NEAR(measureSolid(one).volume, unionVolume, 0.01 * unionVolume);
   Mesh again = one;
-  EXPECT_TRUE(repairSolid(again).repairs.empty());  // a solid: no self-intersections left
-  repairSolid(two, coarse, Context{.threads = 2});
+  EXPECT_TRUE(prepareSolid(again).repairs.empty());  // a solid: no self-intersections left
+  prepareSolid(two, coarse, Context{.threads = 2});
   EXPECT_EQ(one.positions, two.positions);
   EXPECT_EQ(one.triangles, two.triangles);
 
   Mesh fin = finnedCube();
-  const RepairSolidReport f = repairSolid(fin, coarse);
+  const MeshPreparation f = prepareSolid(fin, coarse);
   ASSERT_EQ(f.repairs.size(), 1u);
   EXPECT_NE(f.repairs[0].find("not a manifold"), std::string::npos) << f.repairs[0];
   EXPECT_NEAR(measureSolid(fin).volume, 8.0, 0.08);
 }
 
-TEST(RepairSolid, RefusesWhatItMayNotRebuildAndLargeHoles) {
-  RepairSolidOptions refuse;
+// Six times the volume the triangles enclose as they are wound (an inverted shell subtracts).
+double signedVolume(const Mesh& m) {
+  double v = 0;
+  for (size_t t = 0; t < m.triangles.size(); ++t)
+    v += m.corner(t, 0).cast<double>().dot(m.corner(t, 1).cast<double>().cross(m.corner(t, 2).cast<double>()));
+  return v / 6;
+}
+
+TEST(PrepareMesh, OverlappingShellsStayOutwardSoThatAPrintTakesTheirUnion) {
+  // Each cube's largest triangle lies inside the other: one point alone took both for cavities and
+  // turned them inside out (inward normals on a textured model; where only one shell turns, a
+  // print's winding rule leaves the overlap empty).
+  for (const MeshUse use : {MeshUse::Surface, MeshUse::Print}) {
+    Mesh m = overlappingCubes();
+    const MeshPreparation r = prepareMesh(m, use);
+    EXPECT_TRUE(r.repairs.empty()) << meshUseName(use) << ": " << r.repairs.front();
+    EXPECT_NEAR(signedVolume(m), 16.0, 1e-5) << meshUseName(use);
+  }
+  // A cavity (a shell wholly inside another) is still turned inward.
+  const Mesh outer = makeSphere(24, 12, 1.0f), inner = makeSphere(24, 12, 0.5f);
+  Mesh hollow = outer;
+  const uint32_t base = uint32_t(hollow.positions.size());
+  hollow.positions.insert(hollow.positions.end(), inner.positions.begin(), inner.positions.end());
+  for (auto t : inner.triangles) hollow.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  hollow.uvs.clear(), hollow.normals.clear(), hollow.tangents.clear();
+  const MeshPreparation r = prepareMesh(hollow, MeshUse::Print);
+  ASSERT_EQ(r.repairs.size(), 1u);
+  EXPECT_NE(r.repairs[0].find("1 inside-out parts turned over"), std::string::npos) << r.repairs[0];
+  EXPECT_NEAR(signedVolume(hollow), signedVolume(outer) - signedVolume(inner), 1e-5);
+}
+
+TEST(PrepareMesh, EachUseGoesAsFarAsItNeeds) {
+  // A sphere with two holes that share a corner: a boundary vertex starts two boundary edges, so
+  // hole fans cannot close it.
+  const Mesh sphere = makeSphere(16, 8);
+  const uint32_t first = 20, v = sphere.triangles[first][0];
+  uint32_t second = 0;
+  for (uint32_t t = 0; t < sphere.triangles.size() && !second; ++t) {
+    int shared = 0;
+    for (uint32_t a : sphere.triangles[t])
+      for (uint32_t b : sphere.triangles[first]) shared += a == b;
+    if (shared == 1 && std::find(sphere.triangles[t].begin(), sphere.triangles[t].end(), v) != sphere.triangles[t].end())
+      second = t;
+  }
+  ASSERT_GT(second, 0u);
+  Mesh holed;
+  holed.positions = sphere.positions;
+  for (uint32_t t = 0; t < sphere.triangles.size(); ++t)
+    if (t != first && t != second) holed.triangles.push_back(sphere.triangles[t]);
+
+  Mesh surface = holed;  // textured as it is
+  EXPECT_TRUE(prepareMesh(surface, MeshUse::Surface).repairs.empty());
+  EXPECT_EQ(surface.triangles, holed.triangles);
+
+  for (const MeshUse use : {MeshUse::Print, MeshUse::Solid}) {
+    Mesh m = holed;
+    const MeshPreparation r = prepareMesh(m, use);
+    std::string all;
+    for (const auto& line : r.repairs) all += line + "; ";
+    EXPECT_NE(all.find("filled 2 holes"), std::string::npos) << meshUseName(use) << ": " << all;
+    const MeshConnectivity c = computeConnectivity(m);
+    EXPECT_TRUE(c.closed && c.oriented) << meshUseName(use) << ": " << all;
+    EXPECT_GT(signedVolume(m), 0.9 * signedVolume(sphere)) << meshUseName(use);
+    EXPECT_EQ(r.holeTriangles > 0, use == MeshUse::Solid);  // tagged as cut faces only where they show
+  }
+}
+
+TEST(PrepareMesh, SolidRefusesWhatItMayNotRebuildAndLargeHoles) {
+  PrepareMeshOptions refuse;
   refuse.remesh.resolution = 0;
   Mesh twoCubes = overlappingCubes();
-  const std::string crossing = errorOf([&] { repairSolid(twoCubes, refuse); });
+  const std::string crossing = errorOf([&] { prepareSolid(twoCubes, refuse); });
   EXPECT_NE(crossing.find("intersects itself"), std::string::npos) << crossing;
   Mesh fin = finnedCube();
-  const std::string nonManifold = errorOf([&] { repairSolid(fin, refuse); });
+  const std::string nonManifold = errorOf([&] { prepareSolid(fin, refuse); });
   EXPECT_NE(nonManifold.find("not a manifold"), std::string::npos) << nonManifold;
   Mesh open = makeSphere(40, 20);
   open.triangles.resize(open.triangles.size() / 2);  // a hemisphere: one hole of 40 edges
-  RepairSolidOptions small;
+  PrepareMeshOptions small;
   small.maxHoleEdges = 10;
-  const std::string hole = errorOf([&] { repairSolid(open, small); });
+  const std::string hole = errorOf([&] { prepareSolid(open, small); });
   EXPECT_NE(hole.find("open"), std::string::npos) << hole;
 }
 

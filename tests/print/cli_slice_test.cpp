@@ -5,6 +5,7 @@
 #include "core/image_io.h"
 #include "geometry/io/mesh_io.h"
 #include "print/slice_writer.h"
+#include "tests/atlas/test_meshes.h"
 #include "tests/geometry/solid_meshes.h"
 #include "tests/golden/golden_cases.h"
 #include "tests/print/icc_test_profiles.h"
@@ -196,9 +197,25 @@ TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
   expectRefused(dir, model + " --materials " + quoted(dir / "none.json"), "no materials");
   std::ofstream(dir / "bad.json") << R"([{"name": "Red", "color": "#FF00"}])";
   expectRefused(dir, model + " --materials " + quoted(dir / "bad.json"), "#RRGGBB");
-  // An open model that cannot be repaired: a sphere missing two triangles that touch at one vertex
-  // only (two holes through one vertex, not simple loops). One missing triangle is closed instead.
-  texfab::geometry::Mesh open = texfab::test::makeIcoSphere(3.0f, 2);
+  // An open model that cannot be repaired: a sphere without its top cap (a hole of 1,200 edges,
+  // above the 1,000 that are filled) and one more triangle that touches that hole at one vertex, so
+  // that the hole is not a simple loop and fans cannot close it.
+  const int around = 1200;
+  texfab::geometry::Mesh open = texfab::test::makeSphere(around, 4, 3.0f);
+  open.triangles.erase(open.triangles.begin() + around, open.triangles.begin() + around + 1);  // touches vertex 1
+  open.triangles.erase(open.triangles.begin(), open.triangles.begin() + around);              // the cap
+  texfab::geometry::writeMesh(open, dir / "open.off");
+  expectRefused(dir, quoted(dir / "open.off") + " -q", "the model is open: a hole of");
+  // A layer larger than this machine's memory.
+  expectRefused(dir, model + " --height 250 --dpi 100000 --layer 10", "of this machine's");
+}
+
+// Where fans cannot close a model (two holes that meet at one vertex), the solid repairs of
+// fracture do, and the print is that of the whole sphere.
+TEST(CliSlice, HolesThatFansCannotCloseAreFilledAsFractureFillsThem) {
+  TempDir dir;
+  const texfab::geometry::Mesh whole = texfab::test::makeIcoSphere(3.0f, 2);
+  texfab::geometry::Mesh open = whole;
   const auto first = open.triangles[0];
   const auto touching = std::find_if(open.triangles.begin() + 1, open.triangles.end(), [&](const auto& t) {
     int shared = 0;
@@ -209,10 +226,21 @@ TEST(CliSlice, BadInputIsRefusedWithoutOutput) {
   ASSERT_NE(touching, open.triangles.end());
   open.triangles.erase(touching);
   open.triangles.erase(open.triangles.begin());
+  texfab::geometry::writeMesh(whole, dir / "whole.off");
   texfab::geometry::writeMesh(open, dir / "open.off");
-  expectRefused(dir, quoted(dir / "open.off") + " -q", "not closed");
-  // A layer larger than this machine's memory.
-  expectRefused(dir, model + " --height 250 --dpi 100000 --layer 10", "of this machine's");
+  const std::string common = " --height 30 --dpi 50.8 --layer 1 --report ";
+  const texfab::test::CliResult w = slice(quoted(dir / "whole.off") + " -o " + quoted(dir / "w") + common + quoted(dir / "w.json"));
+  const texfab::test::CliResult o = slice(quoted(dir / "open.off") + " -o " + quoted(dir / "o") + common + quoted(dir / "o.json"));
+  ASSERT_EQ(w.status, 0) << w.err;
+  ASSERT_EQ(o.status, 0) << o.err;
+  EXPECT_NE(o.err.find("warning: repaired: filled 2 holes"), std::string::npos) << o.err;
+  const nlohmann::json wr = nlohmann::json::parse(readText(dir / "w.json")), orr = nlohmann::json::parse(readText(dir / "o.json"));
+  EXPECT_TRUE(wr["model"]["preparation"]["repairs"].empty());
+  EXPECT_EQ(orr["model"]["preparation"]["use"], "print");
+  // A hole of three edges is filled by the very triangle that was removed: the same voxels.
+  EXPECT_GT(wr["voxels"]["inside"].get<int64_t>(), 0);
+  EXPECT_EQ(orr["voxels"]["inside"], wr["voxels"]["inside"]);
+  EXPECT_EQ(orr["voxels"]["shell"], wr["voxels"]["shell"]);
 }
 
 // --icc-profile: the manifest names the profile; a file that is not a usable printer profile and

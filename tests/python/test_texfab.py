@@ -114,6 +114,14 @@ def test_texture_mesh_equals_the_command_line(tmp_path, cache):
     arrays = texfab.Mesh(np.array(elephant.vertices), np.array(elephant.triangles, dtype=np.int64))
     again = texfab.texture_mesh(arrays, BRICK, resolution=256, seed=4, cache_dir=cache)
     assert np.array_equal(again.base_color, result.base_color)
+    # Every other triangle wound the wrong way: prepared as the command line prepares it, and said.
+    assert result.repairs == []
+    flipped = np.array(elephant.triangles, dtype=np.int64)
+    flipped[1::2, 1:] = flipped[1::2, :0:-1]
+    repaired = texfab.texture_mesh(texfab.Mesh(np.array(elephant.vertices), flipped), BRICK, resolution=256, seed=4,
+                                   cache_dir=cache)
+    assert repaired.repairs == [f"re-oriented {len(flipped[1::2])} triangles (consistent winding)"]
+    assert np.array_equal(repaired.base_color, result.base_color)
 
 
 def test_texture_mesh_from_a_graph_equals_the_command_line(tmp_path, cache):
