@@ -13,9 +13,10 @@ namespace texfab::print {
 
 namespace {
 
-// Exemplar pixels per model unit (textureScale 0 was resolved by PrintJob).
-double exemplarScale(const PrintJobOptions& o, const Image& exemplar) {
-  return o.featureSize > 0 ? std::max(exemplar.width, exemplar.height) / o.featureSize : o.textureScale;
+// Pixels of `exemplar` per model unit (textureScale 0 was resolved by PrintJob; it counts the pixels
+// of the exemplar given, `downsampling` times those of `exemplar`).
+double exemplarScale(const PrintJobOptions& o, const Image& exemplar, int downsampling = 1) {
+  return o.featureSize > 0 ? std::max(exemplar.width, exemplar.height) / o.featureSize : o.textureScale / downsampling;
 }
 
 // The model coloured by surface synthesis (the texture job's surface mode).
@@ -26,7 +27,7 @@ geometry::Mesh surfaceTextured(const geometry::Mesh& mesh, const PrintExemplar& 
   t.atlas.pack.width = t.atlas.pack.height = o.resolution;
   t.surface.seed = o.seed;
   t.measure = false;
-  t.textureScale = exemplarScale(o, *ex.color);
+  t.textureScale = exemplarScale(o, *ex.color, ex.downsampling);
   render::TextureExemplar texture;
   texture.color = ex.color;
   texture.analysis = ex.surface;
@@ -68,6 +69,15 @@ PrintJob::PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Co
   grid_ = print::printGrid(geometry::boundingBox(mesh_), options_.grid);
 }
 
+int PrintJob::analysisDownsampling(const Image& exemplar) const {
+  if (options_.colors != PrintColors::Solid) return 1;
+  const double fewestPerVoxel = exemplarScale(options_, exemplar) * grid_.pitch.minCoeff();
+  const int side = std::min(exemplar.width, exemplar.height);
+  int factor = 1;
+  while (2 * factor <= fewestPerVoxel && side / (2 * factor) >= render::kMinAnalysedSide) factor *= 2;
+  return factor;
+}
+
 double PrintJob::memoryBytes(const Context& ctx) const {
   // A batch's solid voxels are at most its print voxels; refinement's slab is the part that grows.
   const int64_t batchVoxels = int64_t(grid_.width) * grid_.height * options_.slice.batchLayers;
@@ -90,9 +100,10 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
   const SolidVoxelColors* solid = nullptr;
   if (o.colors == PrintColors::Solid) {
     if (!ex.solid) throw Error("solid colours need the exemplar's solid analysis");
-    const double scale = exemplarScale(o, *ex.color);
+    const double scale = exemplarScale(o, *ex.color, ex.downsampling);
     source.exemplar = ex.name, source.seed = o.seed, source.method = o.solid.method;
-    source.contrastGain = o.solid.contrastGain, source.refinePasses = o.solid.refinePasses, source.textureScale = scale;
+    source.contrastGain = o.solid.contrastGain, source.refinePasses = o.solid.refinePasses;
+    source.textureScale = scale * ex.downsampling, source.downsampling = ex.downsampling;
     auto s = std::make_unique<SolidVoxelColors>(*ex.solid, *ex.color, *ex.color, *ex.color, o.solid, scale, grid_);
     solid = s.get();
     colors = std::move(s);

@@ -48,6 +48,9 @@ struct PrintExemplar {
   const synthesis::SolidAnalysis* solid = nullptr;
   const synthesis::ExemplarAnalysis* surface = nullptr;
   std::string name;  ///< for the manifest, e.g. the file name
+  /// `color` (and its analysis) is the exemplar given, this many times smaller
+  /// (PrintJob::analysisDownsampling); a texture scale counts the given exemplar's pixels.
+  int downsampling = 1;
 };
 
 struct PrintJobResult {
@@ -66,6 +69,12 @@ public:
   const geometry::Mesh& mesh() const { return mesh_; }
   /// What made the model printable (geometry::prepareMesh, MeshUse::Print).
   const geometry::MeshPreparation& preparation() const { return preparation_; }
+  /// Solid colours: the power of two (1, 2, 4, ...) by which `exemplar`, as given, is best analysed
+  /// and synthesized smaller. Where the scale puts at least that many solid voxels along the print's
+  /// finest pitch, every print voxel would point-sample detail finer than itself (aliasing, and a
+  /// dependency chain per voxel); a copy that much smaller is the prefiltered texture. Never below
+  /// render::kMinAnalysedSide pixels a side; 1 for the other colours.
+  int analysisDownsampling(const Image& exemplar) const;
   /// Memory the slicing needs at worst, with a layer in flight per thread of `ctx`.
   double memoryBytes(const Context& ctx) const;
   /// Slices layers [first, first + count) (count -1: through the last) into `writer` and seals it

@@ -104,7 +104,8 @@ struct PrintSource {
   synthesis::SolidMethod method = synthesis::SolidMethod::Lazy;  ///< Solid
   float contrastGain = 0;                   ///< Solid
   int refinePasses = 0;                     ///< Solid
-  double textureScale = 0;                  ///< Solid: voxels per model unit used
+  double textureScale = 0;                  ///< Solid: the given exemplar's pixels per model unit
+  int downsampling = 1;                     ///< Solid: synthesized from a copy this many times smaller
 };
 
 /// Memory the job needs beyond its inputs, in bytes, at worst (a layer of noise), with a layer in

@@ -6,6 +6,7 @@
 #include "apps/texfab/cli.h"
 #include "apps/texfab/command.h"
 #include "apps/texfab/report_json.h"
+#include "core/downsample.h"
 #include "core/image_io.h"
 #include "core/memory.h"
 #include "core/text.h"
@@ -68,14 +69,24 @@ struct Exemplar {
   std::optional<synthesis::ExemplarAnalysis> surface;
 };
 
-print::PrintExemplar analyze(const SliceJob& job, Run& run, Exemplar& e) {
+print::PrintExemplar analyze(const SliceJob& job, const print::PrintJob& print, Run& run, Exemplar& e) {
   if (!e.image) return {};
   const print::PrintExemplar view{&*e.image, nullptr, nullptr, fs::path(job.exemplar).filename().string()};
   bool cached = false;
   if (job.print.colors == print::PrintColors::Solid) {
     synthesis::validateSolidExemplars(*e.image, *e.image, *e.image);
-    e.solid = analyzeSolid(run, *e.image, *e.image, *e.image, {}, job.wrap, cached, job.solid);
-    return {view.color, &*e.solid, nullptr, view.name};
+    // The wrap as the exemplar given shows it (a smaller copy hides part of its seam).
+    const WrapChoice wrap =
+        chooseWrap(job.wrap, *e.image, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
+    const int factor = print.analysisDownsampling(*e.image);
+    if (factor > 1) {
+      e.image = downsample(*e.image, factor);
+      run.note("the print puts at least " + std::to_string(factor) + " exemplar pixels in every voxel: the solid " +
+               "texture is synthesized from a copy " + std::to_string(factor) + " times smaller (" +
+               std::to_string(e.image->width) + "x" + std::to_string(e.image->height) + ")");
+    }
+    e.solid = analyzeSolid(run, *e.image, *e.image, *e.image, {}, wrap, cached, job.solid);
+    return {view.color, &*e.solid, nullptr, view.name, factor};
   }
   synthesis::AnalysisOptions options;
   options.wrap = chooseWrap(job.wrap, *e.image, run);
@@ -116,7 +127,7 @@ void runSlice(SliceJob& job) {
               std::to_string(grid.width) + " x " + std::to_string(grid.height) + " x " + std::to_string(grid.layers) +
               " voxels");
 
-  const print::PrintJobResult result = print.slice(analyze(job, run, exemplar), first, count, writer,
+  const print::PrintJobResult result = print.slice(analyze(job, print, run, exemplar), first, count, writer,
                                                     fs::path(job.model).filename().string(), run.ctx());
   const print::SliceReport& r = result.slice.report;
   run.note(counted(int64_t(r.layers), "layer") + " in " + job.output + " (" + figure(r.layers / std::max(1e-9, r.seconds)) +

@@ -4,6 +4,7 @@
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
 
+#include "core/downsample.h"
 #include "core/memory.h"
 #include "geometry/io/mesh_io.h"
 #include "print/print_job.h"
@@ -77,8 +78,10 @@ py::object slice(const py::object& meshLike, const py::object& output, const py:
     print::PrintExemplar ex;
     if (exemplar) {
       ex = {&*exemplar, nullptr, nullptr, exemplarName};
-      const synthesis::ExemplarWrap w = chooseWrap(wrap, *exemplar);
+      const synthesis::ExemplarWrap w = chooseWrap(wrap, *exemplar);  // on the exemplar given
       if (o.colors == print::PrintColors::Solid) {
+        ex.downsampling = job.analysisDownsampling(*exemplar);  // as texfab slice
+        if (ex.downsampling > 1) *exemplar = downsample(*exemplar, ex.downsampling);
         ex.solid = &solid.emplace(analyzeSolid(call, *exemplar, w, o.solid.method, tileSide));
       } else {
         synthesis::AnalysisOptions options;

@@ -2,6 +2,7 @@
 // texfab slice end to end: a small print with its manifest (checksums of the files written), the
 // preview and the report; shards through the command line merged by merge-slices; bad input and a
 // disk that fills up: one line, a non-zero exit, and no output.
+#include "core/downsample.h"
 #include "core/image_io.h"
 #include "geometry/io/mesh_io.h"
 #include "print/slice_writer.h"
@@ -241,6 +242,36 @@ TEST(CliSlice, HolesThatFansCannotCloseAreFilledAsFractureFillsThem) {
   EXPECT_GT(wr["voxels"]["inside"].get<int64_t>(), 0);
   EXPECT_EQ(orr["voxels"]["inside"], wr["voxels"]["inside"]);
   EXPECT_EQ(orr["voxels"]["shell"], wr["voxels"]["shell"]);
+}
+
+// A print coarser than its solid texture is synthesized from a smaller copy of the exemplar, the
+// prefiltered texture (point-sampling the full one would alias, and cost a dependency chain per
+// voxel): the very layers of slicing that copy at its own scale; the manifest says so, with the
+// scale in the given exemplar's pixels.
+TEST(CliSlice, CoarsePrintsAreSynthesizedFromASmallerCopy) {
+  TempDir dir;
+  const fs::path elephant = fs::path(TEXFAB_SOURCE_DIR) / "models" / "meshes" / "elephant.off";
+  const fs::path marble = fs::path(TEXFAB_SOURCE_DIR) / "models" / "exemplars" / "marble.png";
+  texfab::Image copy = texfab::downsample(texfab::readImage(marble), 4);
+  copy.format = texfab::PixelFormat::Float;  // the copy's values exactly
+  texfab::writeImage(copy, dir / "marble32.exr");
+  const std::string common = quoted(elephant) + " --mode solid --height 8 --dpi 300 --layer 0.1 --layers 30:33" +
+                             " --exemplar-wrap tile --no-cache";
+  const texfab::test::CliResult given =
+      slice(common + " -e " + quoted(marble) + " --texture-scale 1536 -o " + quoted(dir / "given"));
+  ASSERT_EQ(given.status, 0) << given.err;
+  EXPECT_NE(given.err.find("synthesized from a copy 4 times smaller (32x32)"), std::string::npos) << given.err;
+  const texfab::test::CliResult small =
+      slice(common + " -e " + quoted(dir / "marble32.exr") + " --texture-scale 384 -o " + quoted(dir / "copy"));
+  ASSERT_EQ(small.status, 0) << small.err;
+  const nlohmann::json g = nlohmann::json::parse(readText(dir / "given" / "slices.json"));
+  const nlohmann::json c = nlohmann::json::parse(readText(dir / "copy" / "slices.json"));
+  EXPECT_EQ(g["print"]["source"]["colors"]["downsampled"], 4);
+  EXPECT_EQ(g["print"]["source"]["colors"]["texture_scale"], 1536.0);
+  EXPECT_EQ(c["print"]["source"]["colors"]["downsampled"], 1);
+  ASSERT_EQ(g["files"].size(), 3u);
+  ASSERT_EQ(c["files"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(g["files"][i]["sha256"], c["files"][i]["sha256"]) << i;
 }
 
 // --icc-profile: the manifest names the profile; a file that is not a usable printer profile and
