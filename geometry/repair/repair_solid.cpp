@@ -148,8 +148,8 @@ std::string closeSurface(Mesh& mesh, SurfaceMesh& sm, const RepairSolidOptions& 
                          const Context& ctx) {
   const MeshConnectivity topology = computeConnectivity(mesh);
   if (topology.nonManifoldEdges)
-    return "the model is not a manifold (" + std::to_string(topology.nonManifoldEdges) +
-           " edges are shared by three or more triangles)";
+    return "the model is not a manifold (" + counted(int64_t(topology.nonManifoldEdges), "edge") +
+           (topology.nonManifoldEdges == 1 ? " is" : " are") + " shared by three or more triangles)";
   if (topology.inconsistentEdges || !toSurfaceMesh(mesh, sm)) {
     orientConsistently(mesh, r);
     if (!toSurfaceMesh(mesh, sm)) return "the model is not a manifold and could not be oriented";
