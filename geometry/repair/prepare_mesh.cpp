@@ -61,10 +61,10 @@ void weld(Mesh& mesh, MeshUse use, Log& log) {
   const size_t before = mesh.positions.size();
   weldPositions(mesh);
   if (mesh.positions.size() < before)
-    log.repair("welded " + std::to_string(before - mesh.positions.size()) + " repeated vertices");
+    log.repair("welded " + counted(int64_t(before - mesh.positions.size()), "repeated vertex", "repeated vertices"));
   if (use == MeshUse::Surface) return;
   if (const size_t dropped = dropRepeatedCorners(mesh))
-    log.repair("removed " + std::to_string(dropped) + " triangles with a repeated corner");
+    log.repair("removed " + counted(int64_t(dropped), "triangle") + " with a repeated corner");
   if (mesh.triangles.empty()) throw Error("the model has no triangles with three distinct corners");
   removeUnusedVertices(mesh);
 }
