@@ -240,8 +240,10 @@ TEST(Cli, EveryCommandPreparesTheModelAlike) {
     }
     // Said before the long work (the exemplar's analysis, the slices).
     const size_t said = r.err.find("warning: repaired: re-oriented 2 triangles");
+    const size_t longWork = r.err.find(job.longWork);
     ASSERT_NE(said, std::string::npos) << r.err;
-    EXPECT_LT(said, r.err.find(job.longWork)) << r.err;
+    ASSERT_NE(longWork, std::string::npos) << r.err;
+    EXPECT_LT(said, longWork) << r.err;
   }
 }
 
