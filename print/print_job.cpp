@@ -71,11 +71,7 @@ PrintJob::PrintJob(geometry::Mesh mesh, const PrintJobOptions& options, const Co
 
 int PrintJob::analysisDownsampling(const Image& exemplar) const {
   if (options_.colors != PrintColors::Solid) return 1;
-  const double fewestPerVoxel = exemplarScale(options_, exemplar) * grid_.pitch.minCoeff();
-  const int side = std::min(exemplar.width, exemplar.height);
-  int factor = 1;
-  while (2 * factor <= fewestPerVoxel && side / (2 * factor) >= render::kMinAnalysedSide) factor *= 2;
-  return factor;
+  return render::analysisDownsampling(exemplarScale(options_, exemplar) * grid_.pitch.minCoeff(), exemplar);
 }
 
 double PrintJob::memoryBytes(const Context& ctx) const {

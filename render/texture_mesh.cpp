@@ -106,11 +106,14 @@ double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& o, 
 int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& o, const Image& exemplar) {
   const double area = geometry::surfaceArea(mesh);
   if (!(area > 0)) return 1;
-  const double fewestPixelsPerTexel =
-      textureScaleFor(mesh, o) / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area);
+  return analysisDownsampling(
+      textureScaleFor(mesh, o) / std::sqrt(double(o.atlas.pack.width) * double(o.atlas.pack.height) / area), exemplar);
+}
+
+int analysisDownsampling(double fewestPixelsPerSample, const Image& exemplar) {
   const int side = std::min(exemplar.width, exemplar.height);
   int factor = 1;
-  while (2 * factor <= fewestPixelsPerTexel && side / (2 * factor) >= kMinAnalysedSide) factor *= 2;
+  while (2 * factor <= fewestPixelsPerSample && side / (2 * factor) >= kMinAnalysedSide) factor *= 2;
   return factor;
 }
 
@@ -125,10 +128,14 @@ namespace {
 /// textureMesh's stages, in order; each fills its part of the result.
 class TextureJob {
  public:
-  TextureJob(const geometry::Mesh& mesh, const TextureExemplar& ex, const TextureMeshOptions& o, const Context& ctx)
-      : mesh_(mesh), ex_(ex), o_(o), ctx_(ctx), exemplar_(*ex.color), surface_(o.mode == TextureMode::Surface) {}
+  TextureJob(const geometry::PreparedMesh& model, const TextureExemplar& ex, const TextureMeshOptions& o,
+             const Context& ctx)
+      : mesh_(model.mesh), ex_(ex), o_(o), ctx_(ctx), exemplar_(*ex.color), surface_(o.mode == TextureMode::Surface) {
+    r_.preparation = model.preparation;
+    r_.warnings = model.preparation.warnings;  // ctx has them already
+  }
 
-  void buildAtlas(geometry::MeshPreparation preparation);
+  void buildAtlas();
   void checkScale();
   void buildDomain();
   void synthesize();
@@ -156,9 +163,7 @@ class TextureJob {
   synthesis::SurfaceDomain domain_; ///< its finest level: the sites (texels) every map is baked at
 };
 
-void TextureJob::buildAtlas(geometry::MeshPreparation preparation) {
-  r_.preparation = std::move(preparation);
-  r_.warnings = r_.preparation.warnings;  // ctx has them already
+void TextureJob::buildAtlas() {
   Stage stage(ctx_, "atlas");
   r_.atlas = generateAtlas(mesh_, o_.atlas, ctx_.nested());
   const AtlasReport& ar = r_.atlas.report;
@@ -318,8 +323,8 @@ TextureMeshResult textureMesh(const geometry::PreparedMesh& model, const Texture
   o.surface.validate();
   o.solid.validate();
 
-  TextureJob job(model.mesh, ex, o, ctx);
-  job.buildAtlas(model.preparation);
+  TextureJob job(model, ex, o, ctx);
+  job.buildAtlas();
   job.checkScale();
   job.buildDomain();
   job.synthesize();

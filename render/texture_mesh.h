@@ -123,6 +123,10 @@ double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& opt
 /// and use textureScaleFor(mesh, options) divided by it as the scale.
 inline constexpr int kMinAnalysedSide = 32;
 int analysisDownsampling(const geometry::Mesh& mesh, const TextureMeshOptions& options, const Image& exemplar);
+/// The rule under analysisDownsampling (and the print job's): the largest power of two at most
+/// `fewestPixelsPerSample` (exemplar pixels across the smallest texel or voxel) that leaves
+/// `exemplar` at least kMinAnalysedSide pixels a side.
+int analysisDownsampling(double fewestPixelsPerSample, const Image& exemplar);
 
 /// Stages reported through ctx: atlas, tangent field (surface mode), fields, synthesis (solid mode:
 /// each level inside it), resolve, measures. Throws texfab::Error on bad input (no triangles, a

@@ -75,6 +75,10 @@ synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, con
   return wrap;
 }
 
+WrapChoice wrapAsGiven(WrapChoice choice, const Image& exemplar, const Run& run) {
+  return chooseWrap(choice, exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
+}
+
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached) {
   return synthesis::analyzeExemplar(exemplar, options, run.analysisCache(), run.ctx(), &cached);

@@ -27,6 +27,9 @@ void solidFidelityFlags(Flags& f, SolidMethodChoice& method, float& gain, int& r
 
 /// The wrap mode the choice asks for; auto measures the exemplar and notes what it chose.
 synthesis::ExemplarWrap chooseWrap(WrapChoice choice, const Image& exemplar, const Run& run);
+/// chooseWrap on the exemplar as given, as a fixed choice for analysing a smaller copy of it (which
+/// hides part of its seam).
+WrapChoice wrapAsGiven(WrapChoice choice, const Image& exemplar, const Run& run);
 
 synthesis::ExemplarAnalysis analyzeExemplar(Run& run, const Image& exemplar, const synthesis::AnalysisOptions& options,
                                             bool& cached);

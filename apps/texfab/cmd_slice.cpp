@@ -75,9 +75,7 @@ print::PrintExemplar analyze(const SliceJob& job, const print::PrintJob& print, 
   bool cached = false;
   if (job.print.colors == print::PrintColors::Solid) {
     synthesis::validateSolidExemplars(*e.image, *e.image, *e.image);
-    // The wrap as the exemplar given shows it (a smaller copy hides part of its seam).
-    const WrapChoice wrap =
-        chooseWrap(job.wrap, *e.image, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
+    const WrapChoice wrap = wrapAsGiven(job.wrap, *e.image, run);
     const int factor = print.analysisDownsampling(*e.image);
     if (factor > 1) {
       e.image = downsample(*e.image, factor);

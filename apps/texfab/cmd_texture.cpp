@@ -138,9 +138,7 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
     return a;
   }
   a.report = imageJson(job.exemplar, in.exemplar);  // as given
-  // The wrap is measured on the exemplar as given (a smaller copy hides part of its seam).
-  const WrapChoice wrap =
-      chooseWrap(job.wrap, in.exemplar, run) == synthesis::ExemplarWrap::Clamp ? WrapChoice::Clamp : WrapChoice::Tile;
+  const WrapChoice wrap = wrapAsGiven(job.wrap, in.exemplar, run);
   o.textureScale = render::textureScaleFor(in.model.mesh, o);
   a.downsampling = downsampleForAnalysis(o, in, run);
   if (o.mode == render::TextureMode::Surface) {
