@@ -6,6 +6,9 @@
 //   volume  a solid box (default 128^3)
 //   job     a solid texture job's request: the voxels of a thin spherical shell, about as many as
 //           the texels a 2048^2 atlas fills (default radius 400: ~2M voxels)
+//   tiles-box, tiles-cut, tiles-job   the same three requests read from a solid tile set
+//           (--solid-method tiles; the box 512^3 by default); after the box, the kernel's rate in
+//           voxels per second and the bytes it writes per second against --peak-gbs
 // Each case runs on the CPU and on the device; both outputs must be equal, byte for byte (the
 // program exits 1 otherwise). Device times come from timestamps around every copy and dispatch
 // (Device::setProfiling): upload, dispatch, download, and the host's wall time inside submits.
@@ -18,6 +21,7 @@
 #include "synthesis/backend.h"
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/solid_analysis.h"
+#include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_2d.h"
 #include "synthesis/synthesize_solid.h"
 
@@ -41,8 +45,9 @@ using Clock = std::chrono::steady_clock;
 struct Args {
   std::string exemplar;  // PPM or PGM; empty: procedural
   int exemplarSide = 64;
-  std::vector<std::string> cases{"2d", "cut", "volume", "job"};
-  int size2d = 4096, cut = 256, volume = 128, shellRadius = 400;
+  std::vector<std::string> cases{"2d", "cut", "volume", "job", "tiles-box", "tiles-cut", "tiles-job"};
+  int size2d = 4096, cut = 256, volume = 128, shellRadius = 400, tilesBox = 512, tileSide = 32;
+  double peakGBs = 4800;  // the device's memory bandwidth, GB/s (NVIDIA H200: 4.8 TB/s)
   int reps = 3;
   int threads = 0;
   int device = -1;
@@ -51,7 +56,8 @@ struct Args {
 [[noreturn]] void usage(const char* message) {
   std::fprintf(stderr,
                "vulkan_bench: error: %s\n"
-               "usage: vulkan_bench [--cases 2d,cut,volume,job] [--2d N] [--cut N] [--volume N] [--shell R]\n"
+               "usage: vulkan_bench [--cases 2d,cut,volume,job,tiles-box,tiles-cut,tiles-job] [--2d N] [--cut N]\n"
+               "                    [--volume N] [--shell R] [--tiles-box N] [--tile-side N] [--peak-gbs GB/s]\n"
                "                    [--reps N] [--threads N] [--device N] [--exemplar FILE.ppm|pgm] [--exemplar-side N]\n",
                message);
   std::exit(1);
@@ -79,6 +85,9 @@ Args parseArgs(int argc, char** argv) {
     else if (flag == "--cut") a.cut = number();
     else if (flag == "--volume") a.volume = number();
     else if (flag == "--shell") a.shellRadius = number();
+    else if (flag == "--tiles-box") a.tilesBox = number();
+    else if (flag == "--tile-side") a.tileSide = number();
+    else if (flag == "--peak-gbs") a.peakGBs = std::max(1, number());
     else if (flag == "--reps") a.reps = std::max(1, number());
     else if (flag == "--threads") a.threads = number();
     else if (flag == "--device") a.device = number();
@@ -202,7 +211,8 @@ void printStages(const char* backend, const Timing& t) {
 // first dispatch) and prints its row; returns whether the outputs are equal.
 template <class Result>
 bool compare(const Args& args, vulkan::Device& device, const std::string& name, const std::string& size,
-             const std::function<void()>& prepare, const std::function<Result(const Context&)>& run) {
+             const std::function<void()>& prepare, const std::function<Result(const Context&)>& run,
+             Timing* deviceTiming = nullptr) {
   StageLog log;
   const Context cpuCtx{.threads = args.threads, .progress = log.sink()};
   const Context gpuCtx{.threads = args.threads, .backend = Backend::Vulkan, .device = args.device, .progress = log.sink()};
@@ -214,6 +224,7 @@ bool compare(const Args& args, vulkan::Device& device, const std::string& name, 
   printRow(name, size, tc, tg, cpu == gpu);
   printStages("cpu", tc);
   printStages("vulkan", tg);
+  if (deviceTiming) *deviceTiming = tg;
   return cpu == gpu;
 }
 
@@ -226,6 +237,49 @@ std::vector<Voxel> shell(int r) {
         if (d2 >= (r - 0.5) * (r - 0.5) && d2 < (r + 0.5) * (r + 0.5)) v.push_back({x, y, z});
       }
   return v;
+}
+
+// The tile cases: a box (with the kernel's rate and bandwidth), a cut plane and a shell.
+bool runTiles(const Args& args, vulkan::Device& device, const SolidAnalysis& lazy,
+              const std::function<bool(const char*)>& wants) {
+  SolidAnalysis a = lazy;
+  const auto start = Clock::now();
+  a.tiles = std::make_shared<const SolidTileSet>(
+      buildSolidTiles(a, SolidTileOptions{.tileSide = args.tileSide}, Context{.threads = args.threads}));
+  std::printf("tile set: %d-voxel tiles, %.1f MiB, built in %.1f s\n", a.tiles->layout.side,
+              double(a.tiles->elements.size() * sizeof(Triple)) / (1 << 20),
+              std::chrono::duration<double>(Clock::now() - start).count());
+  const SolidSynthesisOptions o{.method = SolidMethod::Tiles};
+  const std::function<void()> nothing = [] {};
+  bool identical = true;
+  if (wants("tiles-box")) {
+    const int n = args.tilesBox;
+    Timing t;
+    identical &= compare<std::vector<Triple>>(
+        args, device, "tiles-box", std::to_string(n) + "^3", nothing,
+        [&](const Context& ctx) { return synthesizeSolidBox(a, {0, 0, 0, n, n, n}, o, nullptr, ctx).triples; }, &t);
+    const double voxels = double(n) * n * n, kernel = t.profile.dispatchSeconds;
+    if (kernel > 0) {
+      const double written = voxels * double(sizeof(Triple)) / kernel / 1e9;
+      std::printf("  kernel: %.2f G voxels/s; %.1f GB/s written, %.2f %% of %.0f GB/s\n", voxels / kernel / 1e9, written,
+                  100 * written / args.peakGBs, args.peakGBs);
+    }
+  }
+  if (wants("tiles-cut")) {
+    const int n = args.cut;
+    std::vector<Voxel> plane;
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) plane.push_back({x, y, 17});
+    identical &= compare<std::vector<Triple>>(args, device, "tiles-cut", std::to_string(n) + "^2", nothing,
+                                              [&](const Context& ctx) { return synthesizeSolid(a, plane, o, nullptr, ctx).triples; });
+  }
+  if (wants("tiles-job")) {
+    const std::vector<Voxel> voxels = shell(args.shellRadius);
+    identical &= compare<std::vector<Triple>>(
+        args, device, "tiles-job", "shell r" + std::to_string(args.shellRadius) + " " + std::to_string(voxels.size()) + "vx",
+        nothing, [&](const Context& ctx) { return synthesizeSolid(a, voxels, o, nullptr, ctx).triples; });
+  }
+  return identical;
 }
 
 int runBench(const Args& args) {
@@ -250,7 +304,9 @@ int runBench(const Args& args) {
                                                   return synthesize2d(a, {0, 0, n, n}, {}, ctx).coords.coords;
                                                 });
   }
-  if (!wants("cut") && !wants("volume") && !wants("job")) return identical ? 0 : 1;
+  if (!wants("cut") && !wants("volume") && !wants("job") && !wants("tiles-box") && !wants("tiles-cut") &&
+      !wants("tiles-job"))
+    return identical ? 0 : 1;
   const SolidAnalysis a = analyzeSolid(exemplar, exemplar, exemplar, {}, analysisCtx);
   const auto triples = [](const SolidSynthesisResult& r) { return r.triples; };
   if (wants("cut")) {
@@ -288,6 +344,7 @@ int runBench(const Args& args) {
                                                 return triples(synthesizeSolid(a, voxels, {}, nullptr, ctx));
                                               });
   }
+  if (wants("tiles-box") || wants("tiles-cut") || wants("tiles-job")) identical &= runTiles(args, *device, a, wants);
   return identical ? 0 : 1;
 }
 

@@ -23,8 +23,8 @@
 // by a hash of the face's lattice position, and the tile whose 6 face variants are those of its
 // cell's 6 faces fills the interior; edges and corners are shared variants too (2 each, hashed by
 // position). Every arrangement is therefore seamless by construction, and a voxel is a handful of
-// hashes and one read. A box of voxels (synthesizeSolidBox) is read on the Vulkan device when the
-// context asks for one (vulkan/solid_kernels.h: the same bytes); lists of voxels on the CPU.
+// hashes and one read. Boxes and lists of voxels (synthesizeSolidBox, synthesizeSolid) are read
+// on the Vulkan device when the context asks for one (vulkan/solid_kernels.h: the same bytes).
 //
 // Optimization. The tile set is optimized where it is seen: on periodic arrangements of M^3 cells
 // in which every tile appears, drawn anew at each iteration so that tiles meet many neighbours.

@@ -828,7 +828,12 @@ SolidSynthesisResult synthesizeSolid(const SolidAnalysis& a, std::span<const Vox
   if (o.method == SolidMethod::Tiles) {
     SolidSynthesisResult result;
     result.triples.resize(voxels.size());
-    evaluateSolidTiles(requireTiles(a), o.seed, voxels, result.triples, ctx);
+#if TEXFAB_HAS_VULKAN
+    if (const auto device = deviceFor(ctx))
+      vulkan::evaluateSolidTiles(*device, requireTiles(a), o.seed, voxels, result.triples, ctx);
+    else
+#endif
+      evaluateSolidTiles(requireTiles(a), o.seed, voxels, result.triples, ctx);
     result.distinctVoxels = int64_t(voxels.size());
     return result;
   }

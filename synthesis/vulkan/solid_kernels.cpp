@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,12 @@ constexpr uint32_t kGatherSpirv[] =
 constexpr uint32_t kTilesSpirv[] =
 #include "synthesis/vulkan/shaders/solid_tiles_kernel.spv.inc"
     ;
+constexpr uint32_t kTilesCellsSpirv[] =
+#include "synthesis/vulkan/shaders/solid_tiles_cells_kernel.spv.inc"
+    ;
+constexpr uint32_t kTilesListSpirv[] =
+#include "synthesis/vulkan/shaders/solid_tiles_list_kernel.spv.inc"
+    ;
 
 const Kernel kInit{"solidInitKernel", kInitSpirv, {1, 1, 1, 1}, sizeof(SolidParams)};
 const Kernel kUpsample{"solidUpsampleKernel", kUpsampleSpirv, {1, 1, 1}, sizeof(SolidParams)};
@@ -44,7 +51,9 @@ const Kernel kColor{"solidColorKernel", kColorSpirv, {1, 1, 1, 3, 1}, sizeof(Sol
 const Kernel kCorrect{"solidCorrectKernel", kCorrectSpirv, {1, 1, 1, 1, 1, 1, 3, 3, 3, 3, 3, 1, 1}, sizeof(SolidParams)};
 const Kernel kCommit{"solidCommitKernel", kCommitSpirv, {1, 1, 1, 1, 1}, sizeof(SolidParams)};
 const Kernel kGather{"solidGatherKernel", kGatherSpirv, {1, 1, 1}, sizeof(GatherParams)};
-const Kernel kTiles{"solidTilesKernel", kTilesSpirv, {1, 1}, sizeof(TilesParams)};
+const Kernel kTiles{"solidTilesKernel", kTilesSpirv, {1, 1, 1}, sizeof(TilesParams)};
+const Kernel kTilesCells{"solidTilesCellsKernel", kTilesCellsSpirv, {1}, sizeof(TilesParams)};
+const Kernel kTilesList{"solidTilesListKernel", kTilesListSpirv, {1, 1, 1}, sizeof(TilesParams)};
 
 constexpr uint64_t kTilesResidentSalt = 0x54494c4553ull;  // "TILES": a tile set's key among the resident data
 
@@ -220,17 +229,31 @@ void solidGatherKernel(Commands& commands, const SolidChunks& c, const Buffer& l
   commands.dispatch(kGather, GatherParams{count}, {listed, c.triples, packed}, count);
 }
 
-void evaluateSolidTilesBox(Device& device, const SolidTileSet& tiles, uint32_t seed, const VoxelBox& box,
-                           std::span<Triple> out, const Context& ctx, uint64_t slabVoxels) {
-  if (int64_t(out.size()) != box.count()) throw Error("evaluateSolidTilesBox: one output per voxel");
-  const SolidTileLayout& layout = tiles.layout;
-  const auto elements = device.resident<Buffer>(tiles.key ^ kTilesResidentSalt, [&] {
+namespace {
+
+// The tile set's elements, uploaded once and kept resident under its key.
+std::shared_ptr<const Buffer> residentTiles(Device& device, const SolidTileSet& tiles, const Context& ctx) {
+  return device.resident<Buffer>(tiles.key ^ kTilesResidentSalt, [&] {
     Commands commands(device);
     auto b = std::make_shared<const Buffer>(commands.uploaded(std::span<const Triple>(tiles.elements)));
     commands.submit(ctx);
     return std::pair{b, b->bytes()};
   });
+}
+
+TilesParams tilesParams(const SolidTileSet& tiles, uint32_t seed, uint32_t count) {
+  const SolidTileLayout& l = tiles.layout;
+  return TilesParams{0, 0, 0, 0, 0, 0, seed, l.shift, l.variants, uint32_t(l.faces), uint32_t(l.interiors), count};
+}
+
+} // namespace
+
+void evaluateSolidTilesBox(Device& device, const SolidTileSet& tiles, uint32_t seed, const VoxelBox& box,
+                           std::span<Triple> out, const Context& ctx, uint64_t slabVoxels) {
+  if (int64_t(out.size()) != box.count()) throw Error("evaluateSolidTilesBox: one output per voxel");
+  const auto elements = residentTiles(device, tiles, ctx);
   // Slabs of whole layers whose triples fit one binding.
+  const int shift = tiles.layout.shift;
   const uint64_t layer = uint64_t(box.nx) * uint64_t(box.ny);
   const uint64_t perSlab = std::min<uint64_t>(device.maxRangeBytes() / sizeof(Triple), slabVoxels);
   if (layer > perSlab) throw Error("evaluateSolidTilesBox: a layer of the box exceeds the device's binding range");
@@ -238,12 +261,44 @@ void evaluateSolidTilesBox(Device& device, const SolidTileSet& tiles, uint32_t s
   for (int z = 0; z < box.nz; z += layers) {
     const int nz = std::min(layers, box.nz - z);
     const uint32_t count = uint32_t(layer * uint64_t(nz));
+    TilesParams params = tilesParams(tiles, seed, count);
+    params.x0 = int32_t(box.x);
+    params.y0 = int32_t(box.y);
+    params.z0 = int32_t(box.z + z);
+    params.nx = box.nx;
+    params.ny = box.ny;
+    params.nz = nz;
+    // The codes of the slab's cells first (solid_tiles.glsl: cellCounts), so that voxels hash nothing.
+    const auto cellsAlong = [&](int64_t first, int n) { return uint32_t(((first + n - 1) >> shift) - (first >> shift) + 1); };
+    TilesParams cellParams = params;
+    cellParams.count = cellsAlong(box.x, box.nx) * cellsAlong(box.y, box.ny) * cellsAlong(box.z + z, nz);
     Commands commands(device);
+    Buffer codes(device, uint64_t(cellParams.count) * sizeof(uint32_t));
     Buffer triples(device, uint64_t(count) * sizeof(Triple));
-    const TilesParams params{int32_t(box.x), int32_t(box.y), int32_t(box.z + z), box.nx, box.ny, nz, seed,
-                             layout.shift, layout.variants, uint32_t(layout.faces), uint32_t(layout.interiors), count};
-    commands.dispatch(kTiles, params, {*elements, triples}, count);
+    commands.dispatch(kTilesCells, cellParams, {codes}, cellParams.count);
+    commands.dispatch(kTiles, params, {*elements, codes, triples}, count);
     commands.download(triples, 0, out.data() + layer * uint64_t(z), uint64_t(count) * sizeof(Triple));
+    commands.submit(ctx);
+  }
+}
+
+void evaluateSolidTiles(Device& device, const SolidTileSet& tiles, uint32_t seed, std::span<const Voxel> voxels,
+                        std::span<Triple> out, const Context& ctx, uint64_t batchVoxels) {
+  if (out.size() != voxels.size()) throw Error("evaluateSolidTiles: one output per voxel");
+  const auto elements = residentTiles(device, tiles, ctx);
+  const uint64_t perBatch = std::max<uint64_t>(1, std::min<uint64_t>(device.maxRangeBytes() / sizeof(Triple), batchVoxels));
+  std::vector<int32_t> positions;
+  for (size_t first = 0; first < voxels.size(); first += perBatch) {
+    const size_t count = std::min<size_t>(perBatch, voxels.size() - first);
+    positions.resize(3 * count);
+    for (size_t i = 0; i < count; ++i)  // |coordinates| <= kMaxSolidPosition = 2^30
+      for (int a = 0; a < 3; ++a) positions[3 * i + size_t(a)] = int32_t(voxels[first + i][a]);
+    Commands commands(device);
+    const Buffer listed = commands.uploaded(std::span<const int32_t>(positions));
+    Buffer triples(device, uint64_t(count) * sizeof(Triple));
+    commands.dispatch(kTilesList, tilesParams(tiles, seed, uint32_t(count)), {*elements, listed, triples},
+                      uint32_t(count));
+    commands.download(triples, 0, out.data() + first, uint64_t(count) * sizeof(Triple));
     commands.submit(ctx);
   }
 }

@@ -88,5 +88,9 @@ void solidGatherKernel(Commands& commands, const SolidChunks& chunks, const Buff
 /// binding range). The tile set stays resident on the device under its key.
 void evaluateSolidTilesBox(Device& device, const SolidTileSet& tiles, uint32_t seed, const VoxelBox& box,
                            std::span<Triple> out, const Context& ctx = {}, uint64_t slabVoxels = uint64_t(1) << 26);
+/// The triples of `voxels` (|coordinates| <= kMaxSolidPosition), in order: the GLSL twin of
+/// evaluateSolidTiles, one voxel per invocation, in batches of at most `batchVoxels`.
+void evaluateSolidTiles(Device& device, const SolidTileSet& tiles, uint32_t seed, std::span<const Voxel> voxels,
+                        std::span<Triple> out, const Context& ctx = {}, uint64_t batchVoxels = uint64_t(1) << 26);
 
 } // namespace texfab::synthesis::vulkan

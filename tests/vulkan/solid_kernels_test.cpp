@@ -212,8 +212,9 @@ TEST(VulkanKernels, SolidKernelsEqualTheCpu) {
   }
 }
 
-// The tile kernel against SolidTileReader: random tile sets of two and three face variants, boxes
-// across cells on both sides of the origin, several seeds, in slabs of a few layers.
+// The tile kernels against SolidTileReader: random tile sets of two and three face variants, boxes
+// across cells on both sides of the origin in slabs of a few layers, lists of scattered voxels in
+// batches, several seeds.
 TEST(VulkanKernels, SolidTilesKernelReadsTheCpusTriples) {
   VulkanDevice d;
   TEXFAB_REQUIRE_VULKAN(d);
@@ -235,6 +236,20 @@ TEST(VulkanKernels, SolidTilesKernelReadsTheCpusTriples) {
         vulkan::evaluateSolidTilesBox(*d.device, tiles, seed, box, gpu, {}, uint64_t(box.nx) * uint64_t(box.ny) * 3);
         ASSERT_EQ(gpu, cpu);
       }
+    }
+    // Lists: scattered voxels up to the largest position allowed, in batches of a few hundred.
+    std::vector<Voxel> voxels;
+    for (int i = 0; i < 2000; ++i) {
+      const int64_t range = i % 2 ? 40 : kMaxSolidPosition;
+      voxels.push_back({r.between(-range, range), r.between(-range, range), r.between(-range, range)});
+    }
+    voxels.push_back({kMaxSolidPosition, -kMaxSolidPosition, kMaxSolidPosition});
+    for (uint32_t seed : {1u, 7u}) {
+      SCOPED_TRACE(std::to_string(variants) + " variants, seed " + std::to_string(seed) + ", a list");
+      std::vector<Triple> cpu(voxels.size()), gpu(voxels.size());
+      evaluateSolidTiles(tiles, seed, voxels, cpu);
+      vulkan::evaluateSolidTiles(*d.device, tiles, seed, voxels, gpu, {}, 300);
+      ASSERT_EQ(gpu, cpu);
     }
   }
 }

@@ -143,7 +143,8 @@ struct GatherParams {
 
 /// solidTilesKernel: the voxels of the box (x0, y0, z0) + [0, nx) x [0, ny) x [0, nz), x fastest,
 /// from a tile set of SolidTileLayout (side = 1 << shift, V variants, its face and interior
-/// element offsets).
+/// element offsets); solidTilesCellsKernel: the `count` cells that box touches;
+/// solidTilesListKernel: `count` listed voxels (the box fields unused).
 struct TilesParams {
   int32_t x0;
   int32_t y0;
