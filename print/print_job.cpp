@@ -101,6 +101,7 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
     source.contrastGain = o.solid.contrastGain, source.refinePasses = o.solid.refinePasses;
     source.textureScale = scale * ex.downsampling, source.downsampling = ex.downsampling;
     auto s = std::make_unique<SolidVoxelColors>(*ex.solid, *ex.color, *ex.color, *ex.color, o.solid, scale, grid_);
+    source.trilinear = s->trilinear();
     solid = s.get();
     colors = std::move(s);
   } else {

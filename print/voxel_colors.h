@@ -15,6 +15,7 @@
 #include "synthesis/solid_analysis.h"
 #include "synthesis/synthesize_solid.h"
 
+#include <array>
 #include <memory>
 #include <span>
 #include <vector>
@@ -37,7 +38,10 @@ public:
 /// The solid texture in the frame of `texfab texture --mode solid`: a point p of the model (model
 /// units) has the colour of solid voxel floor(p * scale), synthesized lazily for the shell voxels
 /// of the prepared layers only, its colour the solid engine's colour of its triple
-/// (synthesis::solidColors) read as sRGB.
+/// (synthesis::solidColors) read as sRGB. Where the print's finest pitch is under
+/// render::kSolidTrilinearBelow solid voxels (a magnified texture), a print voxel blends the 8
+/// solid voxels whose centres surround its centre, in linear light, as texture bakes do, so that
+/// prints show no voxel blocks.
 class SolidVoxelColors : public VoxelColorSource {
 public:
   /// `scale`: solid voxels (exemplar pixels) per model unit, > 0. The exemplars and analysis must
@@ -51,16 +55,26 @@ public:
   /// Distinct solid voxels requested so far, and voxels synthesized for them (all levels).
   int64_t voxelsRequested() const { return requested_; }
   int64_t voxelsSynthesized() const { return synthesized_; }
+  /// Whether print voxels blend 8 solid voxels (a magnified texture) or take the one under them.
+  bool trilinear() const { return trilinear_; }
 
 private:
   struct Samples;
-  synthesis::Voxel solidVoxel(int x, int y, int layer) const;  // under print voxel (x, y, layer)
-  int64_t fastCoordinate(int x) const;  // solidVoxel's coordinate along modelAxisOfX, cheaper
+  /// A model coordinate in solid voxels: the voxel below it (trilinear: the lower of the two
+  /// centres around it) and the fraction of the way to the next.
+  struct Position {
+    int64_t voxel;
+    float fraction;
+  };
+  Position solidPosition(double coordinate) const;
+  std::array<Position, 2> rowPosition(int y, int layer) const;  // of grid row y, along the two slow axes
+  Position fastPosition(int x) const;                          // along modelAxisOfX (the print's x)
   const synthesis::SolidAnalysis& analysis_;
   const Image &ex_, &ey_, &ez_;
   synthesis::SolidSynthesisOptions options_;
   double scale_;
   print::PrintGrid grid_;
+  bool trilinear_;
   std::unique_ptr<synthesis::SolidLevelCache> cache_;
   std::unique_ptr<Samples> samples_;
   int64_t requested_ = 0, synthesized_ = 0;

@@ -68,7 +68,7 @@ inline constexpr Stage kFracture[] = {
     {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "a6a15d52f562e627"},
     {"encode", "4b1659ed76db330b"}};
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
-inline constexpr Stage kSliceLayers[] = {{"layers", "f5a4ceac04d174ac"}, {"manifest", "da0904166c5ffe38"}};
+inline constexpr Stage kSliceLayers[] = {{"layers", "f5a4ceac04d174ac"}, {"manifest", "3cede8619e4319a7"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {

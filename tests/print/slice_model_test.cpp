@@ -138,7 +138,7 @@ TEST(SliceModel, SolidColorsAreTheSynthesizersColors) {
   const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3);
   const PrintGrid grid = gridFor(sphere, 0.1);
   const LayerVoxelizer voxelizer(sphere, grid);
-  const double scale = 6.0;  // solid voxels per mm
+  const double scale = 12.0;  // solid voxels per mm: 1.2 per print voxel, each takes its own
   const synthesis::SolidSynthesisOptions options;
   SolidVoxelColors colors(golden::solidAnalysis32(), golden::marble32(), golden::marble32(), golden::marble32(), options,
                           scale, grid);
@@ -164,6 +164,64 @@ TEST(SliceModel, SolidColorsAreTheSynthesizersColors) {
         }
       }
   EXPECT_GT(checked, 50);
+}
+
+// A print finer than its solid texture (0.2 solid voxels per print voxel): each print voxel blends
+// the 8 solid voxels whose centres surround it, so that no blocks show.
+TEST(SliceModel, MagnifiedSolidColorsBlendTheirVoxelsTrilinearly) {
+  const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3);
+  const PrintGrid grid = gridFor(sphere, 0.1);
+  const LayerVoxelizer voxelizer(sphere, grid);
+  const double scale = 2.0;
+  const synthesis::SolidSynthesisOptions options;
+  const Image& marble = golden::marble32();
+  SolidVoxelColors colors(golden::solidAnalysis32(), marble, marble, marble, options, scale, grid);
+  ASSERT_TRUE(colors.trilinear());
+  const std::vector<LayerSpans> layers = {voxelizer.voxelize(20)};
+  colors.prepare(layers, {});
+  // The synthesizer's colour of one voxel, in linear light.
+  const auto voxelColor = [&](const synthesis::Voxel& v) {
+    const synthesis::SolidSynthesisResult alone = synthesis::synthesizeSolid(golden::solidAnalysis32(), {&v, 1}, options);
+    std::vector<float> color;
+    synthesis::solidColors(alone.triples, marble, marble, marble, color);
+    Eigen::Vector3f out;
+    for (int c = 0; c < 3; ++c) out[c] = srgbToLinear(color[color.size() == 1 ? 0 : size_t(c)]);
+    return out;
+  };
+  double stepAcross = 0, stepWithin = 0;
+  int across = 0, within = 0, equal = 0, checked = 0;
+  for (const LayerSpans& spans : layers)
+    for (int r = 0; r < spans.rows(); r += 5)
+      for (const print::VoxelSpan& s : spans.row(r)) {
+        if (!s.shell || s.end - s.begin < 2) continue;
+        const int y = grid.height - 1 - r;
+        std::vector<float> rgba(4 * size_t(s.end - s.begin));
+        colors.colors(spans.layer, y, s.begin, s.end, rgba.data());
+        const auto at = [&](int x) { return Eigen::Vector3f(&rgba[4 * size_t(x - s.begin)]); };
+        for (int x = s.begin; x + 1 < s.end; ++x) {
+          const double step = (at(x + 1) - at(x)).norm();
+          const bool boundary = std::floor(grid.centerX(x) * scale) != std::floor(grid.centerX(x + 1) * scale);
+          (boundary ? stepAcross : stepWithin) += step;
+          ++(boundary ? across : within);
+          equal += step == 0;
+        }
+        for (int x = s.begin; x < s.end && checked < 200; x += 4, ++checked) {
+          const Eigen::Vector3d q = grid.center(x, y, spans.layer) * scale - Eigen::Vector3d::Constant(0.5);
+          const Eigen::Vector3d base = q.array().floor(), f = q - base;
+          Eigen::Vector3f expected = Eigen::Vector3f::Zero();
+          for (int k = 0; k < 8; ++k) {
+            const synthesis::Voxel v{int64_t(base.x()) + (k & 1), int64_t(base.y()) + (k >> 1 & 1), int64_t(base.z()) + (k >> 2)};
+            const double w = ((k & 1) ? f.x() : 1 - f.x()) * ((k & 2) ? f.y() : 1 - f.y()) * ((k & 4) ? f.z() : 1 - f.z());
+            expected += float(w) * voxelColor(v);
+          }
+          ASSERT_LT((at(x) - expected).cwiseAbs().maxCoeff(), 1e-5f) << "print voxel " << x << ", " << y;
+        }
+      }
+  ASSERT_GT(across, 20);
+  ASSERT_GE(checked, 40);
+  // With the nearest voxel, 4 of 5 neighbours would be equal and every step would cross a boundary.
+  EXPECT_LT(equal, (across + within) / 20);
+  EXPECT_LT(stepAcross / across, 1.5 * stepWithin / within);
 }
 
 TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
