@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "core/hash.h"
+#include "core/image_io.h"
 #include "core/parallel.h"
 #include "synthesis/cpu/graph_atlas.h"
 #include "synthesis/cpu/synthesis_kernels.h"
@@ -22,15 +23,19 @@ using cpu::GraphAtlas;
 using cpu::kRowGrain;
 using cpu::LevelGrid;
 
+// Position q on a level of period p (0: none).
+int64_t wrap(int64_t q, int64_t p) { return p > 0 ? cpu::floorMod(q, p) : q; }
+
 // Upsampling: a texel at level k < L of its exemplar becomes four at level k+1, h_{k+1} apart
 // (the thesis' ⌊h Δ⌋ with the child's spacing, notes §3.2 erratum); at the finest level, magnified.
+// Children at positions wrapped by (px, py): the first periodic level reads its parent so.
 void upsample(const GraphAtlas& a, const uint32_t* parent, const LevelGrid& pg, uint32_t* out, const LevelGrid& g,
-              int r0, int r1) {
+              int64_t px, int64_t py, int r0, int r1) {
   for (int y = r0; y < r1; ++y) {
-    const int64_t qy = g.y0 + y;
+    const int64_t qy = wrap(g.y0 + y, py);
     const uint32_t* prow = parent + size_t((qy >> 1) - pg.y0) * size_t(pg.width);
     for (int x = 0; x < g.width; ++x) {
-      const int64_t qx = g.x0 + x;
+      const int64_t qx = wrap(g.x0 + x, px);
       const uint32_t s = prow[(qx >> 1) - pg.x0];
       if (a.level(s) == a.finest) {
         out[size_t(y) * g.width + x] = s;
@@ -44,15 +49,16 @@ void upsample(const GraphAtlas& a, const uint32_t* parent, const LevelGrid& pg, 
 }
 
 // Jitter: S[q] += round(strength h_k H(q)), H uniform in [-1, 1)^2 from texelHash(seed, t, q), the
-// strength and h_k those of the tile S[q] points to; in integers as cpu::jitterKernel.
+// strength and h_k those of the tile S[q] points to; in integers as cpu::jitterKernel. q wrapped by
+// the level's periods (px, py).
 void jitter(const GraphAtlas& a, uint32_t* coords, const LevelGrid& g, uint32_t seed, int t,
-            const std::vector<int64_t>& amplitude256, int r0, int r1) {
+            const std::vector<int64_t>& amplitude256, int64_t px, int64_t py, int r0, int r1) {
   for (int y = r0; y < r1; ++y)
     for (int x = 0; x < g.width; ++x) {
       uint32_t& s = coords[size_t(y) * g.width + x];
       const int64_t amp = amplitude256[size_t(a.tile(s))];
       if (amp == 0) continue;
-      const int64_t qx = g.x0 + x, qy = g.y0 + y;
+      const int64_t qx = wrap(g.x0 + x, px), qy = wrap(g.y0 + y, py);
       const int64_t hx = int64_t(texelHash(seed, uint32_t(t), int32_t(qx), int32_t(qy), 0) >> 16) - 32768;
       const int64_t hy = int64_t(texelHash(seed, uint32_t(t), int32_t(qx), int32_t(qy), 1) >> 16) - 32768;
       s = a.move(s, (amp * hx + (int64_t(1) << 22)) >> 23, (amp * hy + (int64_t(1) << 22)) >> 23);
@@ -104,6 +110,11 @@ void GraphSynthesisOptions::validate(const GraphAnalysis& analysis) const {
     if (!(j >= 0.0f && j <= 1.0f)) throw Error("jitter values must be in [0, 1]");
   if (passes < 0 || passes > 8) throw Error("passes must be 0 to 8");
   if (interleave < 1 || interleave > 3) throw Error("interleave must be 1 to 3");
+  if (periodX < 0 || periodY < 0 || periodX > kMaxImageSide || periodY > kMaxImageSide)
+    throw Error("tiling period must be in [0, " + std::to_string(kMaxImageSide) + "]");
+  if (periodX % interleave || periodY % interleave)
+    throw Error("tiling period " + std::to_string(periodX) + "x" + std::to_string(periodY) +
+                " must be a multiple of the interleave (" + std::to_string(interleave) + ")");
 }
 
 int graphZoomOctaves(double zoom) {
@@ -115,6 +126,18 @@ int graphZoomOctaves(double zoom) {
 
 int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options) {
   return analysis.finestLevel() + options.zoomOctaves;
+}
+
+int graphFirstPeriodicLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options) {
+  if (options.periodX == 0 && options.periodY == 0) return 0;
+  const int finest = graphOutputLevel(analysis, options);
+  const auto periodic = [&](int period, int shift) {
+    return period == 0 || (shift < 31 && period % (1 << shift) == 0 && (period >> shift) % options.interleave == 0);
+  };
+  int first = finest;
+  while (first > 0 && periodic(options.periodX, finest - first + 1) && periodic(options.periodY, finest - first + 1))
+    --first;
+  return first;
 }
 
 std::vector<int64_t> graphJitterAmplitudes256(const GraphAnalysis& analysis, const std::vector<float>& jitter) {
@@ -142,11 +165,19 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   const int finest = graphOutputLevel(analysis, options);
   const int subpasses = options.passes * options.interleave * options.interleave;
 
+  // Periods per level (0: none, or a level coarser than the first periodic one).
+  const int first = graphFirstPeriodicLevel(analysis, options);
+  const auto period = [&](int p, int t) { return t >= first ? int64_t(p >> (finest - t)) : int64_t(0); };
+
   std::vector<LevelGrid> padded(size_t(finest + 1));
   LevelGrid valid{window.x, window.y, window.width, window.height};
   for (int t = finest; t >= 0; --t) {
     padded[size_t(t)] = cpu::expand(valid, subpasses);
     valid = cpu::parentOf(padded[size_t(t)]);
+    if (t != first || t == 0) continue;
+    // The first periodic level reads its parent at wrapped positions [0, p): parents [0, (p + 1) / 2).
+    if (const int64_t p = period(options.periodX, t)) valid.x0 = 0, valid.width = int((p + 1) / 2);
+    if (const int64_t p = period(options.periodY, t)) valid.y0 = 0, valid.height = int((p + 1) / 2);
   }
   // The root's schedule starts at its level 0; another exemplar's two steps before the level texels
   // enter it, as the layout above that level came from the exemplar they left (entered at the start
@@ -162,8 +193,13 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
     const LevelGrid& g = padded[size_t(t)];
     const auto rows = [&](auto&& kernel) { parallelFor(0, g.height, ctx, kernel, kRowGrain); };
     current.assign(size_t(g.width) * size_t(g.height), 0);  // t = 0: the root's coarsest level, at (0, 0)
-    if (t > 0) rows([&](int r0, int r1) { upsample(atlas, previous.data(), padded[size_t(t - 1)], current.data(), g, r0, r1); });
-    rows([&](int r0, int r1) { jitter(atlas, current.data(), g, options.seed, t, amplitude256, r0, r1); });
+    const int64_t px = period(options.periodX, t), py = period(options.periodY, t);
+    if (t > 0)
+      rows([&](int r0, int r1) {
+        upsample(atlas, previous.data(), padded[size_t(t - 1)], current.data(), g, t == first ? px : 0,
+                 t == first ? py : 0, r0, r1);
+      });
+    rows([&](int r0, int r1) { jitter(atlas, current.data(), g, options.seed, t, amplitude256, px, py, r0, r1); });
     scratch.assign(current.size(), 0);
     int inset = 0;
     for (int pass = 0; pass < options.passes; ++pass)

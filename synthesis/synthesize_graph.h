@@ -46,6 +46,12 @@ struct GraphSynthesisOptions {
   std::vector<float> jitter;
   int passes = 2;      ///< correction passes per level
   int interleave = 2;  ///< sub-passes per pass = interleave^2; 1..3
+  /// Output wraps with this period (output texels) when > 0: the texture tiles at its size (a
+  /// multiple of the interleave). Levels from graphFirstPeriodicLevel on wrap at the period
+  /// halved per level; the coarser ones are synthesized as usual and read wrapped, so the tile
+  /// keeps their structure (synthesize2d's rule, except that it skips those levels).
+  int periodX = 0;
+  int periodY = 0;
 
   /// Throws texfab::Error naming the field when a value is out of range for `analysis`.
   void validate(const GraphAnalysis& analysis) const;
@@ -57,6 +63,10 @@ int graphZoomOctaves(double zoom);
 
 /// The synthesis level of the output: L + zoomOctaves.
 int graphOutputLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options);
+/// The coarsest level whose periods are whole and multiples of the interleave (0 without a period):
+/// the levels from it on tile; a period that is a multiple of interleave * 2^graphOutputLevel
+/// tiles every level.
+int graphFirstPeriodicLevel(const GraphAnalysis& analysis, const GraphSynthesisOptions& options);
 
 /// Jitter amplitude per atlas tile (node * levels + level), in 1/256 pixels of the tile's exemplar:
 /// h_k times the strength `jitter` (as GraphSynthesisOptions::jitter; empty: defaultJitter) gives

@@ -116,12 +116,16 @@ Image load(const SynthJob& job, std::vector<Companion>& companions, const Run& r
 void runGraphSynth(const SynthJob& job) {
   using namespace synthesis;
   Run run("synth", job.common);
-  if (job.tileable) throw UsageError("--graph does not take --tileable yet");
   GraphSynthesisOptions options;
   options.seed = job.options.seed;
   options.jitter = job.options.jitter;
   options.passes = job.options.passes;
   options.interleave = job.options.interleave;
+  if (job.tileable) {
+    if (job.windowGiven) throw UsageError("--tileable and --window cannot be combined (the tile is the output size)");
+    options.periodX = job.window.width;
+    options.periodY = job.window.height;
+  }
   try {
     options.zoomOctaves = graphZoomOctaves(job.zoom);
   } catch (const Error& e) {
@@ -149,7 +153,13 @@ void runGraphSynth(const SynthJob& job) {
   bool cached = false;
   const GraphAnalysis analysis = analyzeGraph(graph, {}, run.analysisCache(), run.ctx(), &cached);
   options.validate(analysis);
-  const int deepest = graph.deepestLevel(), level = graphOutputLevel(analysis, options);
+  const int level = graphOutputLevel(analysis, options);
+  if (const int first = graphFirstPeriodicLevel(analysis, options); first > 0)
+    run.ctx().warn("a " + std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " tile at zoom " +
+                   figure(job.zoom) + " wraps " + std::to_string(level + 1 - first) + " of " +
+                   std::to_string(level + 1) + " levels (the coarser are cut at its edges); sizes that are "
+                   "multiples of " + std::to_string(int64_t(options.interleave) << level) + " wrap them all");
+  const int deepest = graph.deepestLevel();
   if (deepest >= 0 && level > deepest)
     run.ctx().warn("zoom " + figure(job.zoom) + " is finer than the graph's finest exemplar (zoom " +
                    figure(std::ldexp(1.0, deepest - analysis.finestLevel())) + "): its pixels are magnified");
@@ -169,7 +179,7 @@ void runGraphSynth(const SynthJob& job) {
                 {"side", graph.side()}, {"deepest_level", deepest}, {"analysis_cached", cached}};
   r["window"] = {{"x", job.window.x}, {"y", job.window.y}, {"width", job.window.width}, {"height", job.window.height}};
   r["parameters"] = {{"seed", options.seed}, {"zoom", job.zoom}, {"passes", options.passes},
-                     {"interleave", options.interleave},
+                     {"interleave", options.interleave}, {"tileable", job.tileable},
                      {"jitter", options.jitter.empty() ? defaultJitter(analysis.levels) : options.jitter}};
   r["levels"] = toJson(result.levels);
   run.finish();
@@ -280,7 +290,8 @@ Command addSynthCommand(CLI::App& root) {
   f.flag("--tileable", job->tileable,
          "Make the output wrap at its size (a tile). A tile of 2-3 times the exemplar's size may repeat the "
          "exemplar (synth warns when its self-correlation at the exemplar's period exceeds 0.25; try another "
-         "--seed); at 4 times or more it stayed below on the patterns measured");
+         "--seed); at 4 times or more it stayed below on the patterns measured. With --graph, a tile wraps every "
+         "scale when its size is a multiple of the interleave times 2^level (synth says so otherwise)");
   wrapFlag(f, job->wrap);
   f.text("--coords", job->coords, "Also write the coordinate map (16-bit .png/.tif or .exr)");
   f.app()->add_option("--apply", job->apply,

@@ -116,9 +116,10 @@ SynthesisOutput synthesize(const py::object& exemplarLike, const py::object& siz
 
 SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& size, const py::object& window,
                                 double zoom, uint32_t seed, std::vector<float> jitter, int passes, int interleave,
-                                int threads, const py::object& cacheDir, const py::object& progress) {
+                                bool tileable, int threads, const py::object& cacheDir, const py::object& progress) {
   using namespace synthesis;
   Call call(threads, "cpu", cacheDir, progress);
+  if (!window.is_none() && tileable) throw Error("tileable and window cannot be combined (the tile is the output size)");
   const Window w = windowOf(size, window);
   GraphSynthesisOptions options;
   options.zoomOctaves = graphZoomOctaves(zoom);
@@ -126,6 +127,7 @@ SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& s
   options.jitter = std::move(jitter);
   options.passes = passes;
   options.interleave = interleave;
+  if (tileable) options.periodX = w.width, options.periodY = w.height;
   const ExemplarGraph graph = readExemplarGraph(toPath(graphFile));
   checkMemory(graphAnalysisMemoryBytes(int(graph.exemplars.size()), graph.side()) + synthesizeGraphMemoryBytes(w),
               "a " + std::to_string(w.width) + "x" + std::to_string(w.height) + " output from a graph of " +
@@ -244,11 +246,12 @@ void bindSynthesis(py::module_& m) {
   m.def("synthesize_graph", &synthesizeGraph, py::arg("graph"), py::arg("size") = py::make_tuple(512, 512),
         py::kw_only(), py::arg("window") = py::none(), py::arg("zoom") = 1.0, py::arg("seed") = gso.seed,
         py::arg("jitter") = gso.jitter, py::arg("passes") = gso.passes, py::arg("interleave") = gso.interleave,
-        py::arg("threads") = 0, py::arg("cache_dir") = py::none(), py::arg("progress") = py::none(),
+        py::arg("tileable") = false, py::arg("threads") = 0, py::arg("cache_dir") = py::none(),
+        py::arg("progress") = py::none(),
         "Synthesizes `size` (W, H), or the window (X, Y, W, H), at `zoom` (a power of two: output texels are 1/zoom of "
         "a root pixel) from an exemplar graph file (multiscale synthesis, Han et al. 2008); coords are positions in "
-        "the graph's packed exemplars; maps: the companion maps the graph's exemplars give. Equal to `texfab synth "
-        "--graph`");
+        "the graph's packed exemplars; maps: the companion maps the graph's exemplars give; tileable: the output "
+        "wraps at its size. Equal to `texfab synth --graph`");
   const synthesis::SolidSynthesisOptions sso;
   m.def("solid", &solid, py::arg("exemplar"), py::kw_only(), py::arg("points") = py::none(),
         py::arg("box") = py::none(), py::arg("plane") = py::none(), py::arg("size") = py::none(),

@@ -77,11 +77,12 @@ def synthesize(exemplar: ImageLike, size: tuple[int, int] = (512, 512), *,
 def synthesize_graph(graph: PathLike, size: tuple[int, int] = (512, 512), *,
                      window: Optional[tuple[int, int, int, int]] = None, zoom: float = 1.0, seed: int = 1,
                      jitter: Optional[Sequence[float]] = None, passes: int = 2, interleave: int = 2,
-                     threads: int = 0, cache_dir: CacheDir = None,
+                     tileable: bool = False, threads: int = 0, cache_dir: CacheDir = None,
                      progress: Optional[Progress] = None) -> SynthesisResult:
     """Multiscale synthesis from an exemplar graph file (docs/exemplar-graphs.md) at `zoom` (a
     power of two: output texels are 1/zoom of a root pixel); equal to `texfab synth --graph`.
-    `maps` holds the companion maps the graph's exemplars give ("normal", "roughness", "height")."""
+    `maps` holds the companion maps the graph's exemplars give ("normal", "roughness", "height").
+    `tileable`: the output wraps at its size."""
 
 def solid(exemplar: ImageLike, *, points: Optional[npt.ArrayLike] = None,
           box: Optional[tuple[int, int, int, int, int, int]] = None,

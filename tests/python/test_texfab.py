@@ -75,6 +75,13 @@ def test_synthesize_graph_equals_the_command_line(tmp_path, cache):
     assert same_bytes(tmp_path / "cli_n.png", tmp_path / "py.png")
     with pytest.raises(texfab.Error, match="zoom: expected a power of two"):
         texfab.synthesize_graph(graph, (8, 8), zoom=3)
+    # A tile: the command line's bytes.
+    cli("synth", "--graph", graph, "--tileable", "--size", "64", "-o", tmp_path / "cli_t.png", cache_dir=cache)
+    tile = texfab.synthesize_graph(graph, (64, 64), tileable=True, cache_dir=cache)
+    texfab.write_image(tile.image, tmp_path / "py_t.png")
+    assert same_bytes(tmp_path / "cli_t.png", tmp_path / "py_t.png")
+    with pytest.raises(texfab.Error, match="tileable and window cannot be combined"):
+        texfab.synthesize_graph(graph, window=(0, 0, 8, 8), tileable=True)
 
 
 def test_a_window_equals_the_same_texels_of_a_larger_request(cache):

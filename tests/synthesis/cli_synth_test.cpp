@@ -154,8 +154,8 @@ TEST(CliSynth, WindowsMatchTheFullImage) {
       for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 74, y + 27, c));
 }
 
-// synth --graph: a two-exemplar graph at two zooms; windows agree with the full image; a bad graph
-// file, or a flag --graph does not take, is one line and no output.
+// synth --graph: a two-exemplar graph at two zooms; windows agree with the full image; tiles; a bad
+// graph file, or flags that do not go together, is one line and no output.
 TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
   TempDir dir;
   const std::string photos = std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/photos/";
@@ -177,6 +177,17 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
         for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 25, y + 17, c)) << "zoom " << zoom;
     std::ifstream report(dir / "r.json");
     EXPECT_EQ(nlohmann::json::parse(report)["graph"]["deepest_level"], 7 + 4);
+  }
+  // --tileable: a 256 tile wraps all 8 levels of the 128-pixel rock at zoom 1; a 96 tile the finest 5,
+  // and says so (SynthesizeGraph.TileableOutputsRepeatAtTheirPeriod checks the repetition).
+  for (const auto& [size, warning] : {std::pair{"256", ""}, std::pair{"96", "a 96x96 tile at zoom 1 wraps 5 of 8 levels"}}) {
+    const Outcome o = texfab("synth --graph " + graph + " --tileable --size " + size + " -o " +
+                             (dir / "tile.png").string() + " --report " + (dir / "t.json").string());
+    ASSERT_EQ(o.status, 0) << o.err;
+    EXPECT_EQ(o.err.find("warning") != std::string::npos, *warning != 0) << o.err;
+    EXPECT_NE(o.err.find(warning), std::string::npos) << o.err;
+    std::ifstream report(dir / "t.json");
+    EXPECT_EQ(nlohmann::json::parse(report)["parameters"]["tileable"], true);
   }
   // Regions: a rectangle for one edge, a mask image for the other.
   Image mask(128, 128, 1);
@@ -205,7 +216,8 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
       {"--graph " + graphFile("b6.json", ""), "'stone' is not reached from the root 'rock'"},
       {"--graph " + (dir / "none.json").string(), "cannot open the graph file"},
       {"--graph " + graph + " --zoom 3", "--zoom: expected a power of two"},
-      {"--graph " + graph + " --tileable", "--graph does not take"},
+      {"--graph " + graph + " --tileable --window 0,0,64,64", "cannot be combined"},
+      {"--graph " + graph + " --tileable --size 47", "must be a multiple of the interleave (2)"},
       {kBrick + " --graph " + graph, "not both"},
       {kBrick + " --zoom 2", "--zoom needs --graph"},
   };

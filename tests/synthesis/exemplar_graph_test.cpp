@@ -184,6 +184,39 @@ TEST(SynthesizeGraph, WindowsAgreeWithLargerRequestsAndThreadCounts) {
   }
 }
 
+// --tileable: the output repeats at its period, at every zoom, whether the period tiles every level
+// (a multiple of interleave * 2^level) or only the finer ones (the coarser are read wrapped).
+TEST(SynthesizeGraph, TileableOutputsRepeatAtTheirPeriod) {
+  const GraphAnalysis a = analyzeGraph(twoNodes(64, 2));  // L = 6
+  for (const auto& [zoom, period] : {std::pair{0, 128}, std::pair{0, 48}, std::pair{2, 40}, std::pair{-1, 64}}) {
+    GraphSynthesisOptions options;
+    options.zoomOctaves = zoom;
+    options.seed = 3;
+    options.periodX = options.periodY = period;
+    SCOPED_TRACE("zoom 2^" + std::to_string(zoom) + ", period " + std::to_string(period) + ", periodic from level " +
+                 std::to_string(graphFirstPeriodicLevel(a, options)));
+    const Window w{-period / 2, -7, 2 * period + 5, 2 * period + 3};
+    const CoordMap out = synthesizeGraph(a, w, options).coords;
+    for (int y = 0; y < w.height; ++y)
+      for (int x = 0; x < w.width; ++x) {
+        if (x + period < w.width) {
+          ASSERT_EQ(out.at(x, y), out.at(x + period, y)) << "texel (" << x << ", " << y << ")";
+        }
+        if (y + period < w.height) {
+          ASSERT_EQ(out.at(x, y), out.at(x, y + period)) << "texel (" << x << ", " << y << ")";
+        }
+      }
+    // The tile is not one exemplar texel repeated.
+    std::vector<uint32_t> distinct(out.coords.begin(), out.coords.end());
+    std::sort(distinct.begin(), distinct.end());
+    EXPECT_GT(std::unique(distinct.begin(), distinct.end()) - distinct.begin(), period * period / 8);
+  }
+  GraphSynthesisOptions odd;
+  odd.periodX = odd.periodY = 47;
+  EXPECT_NE(refusal([&] { synthesizeGraph(a, {0, 0, 47, 47}, odd); }).find("must be a multiple of the interleave"),
+            std::string::npos);
+}
+
 // The two-node target on photographs: a coarse exemplar (rock) detailed by a fine one
 // (stone) at 1/16 the scale. At zoom 1 the output is the rock's, at zoom 16 the stone's, each
 // within 1.3x the 7x7 fidelity of a single-exemplar synthesis of that exemplar.
