@@ -75,7 +75,8 @@ int PrintJob::analysisDownsampling(const Image& exemplar) const {
 }
 
 double PrintJob::memoryBytes(const Context& ctx) const {
-  // A batch's solid voxels are at most its print voxels; refinement's slab is the part that grows.
+  // A batch's solid voxels are about its print voxels (its shell voxels, a fraction of the batch,
+  // each read one to 5^3 solid voxels: SolidSampling); refinement's slab is the part that grows.
   const int64_t batchVoxels = int64_t(grid_.width) * grid_.height * options_.slice.batchLayers;
   const double refinement = options_.colors == PrintColors::Solid
                                 ? synthesis::refineSolidMemoryBytes(batchVoxels, options_.solid.refinePasses)
@@ -101,7 +102,7 @@ PrintJobResult PrintJob::slice(const PrintExemplar& ex, int first, int count, Sl
     source.contrastGain = o.solid.contrastGain, source.refinePasses = o.solid.refinePasses;
     source.textureScale = scale * ex.downsampling, source.downsampling = ex.downsampling;
     auto s = std::make_unique<SolidVoxelColors>(*ex.solid, *ex.color, *ex.color, *ex.color, o.solid, scale, grid_);
-    source.trilinear = s->trilinear();
+    source.sampling = s->sampling();
     solid = s.get();
     colors = std::move(s);
   } else {

@@ -73,7 +73,8 @@ public:
   /// and synthesized smaller. Where the scale puts at least that many solid voxels along the print's
   /// finest pitch, every print voxel would point-sample detail finer than itself (aliasing, and a
   /// dependency chain per voxel); a copy that much smaller is the prefiltered texture. Never below
-  /// render::kMinAnalysedSide pixels a side; 1 for the other colours.
+  /// render::kMinAnalysedSide pixels a side (where that stops it, print voxels average their
+  /// footprint: SolidSampling::Box); 1 for the other colours.
   int analysisDownsampling(const Image& exemplar) const;
   /// Memory the slicing needs at worst, with a layer in flight per thread of `ctx`.
   double memoryBytes(const Context& ctx) const;

@@ -226,7 +226,7 @@ nlohmann::ordered_json sourceJson(const PrintSource& s) {
   case PrintColors::Solid:
     colors = {{"mode", "solid"}, {"method", synthesis::toString(s.method)}, {"exemplar", s.exemplar}, {"seed", s.seed},
               {"contrast_gain", s.contrastGain}, {"refine_passes", s.refinePasses}, {"texture_scale", s.textureScale},
-              {"downsampled", s.downsampling}, {"sampling", s.trilinear ? "trilinear" : "nearest"}};
+              {"downsampled", s.downsampling}, {"sampling", toString(s.sampling)}};
     break;
   case PrintColors::Surface: colors = {{"mode", "surface"}, {"exemplar", s.exemplar}, {"seed", s.seed}}; break;
   }

@@ -106,7 +106,7 @@ struct PrintSource {
   int refinePasses = 0;                     ///< Solid
   double textureScale = 0;                  ///< Solid: the given exemplar's pixels per model unit
   int downsampling = 1;                     ///< Solid: synthesized from a copy this many times smaller
-  bool trilinear = false;                   ///< Solid: print voxels blend 8 solid voxels (magnified)
+  SolidSampling sampling = SolidSampling::Nearest;  ///< Solid: how print voxels read the solid texture
 };
 
 /// Memory the job needs beyond its inputs, in bytes, at worst (a layer of noise), with a layer in

@@ -32,72 +32,103 @@ SolidVoxelColors::SolidVoxelColors(const synthesis::SolidAnalysis& analysis, con
                                    const Image& ez, const synthesis::SolidSynthesisOptions& options, double scale,
                                    const print::PrintGrid& grid)
     : analysis_(analysis), ex_(ex), ey_(ey), ez_(ez), options_(options), scale_(scale), grid_(grid),
-      trilinear_(grid.pitch.minCoeff() * scale < render::kSolidTrilinearBelow),
+      modelPitch_((grid.rotation.transpose() * grid.pitch).cwiseAbs()),
       cache_(std::make_unique<synthesis::SolidLevelCache>(size_t(128) << 20)), samples_(std::make_unique<Samples>()) {
   options.validate();
   if (grid.rotation(0, grid.modelAxisOfX) != 1) throw Error("internal: the print's x must be a model axis, unflipped");
   if (!(scale > 0) || !std::isfinite(scale)) throw Error("solid texture scale must be a positive number of voxels per model unit");
+  const double voxelsPerPitch = grid.pitch.minCoeff() * scale;
+  sampling_ = voxelsPerPitch < render::kSolidTrilinearBelow ? SolidSampling::Trilinear
+              : voxelsPerPitch >= kSolidBoxFrom                 ? SolidSampling::Box
+                                                                : SolidSampling::Nearest;
   samples_->order = grid.modelAxisOfX == 0 ? std::array<int, 3>{2, 1, 0} : std::array<int, 3>{2, 0, 1};
   const Eigen::Vector3d far = grid.origin + Eigen::Vector3d(grid.width, grid.height, grid.layers).cwiseProduct(grid.pitch);
-  const double reach = std::max(grid.origin.cwiseAbs().maxCoeff(), far.cwiseAbs().maxCoeff()) * scale + 1;  // any rotation
+  const double reach = (std::max(grid.origin.cwiseAbs().maxCoeff(), far.cwiseAbs().maxCoeff()) + grid.pitch.maxCoeff()) *
+                           scale + 1;  // any rotation; a footprint reaches a pitch and a voxel further
   if (!(reach < double(synthesis::kMaxSolidPosition)))
     throw Error("the texture scale puts the print outside the solid texture's range (|position x scale| <= 2^30)");
 }
 
 SolidVoxelColors::~SolidVoxelColors() = default;
 
-SolidVoxelColors::Position SolidVoxelColors::solidPosition(double coordinate) const {
-  const double q = coordinate * scale_ - (trilinear_ ? 0.5 : 0.0);  // trilinear: on the voxel centres' lattice
-  const double below = std::floor(q);
-  return {int64_t(below), float(q - below)};
+const char* toString(SolidSampling sampling) {
+  return sampling == SolidSampling::Trilinear ? "trilinear" : sampling == SolidSampling::Box ? "box" : "nearest";
 }
 
-std::array<SolidVoxelColors::Position, 2> SolidVoxelColors::rowPosition(int y, int layer) const {
+SolidVoxelColors::Taps SolidVoxelColors::taps(double coordinate, int axis) const {
+  Taps t;
+  if (sampling_ == SolidSampling::Nearest) {
+    t.first = int64_t(std::floor(coordinate * scale_));
+    return t;
+  }
+  if (sampling_ == SolidSampling::Trilinear) {  // the two voxel centres around it
+    const double q = coordinate * scale_ - 0.5, below = std::floor(q);
+    t.first = int64_t(below), t.count = 2;
+    t.weight[1] = float(q - below), t.weight[0] = 1.0f - t.weight[1];
+    return t;
+  }
+  // Box: the voxels the print voxel [a, b) overlaps, each weighted by its share of the overlap;
+  // wider than kMaxTaps voxels, kMaxTaps of them evenly spread.
+  const double half = 0.5 * modelPitch_[axis];
+  const double a = (coordinate - half) * scale_, b = (coordinate + half) * scale_;
+  t.first = int64_t(std::floor(a));
+  const int64_t last = int64_t(std::ceil(b)) - 1;
+  if (last - t.first < kMaxTaps) {
+    t.count = int(last - t.first + 1);
+    for (int k = 0; k < t.count; ++k) {
+      const double lo = std::max(a, double(t.first + k)), hi = std::min(b, double(t.first + k + 1));
+      t.weight[size_t(k)] = float((hi - lo) / (b - a));
+    }
+  } else {
+    t.count = kMaxTaps, t.stride = (last - t.first) / (kMaxTaps - 1);
+    t.weight.fill(1.0f / float(kMaxTaps));
+  }
+  return t;
+}
+
+std::array<SolidVoxelColors::Taps, 2> SolidVoxelColors::rowTaps(int y, int layer) const {
   const Eigen::Vector3d c = grid_.center(0, y, layer);
   const std::array<int, 3>& order = samples_->order;
-  return {solidPosition(c[order[0]]), solidPosition(c[order[1]])};
+  return {taps(c[order[0]], order[0]), taps(c[order[1]], order[1])};
 }
 
-SolidVoxelColors::Position SolidVoxelColors::fastPosition(int x) const {
+SolidVoxelColors::Taps SolidVoxelColors::fastTaps(int x) const {
   // The rotation takes the print's x to model axis modelAxisOfX with factor +1, so that
   // coordinate of center(x, y, layer) is centerX(x), bit for bit.
-  return solidPosition(grid_.centerX(x));
+  return taps(grid_.centerX(x), grid_.modelAxisOfX);
 }
 
 void SolidVoxelColors::prepare(std::span<const print::LayerSpans> layers, const Context& ctx) {
   Samples prepared;
   const int fast = grid_.modelAxisOfX;
   prepared.order = samples_->order;
-  // The solid voxels of each shell span: a run along the fast axis (every one between the ends
-  // when a print voxel is narrower than a solid voxel, else listed one by one); trilinear, the
-  // next voxel along every axis too.
+  // The solid voxels of each shell span: the runs of its print voxels' taps along the fast axis,
+  // in each row of solid voxels the print row's footprint covers.
   struct Run {
     int64_t slow[2], lo, hi;
     bool operator<(const Run& o) const {
       return slow[0] != o.slow[0] ? slow[0] < o.slow[0] : slow[1] != o.slow[1] ? slow[1] < o.slow[1] : lo < o.lo;
     }
   };
-  const int rows = trilinear_ ? 4 : 1;     // rows of solid voxels per print row (trilinear: 2 x 2)
-  const int64_t next = trilinear_ ? 1 : 0;  // and the next voxel along the row
-  const bool contiguous = grid_.pitch.x() * scale_ <= 0.5;
   std::vector<Run> runs;
+  std::vector<std::pair<int64_t, int64_t>> along;  // a span's runs along the fast axis
   for (const print::LayerSpans& layer : layers)
     for (int r = 0; r < layer.rows(); ++r) {
-      const std::array<Position, 2> row = rowPosition(grid_.height - 1 - r, layer.layer);
+      const std::array<Taps, 2> row = rowTaps(grid_.height - 1 - r, layer.layer);
       for (const print::VoxelSpan& s : layer.row(r)) {
         if (!s.shell) continue;
-        for (int d = 0; d < rows; ++d) {
-          const int64_t slow[2] = {row[0].voxel + (d & 1), row[1].voxel + (d >> 1)};
-          if (contiguous) {
-            runs.push_back({{slow[0], slow[1]}, fastPosition(s.begin).voxel, fastPosition(s.end - 1).voxel + next});
-            continue;
-          }
-          for (int x = s.begin; x < s.end; ++x)
-            if (const int64_t f = fastPosition(x).voxel; x == s.begin || f > runs.back().hi)
-              runs.push_back({{slow[0], slow[1]}, f, f + next});
+        along.clear();
+        for (int x = s.begin; x < s.end; ++x) {
+          const Taps t = fastTaps(x);
+          for (int k = 0; k < t.count; ++k)
+            if (const int64_t f = t.voxel(k); along.empty() || f > along.back().second + 1)
+              along.emplace_back(f, f);
             else
-              runs.back().hi = std::max(runs.back().hi, f + next);
+              along.back().second = std::max(along.back().second, f);
         }
+        for (int i = 0; i < row[0].count; ++i)
+          for (int j = 0; j < row[1].count; ++j)
+            for (const auto& [lo, hi] : along) runs.push_back({{row[0].voxel(i), row[1].voxel(j)}, lo, hi});
       }
     }
   std::sort(runs.begin(), runs.end());
@@ -131,35 +162,35 @@ void SolidVoxelColors::prepare(std::span<const print::LayerSpans> layers, const 
 void SolidVoxelColors::colors(int layer, int y, int begin, int end, float* rgba) const {
   const Samples& s = *samples_;
   const int fast = grid_.modelAxisOfX;
-  const std::array<Position, 2> row = rowPosition(y, layer);
-  // One cursor per row of solid voxels read (trilinear: the 4 rows around the print row), each
-  // moving forward with x.
-  const int rows = trilinear_ ? 4 : 1;
-  std::array<std::vector<synthesis::Voxel>::const_iterator, 4> at;
+  const std::array<Taps, 2> row = rowTaps(y, layer);
+  // One cursor per row of solid voxels the print row's footprint covers, each moving forward with x.
+  const int rows = row[0].count * row[1].count;
+  std::array<std::vector<synthesis::Voxel>::const_iterator, kMaxTaps * kMaxTaps> at;
+  std::array<float, kMaxTaps * kMaxTaps> rowWeight;
   for (int d = 0; d < rows; ++d) {
+    const int i = d % row[0].count, j = d / row[0].count;
     synthesis::Voxel first;
-    first[s.order[0]] = row[0].voxel + (d & 1);
-    first[s.order[1]] = row[1].voxel + (d >> 1);
-    first[fast] = fastPosition(begin).voxel;
+    first[s.order[0]] = row[0].voxel(i);
+    first[s.order[1]] = row[1].voxel(j);
+    first[fast] = fastTaps(begin).first;
     at[size_t(d)] = std::lower_bound(s.voxels.begin(), s.voxels.end(), first,
                                      [&](const auto& a, const auto& b) { return s.less(a, b); });
+    rowWeight[size_t(d)] = row[0].weight[size_t(i)] * row[1].weight[size_t(j)];
   }
   for (int x = begin; x < end; ++x, rgba += 4) {
-    const Position along = fastPosition(x);
+    const Taps along = fastTaps(x);
     float sum[3] = {0, 0, 0};
     for (int d = 0; d < rows; ++d) {
-      auto& i = at[size_t(d)];
-      while (i + 1 < s.voxels.end() && (*i)[fast] < along.voxel) ++i;
-      assert(i + (rows > 1) < s.voxels.end() && (*i)[fast] == along.voxel && "a voxel outside the prepared shell");
-      const float* c = &s.rgb[3 * size_t(i - s.voxels.begin())];
-      if (rows == 1) {
-        std::copy(c, c + 3, sum);
-        break;
+      auto& it = at[size_t(d)];
+      while (it + 1 < s.voxels.end() && (*it)[fast] < along.first) ++it;
+      for (int k = 0; k < along.count; ++k) {
+        auto tap = it;  // the row's voxels are sorted along the fast axis
+        while (tap + 1 < s.voxels.end() && (*tap)[fast] < along.voxel(k)) ++tap;
+        assert((*tap)[fast] == along.voxel(k) && "a voxel outside the prepared shell");
+        const float* c = &s.rgb[3 * size_t(tap - s.voxels.begin())];
+        const float w = rowWeight[size_t(d)] * along.weight[size_t(k)];
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += w * c[ch];
       }
-      // Trilinear: this row's two voxels along x, weighted by the row's share of the 4.
-      const float w = ((d & 1) ? row[0].fraction : 1.0f - row[0].fraction) *
-                      ((d >> 1) ? row[1].fraction : 1.0f - row[1].fraction);
-      for (int k = 0; k < 3; ++k) sum[k] += w * ((1.0f - along.fraction) * c[k] + along.fraction * c[3 + k]);
     }
     std::copy(sum, sum + 3, rgba);
     rgba[3] = 1.0f;

@@ -35,15 +35,26 @@ public:
   virtual void colors(int layer, int y, int begin, int end, float* rgba) const = 0;
 };
 
+/// How a print voxel reads the solid texture: the voxel under its centre (Nearest); where the
+/// print's finest pitch spans fewer than render::kSolidTrilinearBelow solid voxels (magnified), the 8
+/// voxels whose centres surround its centre, with trilinear weights (Trilinear, as texture bakes
+/// do); where it spans at least kSolidBoxFrom (minified, once the exemplar's smallest copy is
+/// reached: PrintJob::analysisDownsampling), the voxels its box overlaps, weighted by the overlap
+/// (Box: the mean colour of its footprint, up to SolidVoxelColors::kMaxTaps voxels per axis).
+enum class SolidSampling { Nearest, Trilinear, Box };
+const char* toString(SolidSampling sampling);
+inline constexpr double kSolidBoxFrom = 2.0;
+
 /// The solid texture in the frame of `texfab texture --mode solid`: a point p of the model (model
 /// units) has the colour of solid voxel floor(p * scale), synthesized lazily for the shell voxels
 /// of the prepared layers only, its colour the solid engine's colour of its triple
-/// (synthesis::solidColors) read as sRGB. Where the print's finest pitch is under
-/// render::kSolidTrilinearBelow solid voxels (a magnified texture), a print voxel blends the 8
-/// solid voxels whose centres surround its centre, in linear light, as texture bakes do, so that
-/// prints show no voxel blocks.
+/// (synthesis::solidColors) read as sRGB; print voxels sample it as SolidSampling says, blending in
+/// linear light.
 class SolidVoxelColors : public VoxelColorSource {
 public:
+  /// Voxels per axis a footprint blends at most.
+  static constexpr int kMaxTaps = 5;
+
   /// `scale`: solid voxels (exemplar pixels) per model unit, > 0. The exemplars and analysis must
   /// outlive the source. Throws texfab::Error when the print reaches beyond the solid texture's
   /// range (|position * scale| > 2^30).
@@ -55,26 +66,29 @@ public:
   /// Distinct solid voxels requested so far, and voxels synthesized for them (all levels).
   int64_t voxelsRequested() const { return requested_; }
   int64_t voxelsSynthesized() const { return synthesized_; }
-  /// Whether print voxels blend 8 solid voxels (a magnified texture) or take the one under them.
-  bool trilinear() const { return trilinear_; }
+  SolidSampling sampling() const { return sampling_; }
 
 private:
   struct Samples;
-  /// A model coordinate in solid voxels: the voxel below it (trilinear: the lower of the two
-  /// centres around it) and the fraction of the way to the next.
-  struct Position {
-    int64_t voxel;
-    float fraction;
+  /// The solid voxels a print voxel reads along one model axis: `count` of them from `first`,
+  /// `stride` apart, with their weights.
+  struct Taps {
+    int64_t first = 0, stride = 1;
+    int count = 1;
+    std::array<float, kMaxTaps> weight{1.0f};
+    int64_t voxel(int k) const { return first + int64_t(k) * stride; }
+    int64_t last() const { return voxel(count - 1); }
   };
-  Position solidPosition(double coordinate) const;
-  std::array<Position, 2> rowPosition(int y, int layer) const;  // of grid row y, along the two slow axes
-  Position fastPosition(int x) const;                          // along modelAxisOfX (the print's x)
+  Taps taps(double coordinate, int axis) const;                 // at a model coordinate along model axis `axis`
+  std::array<Taps, 2> rowTaps(int y, int layer) const;          // of grid row y, along the two slow axes
+  Taps fastTaps(int x) const;                                   // along modelAxisOfX (the print's x)
   const synthesis::SolidAnalysis& analysis_;
   const Image &ex_, &ey_, &ez_;
   synthesis::SolidSynthesisOptions options_;
   double scale_;
   print::PrintGrid grid_;
-  bool trilinear_;
+  Eigen::Vector3d modelPitch_;  // the print voxel's size along each model axis
+  SolidSampling sampling_ = SolidSampling::Nearest;
   std::unique_ptr<synthesis::SolidLevelCache> cache_;
   std::unique_ptr<Samples> samples_;
   int64_t requested_ = 0, synthesized_ = 0;

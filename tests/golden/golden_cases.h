@@ -68,7 +68,7 @@ inline constexpr Stage kFracture[] = {
     {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "a6a15d52f562e627"},
     {"encode", "4b1659ed76db330b"}};
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
-inline constexpr Stage kSliceLayers[] = {{"layers", "f5a4ceac04d174ac"}, {"manifest", "3cede8619e4319a7"}};
+inline constexpr Stage kSliceLayers[] = {{"layers", "dbd4250112e4a0bc"}, {"manifest", "c60d509d95f159fa"}};
 
 /// FNV-1a over bytes, continued from `h`.
 inline uint64_t fnv1a(const void* data, size_t size, uint64_t h = 0xcbf29ce484222325ull) {
@@ -390,7 +390,7 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
   options.grid = {.heightMm = 6, .dpiX = 127, .dpiY = 127, .layerMm = 0.2, .up = geometry::UpAxis::Y};
   options.voxelize.shellMm = 0.6;
   options.colors = print::PrintColors::Solid;
-  options.textureScale = 120;  // about one voxel per print voxel (see textureElephant)
+  options.textureScale = 120;  // 4 solid voxels along each print voxel: each averages its footprint (box)
   const Context ctx{.threads = 2, .backend = backend};
   const print::PrintJob job(geometry::readMesh(bundled("meshes/elephant.off")), options, ctx);
   const test::TempDir dir("texfab-golden");

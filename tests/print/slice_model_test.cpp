@@ -176,7 +176,7 @@ TEST(SliceModel, MagnifiedSolidColorsBlendTheirVoxelsTrilinearly) {
   const synthesis::SolidSynthesisOptions options;
   const Image& marble = golden::marble32();
   SolidVoxelColors colors(golden::solidAnalysis32(), marble, marble, marble, options, scale, grid);
-  ASSERT_TRUE(colors.trilinear());
+  ASSERT_EQ(colors.sampling(), SolidSampling::Trilinear);
   const std::vector<LayerSpans> layers = {voxelizer.voxelize(20)};
   colors.prepare(layers, {});
   // The synthesizer's colour of one voxel, in linear light.
@@ -222,6 +222,73 @@ TEST(SliceModel, MagnifiedSolidColorsBlendTheirVoxelsTrilinearly) {
   // With the nearest voxel, 4 of 5 neighbours would be equal and every step would cross a boundary.
   EXPECT_LT(equal, (across + within) / 20);
   EXPECT_LT(stepAcross / across, 1.5 * stepWithin / within);
+}
+
+// A print coarser than its solid texture (3 solid voxels along each print voxel): each print voxel
+// is the mean of the solid voxels its box overlaps, weighted by the overlap, so that it shows the
+// material prefiltered rather than one aliased voxel.
+TEST(SliceModel, MinifiedSolidColorsAverageTheirFootprint) {
+  const geometry::Mesh sphere = test::makeIcoSphere(2.0f, 3);
+  const PrintGrid grid = gridFor(sphere, 0.1);
+  const LayerVoxelizer voxelizer(sphere, grid);
+  const double scale = 30.0;
+  const Image& marble = golden::marble32();
+  SolidVoxelColors colors(golden::solidAnalysis32(), marble, marble, marble, {}, scale, grid);
+  ASSERT_EQ(colors.sampling(), SolidSampling::Box);
+  const std::vector<LayerSpans> layers = {voxelizer.voxelize(20)};
+  colors.prepare(layers, {});
+  // Print voxels to check, each with its footprint: per axis the overlapped voxels and weights.
+  struct Check {
+    Eigen::Vector3f color;
+    std::array<std::vector<std::pair<int64_t, double>>, 3> taps;
+    int64_t nearest[3];  // the voxel under the centre
+  };
+  std::vector<Check> checks;
+  std::vector<synthesis::Voxel> voxels;
+  for (int r = 0; r < layers[0].rows() && checks.size() < 24; r += 9)
+    for (const print::VoxelSpan& s : layers[0].row(r)) {
+      if (!s.shell) continue;
+      const int y = grid.height - 1 - r;
+      std::vector<float> rgba(4 * size_t(s.end - s.begin));
+      colors.colors(20, y, s.begin, s.end, rgba.data());
+      for (int x = s.begin; x < s.end && checks.size() < 24; x += 5) {
+        Check c;
+        c.color = Eigen::Vector3f(&rgba[4 * size_t(x - s.begin)]);
+        const Eigen::Vector3d center = grid.center(x, y, 20);
+        for (int a = 0; a < 3; ++a) {
+          const double lo = (center[a] - 0.05) * scale, hi = (center[a] + 0.05) * scale;
+          for (int64_t v = int64_t(std::floor(lo)); double(v) < hi; ++v)
+            c.taps[size_t(a)].push_back({v, (std::min(hi, double(v + 1)) - std::max(lo, double(v))) / (hi - lo)});
+          c.nearest[a] = int64_t(std::floor(center[a] * scale));
+        }
+        for (const auto& [vx, wx] : c.taps[0])
+          for (const auto& [vy, wy] : c.taps[1])
+            for (const auto& [vz, wz] : c.taps[2]) voxels.push_back({vx, vy, vz});
+        voxels.push_back({c.nearest[0], c.nearest[1], c.nearest[2]});
+        checks.push_back(c);
+      }
+    }
+  ASSERT_EQ(checks.size(), 24u);
+  int different = 0;
+  const synthesis::SolidSynthesisResult alone = synthesis::synthesizeSolid(golden::solidAnalysis32(), voxels, {});
+  std::vector<float> rgb;
+  synthesis::solidColors(alone.triples, marble, marble, marble, rgb);
+  const auto colorAt = [&](size_t i) {
+    Eigen::Vector3f out;
+    for (int ch = 0; ch < 3; ++ch) out[ch] = srgbToLinear(rgb[rgb.size() == voxels.size() ? i : 3 * i + size_t(ch)]);
+    return out;
+  };
+  size_t i = 0;
+  for (const Check& c : checks) {
+    Eigen::Vector3f expected = Eigen::Vector3f::Zero();
+    for (const auto& [vx, wx] : c.taps[0])
+      for (const auto& [vy, wy] : c.taps[1])
+        for (const auto& [vz, wz] : c.taps[2]) expected += float(wx * wy * wz) * colorAt(i++);
+    EXPECT_LT((c.color - expected).cwiseAbs().maxCoeff(), 1e-5f);
+    const Eigen::Vector3f nearest = colorAt(i++);
+    different += (nearest - expected).cwiseAbs().maxCoeff() > 1e-3f;
+  }
+  EXPECT_GT(different, 12) << "the footprint's mean is mostly not the voxel under its centre";
 }
 
 TEST(SliceModel, ShardsThreadsAndBatchesDoNotChangeAByte) {
