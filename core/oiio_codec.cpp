@@ -122,13 +122,18 @@ uint64_t mostPixels(std::string_view format, uint64_t bytes) {
   return 0;
 }
 
-// Throws when a `format` image of `bytes` bytes claims width x height pixels, more than it can encode.
-void checkClaimedPixels(std::string_view format, uint64_t width, uint64_t height, uint64_t bytes,
+// Throws when a `format` image of `bytes` bytes claims width x height pixels of `channels`, more
+// than it can encode. PNG's and TIFF's bounds hold per sample stored, and a stored sample (a
+// palette index) gives at most 4 channels: so per 4 channels too (a TIFF of 769 channels in 194
+// bytes); JPEG's per pixel, whatever its channels (subsampled chroma).
+void checkClaimedPixels(std::string_view format, uint64_t width, uint64_t height, uint64_t channels, uint64_t bytes,
                         const std::string& name) {
   const uint64_t most = mostPixels(format, bytes);
-  if (most > 0 && width * height > most)
+  const uint64_t perPixel = format == "tiff" || format == "png" ? (channels + 3) / 4 : 1;
+  if (most > 0 && width * height * std::max<uint64_t>(perPixel, 1) > most)
     throw Error(name + ": corrupt " + std::string(format) + ": it claims " + std::to_string(width) + "x" +
-                std::to_string(height) + " pixels, more than its " + std::to_string(bytes) + " bytes can hold");
+                std::to_string(height) + " pixels" + (channels > 4 ? " of " + std::to_string(channels) + " channels" : "") +
+                ", more than its " + std::to_string(bytes) + " bytes can hold");
 }
 
 // `sourceBytes`: the size of the file or memory the image is read from.
@@ -137,7 +142,8 @@ Image decode(OIIO::ImageInput& in, const std::string& name, uint64_t sourceBytes
   checkImageSize(spec.width, spec.height, name);
   // A corrupt header that claims a huge image: decoders allocate what it claims before they find
   // the data missing.
-  checkClaimedPixels(in.format_name(), uint64_t(spec.width), uint64_t(spec.height), sourceBytes, name);
+  checkClaimedPixels(in.format_name(), uint64_t(spec.width), uint64_t(spec.height), uint64_t(std::max(spec.nchannels, 0)),
+                     sourceBytes, name);
   if (spec.depth > 1) throw Error(name + ": volume images are not supported");
   if (spec.nchannels < 1) throw Error(name + ": image has no channels");
   const uint64_t bytes = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels) * sizeof(float);
@@ -232,13 +238,52 @@ void checkExrHeader(std::span<const uint8_t> head, uint64_t fileSize, const std:
 // logical screen's size: a screen larger than the file can fill is refused before.
 void checkGifScreen(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
   if (head.size() < 10 || std::memcmp(head.data(), "GIF8", 4) != 0) return;
-  checkClaimedPixels("gif", head[6] | unsigned(head[7]) << 8, head[8] | unsigned(head[9]) << 8, fileSize, name);
+  checkClaimedPixels("gif", head[6] | unsigned(head[7]) << 8, head[8] | unsigned(head[9]) << 8, 1, fileSize, name);
+}
+
+// OpenImageIO 2.4 decompresses a TIFF's strips (or tiles) by the positions and sizes its first
+// directory states: a 180-byte file whose 1 strip offset and 33 strip sizes disagree, zip-compressed,
+// corrupted its heap and crashed texfab (the image_file fuzz target). A directory whose offsets and
+// sizes differ in number, or name a strip past the file's end, is refused here (TIFF 6.0, section 2,
+// "Image File Directory"); returns quietly where `head` does not hold what it needs (BigTIFF too).
+void checkTiffStrips(std::span<const uint8_t> head, uint64_t fileSize, const std::string& name) {
+  if (head.size() < 8) return;
+  const bool little = head[0] == 'I' && head[1] == 'I';
+  if (!little && !(head[0] == 'M' && head[1] == 'M')) return;
+  const auto u16 = [&](uint64_t at) { return little ? uint32_t(head[at] | head[at + 1] << 8) : uint32_t(head[at] << 8 | head[at + 1]); };
+  const auto u32 = [&](uint64_t at) { return little ? u16(at) | u16(at + 2) << 16 : u16(at) << 16 | u16(at + 2); };
+  if (u16(2) != 42) return;
+  const uint64_t ifd = u32(4);
+  if (ifd + 2 > head.size() || ifd + 2 + 12 * uint64_t(u16(ifd)) > head.size()) return;
+  struct Values {
+    uint32_t type = 0, count = 0;
+    uint64_t at = 0;  // where the values start
+  } offsets, sizes;
+  for (uint64_t e = ifd + 2, end = e + 12 * uint64_t(u16(ifd)); e < end; e += 12) {
+    const uint32_t tag = u16(e), type = u16(e + 2), count = u32(e + 4);
+    Values* v = tag == 273 || tag == 324 ? &offsets : tag == 279 || tag == 325 ? &sizes : nullptr;  // strips, tiles
+    if (!v) continue;
+    if (type != 3 && type != 4) return;  // SHORT or LONG; anything else is libtiff's to judge
+    *v = {type, count, uint64_t(count) * (type == 3 ? 2 : 4) <= 4 ? e + 8 : uint64_t(u32(e + 8))};
+  }
+  if (offsets.type == 0 || sizes.type == 0) return;
+  if (offsets.count != sizes.count)
+    throw Error(name + ": corrupt TIFF: it states " + std::to_string(offsets.count) + " strip positions but " +
+                std::to_string(sizes.count) + " strip sizes");
+  const auto value = [&](const Values& v, uint32_t i) { return v.type == 3 ? u16(v.at + 2 * i) : u32(v.at + 4 * i); };
+  for (uint32_t i = 0; i < offsets.count; ++i) {
+    if (offsets.at + 4 * (uint64_t(i) + 1) > head.size() || sizes.at + 4 * (uint64_t(i) + 1) > head.size()) return;
+    if (uint64_t(value(offsets, i)) + value(sizes, i) > fileSize)
+      throw Error(name + ": corrupt TIFF: its strip " + std::to_string(i + 1) + " of " + std::to_string(offsets.count) +
+                  " lies past the end of the file");
+  }
 }
 
 // The checks above, on what a file's or a buffer's first bytes claim.
 void checkClaims(std::span<const uint8_t> head, uint64_t size, const std::string& name) {
   checkExrHeader(head, size, name);
   checkGifScreen(head, size, name);
+  checkTiffStrips(head, size, name);
 }
 
 // checkClaims on a file's first 64 KB; returns the file's size (0 when the system does not say).
