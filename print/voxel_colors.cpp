@@ -165,6 +165,7 @@ void SolidVoxelColors::colors(int layer, int y, int begin, int end, float* rgba)
   const std::array<Taps, 2> row = rowTaps(y, layer);
   // One cursor per row of solid voxels the print row's footprint covers, each moving forward with x.
   const int rows = row[0].count * row[1].count;
+  const int64_t firstAlong = fastTaps(begin).first;
   std::array<std::vector<synthesis::Voxel>::const_iterator, kMaxTaps * kMaxTaps> at;
   std::array<float, kMaxTaps * kMaxTaps> rowWeight;
   for (int d = 0; d < rows; ++d) {
@@ -172,7 +173,7 @@ void SolidVoxelColors::colors(int layer, int y, int begin, int end, float* rgba)
     synthesis::Voxel first;
     first[s.order[0]] = row[0].voxel(i);
     first[s.order[1]] = row[1].voxel(j);
-    first[fast] = fastTaps(begin).first;
+    first[fast] = firstAlong;
     at[size_t(d)] = std::lower_bound(s.voxels.begin(), s.voxels.end(), first,
                                      [&](const auto& a, const auto& b) { return s.less(a, b); });
     rowWeight[size_t(d)] = row[0].weight[size_t(i)] * row[1].weight[size_t(j)];
