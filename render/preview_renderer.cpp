@@ -14,6 +14,7 @@
 #include <numbers>
 #include <numeric>
 #include <set>
+#include <span>
 
 namespace texfab::render {
 
@@ -30,10 +31,11 @@ float hashUnit(uint32_t x, uint32_t y, uint32_t s, uint32_t d) {
   return float(counterHash(x, y, s, d) >> 8) * (1.0f / 16777216.0f);
 }
 
-// A lobe of a normal distribution in world space.
+// A lobe of a normal distribution in world space: its axis, sharpness κ, weight and mean cosine
+// to its axis (the length of its normals' mean, 1 for a single normal).
 struct WorldLobe {
   Vector3f axis;
-  float sharpness, weight;
+  float sharpness, weight, length;
 };
 
 // The most lobes a footprint gathers: 4 texels of 2 levels, 8 lobes each.
@@ -52,7 +54,7 @@ void addLobes(std::array<WorldLobe, kMaxFootprintLobes>& lobes, int& count, cons
   const auto add = [&](int level, float weight) {
     if (!(weight > 0)) return;
     if (level == 0) {
-      if (mapped.squaredNorm() > 1e-12f) lobes[size_t(count++)] = {mapped.normalized(), kMaxVmfSharpness, weight};
+      if (mapped.squaredNorm() > 1e-12f) lobes[size_t(count++)] = {mapped.normalized(), kMaxVmfSharpness, weight, 1.0f};
       return;
     }
     const NdfLevel& l = chain.levels[size_t(level)];
@@ -69,7 +71,8 @@ void addLobes(std::array<WorldLobe, kMaxFootprintLobes>& lobes, int& count, cons
         if (!(lobe.weight > 0)) continue;
         const Vector3f a = lobe.axis();
         const Vector3f world = normalScale * a.x() * frame[0] + normalScale * a.y() * frame[1] + a.z() * frame[2];
-        if (world.squaredNorm() > 1e-12f) lobes[size_t(count++)] = {world.normalized(), lobe.sharpness(), w * lobe.weight};
+        if (world.squaredNorm() > 1e-12f)
+          lobes[size_t(count++)] = {world.normalized(), lobe.sharpness(), w * lobe.weight, std::min(lobe.mean.norm(), 1.0f)};
       }
     }
   };
@@ -297,7 +300,8 @@ double renderMemoryBytes(const geometry::Mesh& mesh, const RenderOptions& option
       if (!*t || !seen.insert(t->image.get()).second) continue;
       const double texels = double(t->image->width) * t->image->height;
       bytes += kPyramid * texels * 4 * sizeof(float);
-      if (t == &m.normalTexture && options.filterNormalMaps)  // one lobe per texel at level 0, then 8
+      // Fitted lobes: one per texel at level 0, then 8.
+      if (t == &m.normalTexture && options.normalMapFiltering == NormalMapFiltering::Lobes)
         bytes += texels * sizeof(VmfLobe) * (1 + FilterNormalMapOptions{}.lobes * (kPyramid - 1));
     }
   return bytes;
@@ -311,7 +315,7 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
   if (!(o.fovYDegrees > 1 && o.fovYDegrees < 170)) throw Error("render: field of view must be in (1, 170) degrees");
   if (!(o.up.allFinite() && o.up.norm() > 0)) throw Error("render: the up direction must be a non-zero vector");
   if (!(o.margin > 0.01f && o.margin < 100)) throw Error("render: margin must be in (0.01, 100)");
-  if (o.filterNormalMaps) filterNormalMaps(o, ctx);
+  if (o.normalMapFiltering == NormalMapFiltering::Lobes) filterNormalMaps(o, ctx);
   const View view(o, mesh_, scene_.bounds());
   Image out(o.width, o.height, o.transparentBackground ? 4 : 3, PixelFormat::UInt8);
   parallelFor(0, o.height, ctx, [&](int y0, int y1) {
@@ -320,17 +324,17 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
         Vector3f sum = Vector3f::Zero();
         float coverage = 0;
         for (int s = 0; s < view.spp; ++s) addSample(view, px, py, s, sum, coverage);
+        // The surface's mean radiance, its highlights rolled off (Reinhard-style): after the pixel's
+        // samples are averaged, so that the pixel is the tone of the light it receives, as filtered
+        // shading (a normal map's lobes) computes it.
+        Vector3f c = coverage > 0 ? Vector3f(sum / coverage) : Vector3f::Zero();
+        c = c.cwiseQuotient(Vector3f::Ones() + 0.15f * c);
+        const float a = coverage / float(view.spp);
         float* dst = out.pixel(px, py);
-        if (o.transparentBackground) {
-          const float a = coverage / float(view.spp);
-          // Colour un-premultiplied by coverage, so edges do not darken when composited.
-          const Vector3f c = coverage > 0 ? Vector3f(sum / coverage) : Vector3f::Zero();
-          for (int k = 0; k < 3; ++k) dst[k] = linearToSrgb(c[k]);
-          dst[3] = a;
-        } else {
-          const Vector3f c = sum / float(view.spp);
-          for (int k = 0; k < 3; ++k) dst[k] = linearToSrgb(c[k]);
-        }
+        // Transparent: colour un-premultiplied by coverage, so edges do not darken when composited.
+        if (!o.transparentBackground) c = a * c + (1 - a) * view.background;
+        for (int k = 0; k < 3; ++k) dst[k] = linearToSrgb(c[k]);
+        if (o.transparentBackground) dst[3] = a;
         // Quantize now, so the image holds exactly the 8-bit values written.
         for (int k = 0; k < out.channels; ++k) dst[k] = std::round(std::clamp(dst[k], 0.0f, 1.0f) * 255.0f) / 255.0f;
       }
@@ -338,29 +342,24 @@ Image PreviewRenderer::render(const RenderOptions& o, const Context& ctx) const 
   return out;
 }
 
-// Sample s of pixel (px, py): a stratified, jittered camera ray, shaded where it hits.
+// Sample s of pixel (px, py): a stratified, jittered camera ray (one sample: through the pixel's
+// centre, where a filtered texture lookup is meant), shaded where it hits. Adds the surface's
+// radiance times its opacity to `sum`, and its opacity to `coverage`.
 void PreviewRenderer::addSample(const View& view, int px, int py, int s, Vector3f& sum, float& coverage) const {
   const RenderOptions& o = view.o;
-  const float jx = (float(s % view.strata) + hashUnit(uint32_t(px), uint32_t(py), uint32_t(s), 0)) / float(view.strata);
-  const float jy = (float(s / view.strata) + hashUnit(uint32_t(px), uint32_t(py), uint32_t(s), 1)) / float(view.strata);
+  const auto jitter = [&](int stratum, uint32_t dimension) {
+    return view.spp == 1 ? 0.5f : (float(stratum) + hashUnit(uint32_t(px), uint32_t(py), uint32_t(s), dimension)) / float(view.strata);
+  };
+  const float jx = jitter(s % view.strata, 0), jy = jitter(s / view.strata, 1);
   const float sx = (2.0f * (float(px) + jx) / float(o.width) - 1.0f) * view.tanHalf * view.aspect;
   const float sy = (1.0f - 2.0f * (float(py) + jy) / float(o.height)) * view.tanHalf;
   const Vector3f dir = (view.forward + sx * view.right + sy * view.up).normalized();
   const geometry::RayHit hit = scene_.intersect({view.eye, dir, 0.0f, std::numeric_limits<float>::infinity()});
-  if (!hit.hit) {
-    if (!o.transparentBackground) sum += view.background;
-    return;
-  }
-  coverage += 1;
+  if (!hit.hit) return;
   const Surface surface = surfaceAt(view, hit, dir);
-  Vector3f color = lightSurface(view, surface, dir, px, py, s);
-  // Soft highlight roll-off (Reinhard-style), on the shaded surface only.
-  color = color.cwiseQuotient(Vector3f::Ones() + 0.15f * color);
-  // Blend partially transparent materials with the background.
   const float opacity = surface.material->blend ? std::clamp(surface.base.w(), 0.0f, 1.0f) : 1.0f;
-  if (opacity < 1 && !o.transparentBackground) color = opacity * color + (1 - opacity) * view.background;
-  else if (opacity < 1) coverage -= 1 - opacity, color *= opacity;
-  sum += color;
+  sum += opacity * lightSurface(view, surface, dir, px, py, s);
+  coverage += opacity;
 }
 
 // The hit's normals (double-sided: facing the viewer) and material, with its textures sampled at
@@ -413,11 +412,17 @@ PreviewRenderer::Surface PreviewRenderer::surfaceAt(const View& view, const geom
         const Vector4f m = lookup(maps.normal, material.normalTexture);
         const Vector3f local(material.normalScale * (2 * m.x() - 1), material.normalScale * (2 * m.y() - 1), 2 * m.z() - 1);
         const Vector3f mapped = local.x() * tangent + local.y() * bitangent + local.z() * n;
-        if (view.o.filterNormalMaps && maps.normalDistribution) {
-          const float lod = lodOf(maps.normal.levels[0], material.normalTexture);
-          if (lod > 0)
-            addLobes(f.lobes, f.lobeCount, *maps.normalDistribution, material.normalTexture.apply(uv), lod,
-                     material.normalScale, {tangent, bitangent, n}, mapped);
+        const float lod = lodOf(maps.normal.levels[0], material.normalTexture);
+        const NormalMapFiltering filtering = view.o.normalMapFiltering;
+        if (lod > 0 && filtering == NormalMapFiltering::Lobes && maps.normalDistribution) {
+          addLobes(f.lobes, f.lobeCount, *maps.normalDistribution, material.normalTexture.apply(uv), lod,
+                   material.normalScale, {tangent, bitangent, n}, mapped);
+        } else if (lod > 0 && filtering == NormalMapFiltering::Toksvig && mapped.squaredNorm() > 1e-12f) {
+          // The mean normal's length |m| = κ / (κ + 1) for Toksvig's exponent |m|s / (|m| + s(1 - |m|)).
+          const float length = std::min(Vector3f(2 * m.x() - 1, 2 * m.y() - 1, 2 * m.z() - 1).norm(), 1.0f);
+          const float sharpness = std::min(length / std::max(1 - length, 1e-6f), kMaxVmfSharpness);
+          f.lobes[0] = {mapped.normalized(), sharpness, 1.0f, length};
+          f.lobeCount = 1;
         }
         if (mapped.squaredNorm() > 1e-12f) n = mapped.normalized();
       }
@@ -439,8 +444,18 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
   const Vector3f diffuse = (1 - metallic) * albedo;
   const Vector3f f0 = Vector3f::Constant(0.04f) * (1 - metallic) + metallic * albedo;
   const Vector3f offset = f.p + view.eps * f.ng;
+  // The mean cosine of the surface's normals with a direction: the normal's, or over the footprint's
+  // normal distribution each lobe's mean normal's (exact for the fill and the sky, which are linear
+  // in the normal, and for the key light where a lobe lies on its lit side).
+  const std::span<const WorldLobe> lobes(f.lobes.data(), size_t(f.lobeCount));
+  const auto cosine = [&](const Vector3f& d) {
+    if (lobes.empty()) return std::max(0.0f, n.dot(d));
+    float sum = 0;
+    for (const WorldLobe& l : lobes) sum += l.weight * l.length * std::max(0.0f, l.axis.dot(d));
+    return sum;
+  };
   Vector3f color = Vector3f::Zero();
-  const float nl = n.dot(view.light);
+  const float nl = cosine(view.light);
   if (nl > 0 && f.ng.dot(view.light) > -0.2f) {
     const bool lit = !o.shadows || !scene_.occluded({offset, view.light, 0.0f, 4.0f * view.radius + view.distance});
     if (lit) {
@@ -453,11 +468,10 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
         return (exponent + 8) / (8 * kPi) * std::pow(std::max(normal.dot(half), 0.0f), exponent);
       };
       float specular = 0;
-      if (f.lobeCount == 0) {
+      if (lobes.empty()) {
         specular = blinnPhong(n, h, shininess) * nl;
       } else {
-        for (int j = 0; j < f.lobeCount; ++j) {
-          const WorldLobe& l = f.lobes[size_t(j)];
+        for (const WorldLobe& l : lobes) {
           const float exponent = convolvedExponent(l.sharpness, shininess);
           specular += l.weight * blinnPhong(l.axis, h, exponent) * std::max(0.0f, l.axis.dot(view.light));
         }
@@ -467,7 +481,7 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
   }
   // A weak fill light from the camera, never shadowed: faces in deep gaps (the cut faces of
   // exploded pieces, the inside of a crack) keep their colour where the key and the sky do not reach.
-  color += 0.1f * diffuse * std::max(0.0f, -n.dot(dir));
+  color += 0.1f * diffuse * cosine(-dir);
   Vector3f ambient = Vector3f::Zero();
   if (o.aoSamples > 0) {
     Vector3f ta, tb;
@@ -491,7 +505,9 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
     }
     ambient /= float(o.aoSamples);
   } else {
-    const float k = 0.5f * (n.dot(view.modelUp) + 1);
+    Vector3f mean = lobes.empty() ? n : Vector3f::Zero();  // the mean normal
+    for (const WorldLobe& l : lobes) mean += l.weight * l.length * l.axis;
+    const float k = 0.5f * (mean.dot(view.modelUp) + 1);
     ambient = k * kSkyColor + (1 - k) * kGroundColor;
   }
   color += ambient.cwiseProduct(diffuse + 0.25f * f0);

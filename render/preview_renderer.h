@@ -24,6 +24,13 @@
 
 namespace texfab::render {
 
+/// How a minified tangent-space normal map shades its highlights.
+enum class NormalMapFiltering {
+  Mip,     ///< the MIP-mapped normal, renormalized: from afar bumps turn flat and shiny
+  Toksvig, ///< one lobe around the MIP-mapped mean normal, widened by its shortening [Toksvig 2005]
+  Lobes,   ///< the fitted distribution of normals, several vMF lobes (filter_normal_map.h)
+};
+
 struct RenderOptions {
   int width = 800;        ///< pixels
   int height = 800;
@@ -38,11 +45,10 @@ struct RenderOptions {
   Eigen::Vector3f background{1.0f, 1.0f, 1.0f}; ///< sRGB background colour when not transparent
   int aoSamples = 1;              ///< ambient-occlusion rays per camera sample (0 = no AO)
   bool shadows = true;            ///< key-light shadow rays
-  /// Shade the highlights of minified normal maps from their filtered normal distributions
-  /// (filter_normal_map.h; fitted on the first render that asks, about 3-5 s for a 1024^2 map on
-  /// 2 cores, and not for rough dielectrics, where it cannot show), else from their MIP-mapped
-  /// normals, whose bumps turn flat and shiny at a distance.
-  bool filterNormalMaps = true;
+  /// Lobes: minified normal maps shade from their filtered normal distributions (fitted on the
+  /// first render that asks, about 3-5 s for a 1024^2 map on 2 cores, and not for rough
+  /// dielectrics, where it cannot show: those shade as Mip).
+  NormalMapFiltering normalMapFiltering = NormalMapFiltering::Lobes;
   /// Where fitted normal distributions are kept between runs (the analysis cache); none: fitted
   /// every time.
   synthesis::AnalysisCacheSettings normalMapCache;

@@ -231,7 +231,7 @@ void Flags::camera(render::RenderOptions& o) {
          {-3600, 3600});
   option("--elevation", o.elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
   app_->add_flag_function(
-      "--no-ndf-filtering", [&o](int64_t) { o.filterNormalMaps = false; },
+      "--no-ndf-filtering", [&o](int64_t) { o.normalMapFiltering = render::NormalMapFiltering::Mip; },
       "Shade normal maps seen from afar from their MIP-mapped normals (bumps then look flat and shiny) instead "
       "of their filtered normal distributions (Han et al. 2007: about 3-5 s more for a 1024^2 normal map on a "
       "glossy or metallic material)");

@@ -1,14 +1,20 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Normal maps for the tests of normal-map filtering and of its shading in previews: three materials
-// as tiling height fields turned into tangent-space normal maps.
+// as tiling height fields turned into tangent-space normal maps; a glossy metal sphere that wears
+// one, and the views and the error measure of its renders.
 #include "core/hash.h"
 #include "core/image.h"
+#include "geometry/mesh.h"
+#include "render/preview_renderer.h"
 
 #include <Eigen/Core>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -61,5 +67,80 @@ inline std::vector<TestMap> testMaps(int size) {
                   })});
   return maps;
 }
+
+// A latitude-longitude sphere of radius 1 (y up) of glossy metal (roughness 0.3) whose normal map
+// is tiled `tilesAround` times around it and tilesAround / 2 times from pole to pole.
+inline geometry::Mesh normalMappedSphere(const Image& normalMap, int tilesAround, int segments = 256) {
+  geometry::Mesh m;
+  const int rings = segments / 2;
+  const double pi = 3.14159265358979323846;
+  for (int j = 0; j <= rings; ++j)
+    for (int i = 0; i <= segments; ++i) {
+      const double theta = pi * j / rings, phi = 2 * pi * i / segments;
+      m.positions.emplace_back(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)), float(std::sin(theta) * std::sin(phi)));
+    }
+  const auto index = [&](int i, int j) { return uint32_t(j * (segments + 1) + i); };
+  const auto uv = [&](int i, int j) {
+    return Eigen::Vector2f(float(tilesAround * i) / float(segments), 0.5f * float(tilesAround) * (1 - float(j) / float(rings)));
+  };
+  for (int j = 0; j < rings; ++j)
+    for (int i = 0; i < segments; ++i) {
+      const std::array<std::array<int, 2>, 6> corners = {{{i, j}, {i, j + 1}, {i + 1, j + 1}, {i, j}, {i + 1, j + 1}, {i + 1, j}}};
+      for (int t = 0; t < 2; ++t) {
+        std::array<uint32_t, 3> triangle;
+        for (int k = 0; k < 3; ++k) {
+          const auto& c = corners[size_t(3 * t + k)];
+          triangle[size_t(k)] = index(c[0], c[1]);
+          m.uvs.push_back(uv(c[0], c[1]));
+        }
+        m.triangles.push_back(triangle);
+      }
+    }
+  geometry::computeSmoothNormals(m);
+  geometry::Material metal;
+  metal.baseColorFactor = Eigen::Vector4f(0.95f, 0.9f, 0.8f, 1.0f);
+  metal.metallicFactor = 1.0f;
+  metal.roughnessFactor = 0.3f;
+  metal.normalTexture.image = std::make_shared<Image>(normalMap);
+  m.materials = {metal};
+  return m;
+}
+
+// The diameter in pixels at which a normalMappedSphere shows `texelsPerPixel` texels of its
+// normal map per pixel at its centre: tilesAround map widths span its circumference 2π.
+inline int sphereDiameter(int mapSize, int tilesAround, int texelsPerPixel) {
+  return int(std::lround(tilesAround * mapSize / (3.14159265358979323846 * texelsPerPixel)));
+}
+
+// A view that frames the sphere at `diameter` pixels: key light only, no shadows, no AO (nothing
+// but the shading of the normals), transparent background.
+inline render::RenderOptions sphereView(int diameter, int samplesPerPixel, render::NormalMapFiltering filtering) {
+  render::RenderOptions o;
+  o.width = o.height = int(std::lround(1.1 * diameter)) + 2;
+  o.margin = float(o.width) / float(diameter);
+  o.aoSamples = 0;
+  o.shadows = false;
+  o.transparentBackground = true;
+  o.samplesPerPixel = samplesPerPixel;
+  o.normalMapFiltering = filtering;
+  return o;
+}
+
+// The RMS difference of the colour channels over the pixels both images cover whole (a
+// silhouette's coverage is not what normal-map filtering changes).
+inline double coveredRms(const Image& image, const Image& truth) {
+  double sum = 0;
+  size_t n = 0;
+  for (int y = 0; y < truth.height; ++y)
+    for (int x = 0; x < truth.width; ++x) {
+      if (truth.at(x, y, 3) < 1 || image.at(x, y, 3) < 1) continue;
+      for (int c = 0; c < 3; ++c, ++n) sum += std::pow(double(image.at(x, y, c)) - truth.at(x, y, c), 2);
+    }
+  return std::sqrt(sum / double(std::max<size_t>(n, 1)));
+}
+
+// Supersampling that resolves every texel (each sample's footprint at most one texel), at least
+// 256 samples per pixel.
+inline int truthSamples(int texelsPerPixel) { return std::clamp(texelsPerPixel * texelsPerPixel, 256, 4096); }
 
 } // namespace texfab::test

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// A measuring program, not a benchmark: normal-map filtering in previews (issue 38). A glossy metal
+// sphere whose normal map (256^2, tiled 16 x 8 times) is seen at 4, 16 and 64 texels per pixel at
+// the sphere's centre, rendered with each NormalMapFiltering at one sample per pixel and compared
+// with the supersampled truth (full-resolution normals, 256-4096 samples per pixel): the RMS
+// error of the 8-bit sRGB pixels the sphere covers, for the three test materials. With a path it
+// also draws the picture of docs/normal-map-filtering.md (the stone: the truth at 1024 samples per
+// pixel, then MIP-mapped normals, Toksvig and the fitted lobes at 4; the near view's centre, the far
+// views enlarged).
+//   build/bench/normal_map_sphere [docs/images/normal_map_filtering.png]
+#include "core/image_io.h"
+#include "tests/render/test_normal_maps.h"
+
+#include <cstdio>
+
+namespace {
+
+using namespace texfab;
+using render::NormalMapFiltering;
+
+constexpr int kMapSize = 256, kTilesAround = 16;
+constexpr std::array<int, 3> kTexelsPerPixel = {4, 16, 64};
+
+void printTable() {
+  std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | MIP / lobes |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  for (const test::TestMap& m : test::testMaps(kMapSize)) {
+    const geometry::Mesh sphere = test::normalMappedSphere(m.map, kTilesAround);
+    const render::PreviewRenderer renderer(sphere);
+    for (int texelsPerPixel : kTexelsPerPixel) {
+      const int diameter = test::sphereDiameter(kMapSize, kTilesAround, texelsPerPixel);
+      const Image truth =
+          renderer.render(test::sphereView(diameter, test::truthSamples(texelsPerPixel), NormalMapFiltering::Mip));
+      std::array<double, 3> error{};
+      for (NormalMapFiltering f : {NormalMapFiltering::Mip, NormalMapFiltering::Toksvig, NormalMapFiltering::Lobes})
+        error[size_t(f)] = test::coveredRms(renderer.render(test::sphereView(diameter, 1, f)), truth);
+      std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.1fx |\n", m.name.c_str(), texelsPerPixel, diameter, error[0],
+                  error[1], error[2], error[0] / error[2]);
+      std::fflush(stdout);
+    }
+  }
+}
+
+void drawPicture(const char* path) {
+  const geometry::Mesh sphere = test::normalMappedSphere(test::testMaps(kMapSize)[0].map, kTilesAround);
+  const render::PreviewRenderer renderer(sphere);
+  constexpr int kTile = 160, kColumns = 4;
+  Image sheet(kColumns * kTile, int(kTexelsPerPixel.size()) * kTile, 3, PixelFormat::UInt8);
+  for (size_t row = 0; row < kTexelsPerPixel.size(); ++row) {
+    const int diameter = test::sphereDiameter(kMapSize, kTilesAround, kTexelsPerPixel[row]);
+    for (int column = 0; column < kColumns; ++column) {
+      const Image v = renderer.render(column == 0 ? test::sphereView(diameter, 1024, NormalMapFiltering::Mip)
+                                                  : test::sphereView(diameter, 4, NormalMapFiltering(column - 1)));
+      // Over white: the view's centre where it is larger than the tile, else the view enlarged
+      // (nearest) to the tile.
+      const bool crop = v.width >= kTile;
+      const int offset = crop ? (v.width - kTile) / 2 : 0;
+      for (int y = 0; y < kTile; ++y)
+        for (int x = 0; x < kTile; ++x) {
+          const int vx = crop ? offset + x : x * v.width / kTile, vy = crop ? offset + y : y * v.height / kTile;
+          for (int c = 0; c < 3; ++c)
+            sheet.at(column * kTile + x, int(row) * kTile + y, c) = v.at(vx, vy, c) * v.at(vx, vy, 3) + 1 - v.at(vx, vy, 3);
+        }
+    }
+  }
+  writeImage(sheet, path);
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+  if (argc > 2) {
+    std::fprintf(stderr, "usage: normal_map_sphere [PICTURE.png]\n");
+    return 2;
+  }
+  printTable();
+  if (argc == 2) drawPicture(argv[1]);
+  return 0;
+}
