@@ -230,11 +230,17 @@ void Flags::camera(render::RenderOptions& o) {
   option("--azimuth", o.azimuthDegrees, "Camera angle around the up axis, degrees (0 = from the model's front)",
          {-3600, 3600});
   option("--elevation", o.elevationDegrees, "Camera angle above the horizon, degrees", {-89.9, 89.9});
+  using render::NormalMapFiltering;
+  choice("--normal-filtering", o.normalMapFiltering,
+         Names<NormalMapFiltering>{
+             {"lobes", NormalMapFiltering::Lobes}, {"toksvig", NormalMapFiltering::Toksvig}, {"mip", NormalMapFiltering::Mip}},
+         "How normal maps seen from afar shade: lobes, from their fitted normal distributions (Han et al. 2007: "
+         "about 3-5 s more for a 1024^2 normal map on a glossy or metallic material); toksvig, from one lobe "
+         "widened by the MIP-mapped normal's shortening (Toksvig 2005: no fit, less exact); mip, from the "
+         "MIP-mapped normals (bumps then look flat and shiny)");
   app_->add_flag_function(
-      "--no-ndf-filtering", [&o](int64_t) { o.normalMapFiltering = render::NormalMapFiltering::Mip; },
-      "Shade normal maps seen from afar from their MIP-mapped normals (bumps then look flat and shiny) instead "
-      "of their filtered normal distributions (Han et al. 2007: about 3-5 s more for a 1024^2 normal map on a "
-      "glossy or metallic material)");
+      "--no-ndf-filtering", [&o](int64_t) { o.normalMapFiltering = NormalMapFiltering::Mip; },
+      "The same as --normal-filtering mip");
 }
 
 void Flags::modelOutput(geometry::MeshWriteOptions& o) {

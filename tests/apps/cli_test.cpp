@@ -146,6 +146,14 @@ TEST(Cli, NumbersOutOfRangeNameTheFlagAndTheRange) {
   EXPECT_NE(runCli("texture --help").out.find("16 to 16384"), std::string::npos);
 }
 
+// A choice flag names the flag and its values when given another.
+TEST(Cli, AnUnknownChoiceNamesTheFlagAndItsValues) {
+  const CliResult r = runCli("render m.off -o y.png --normal-filtering shiny");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.errLines(), 1u) << r.err;
+  EXPECT_NE(r.err.find("--normal-filtering: expected lobes|toksvig|mip, got 'shiny'"), std::string::npos) << r.err;
+}
+
 TEST(Cli, ABadImageGivesOneLine) {
   TempDir d("texfab-cli");
   std::ofstream(d / "bad.png", std::ios::binary) << "\x89PNG\r\n\x1a\n" << std::string(64, 'x');
