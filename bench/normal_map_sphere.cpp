@@ -20,6 +20,8 @@ using render::NormalMapFiltering;
 
 constexpr int kMapSize = 256, kTilesAround = 16;
 constexpr std::array<int, 3> kTexelsPerPixel = {4, 16, 64};
+constexpr std::array<NormalMapFiltering, 3> kMethods = {NormalMapFiltering::Mip, NormalMapFiltering::Toksvig,
+                                                        NormalMapFiltering::Lobes};
 
 void printTable() {
   std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | MIP / lobes |\n");
@@ -31,9 +33,9 @@ void printTable() {
       const int diameter = test::sphereDiameter(kMapSize, kTilesAround, texelsPerPixel);
       const Image truth =
           renderer.render(test::sphereView(diameter, test::truthSamples(texelsPerPixel), NormalMapFiltering::Mip));
-      std::array<double, 3> error{};
-      for (NormalMapFiltering f : {NormalMapFiltering::Mip, NormalMapFiltering::Toksvig, NormalMapFiltering::Lobes})
-        error[size_t(f)] = test::coveredRms(renderer.render(test::sphereView(diameter, 1, f)), truth);
+      std::array<double, kMethods.size()> error{};
+      for (size_t i = 0; i < kMethods.size(); ++i)
+        error[i] = test::coveredRms(renderer.render(test::sphereView(diameter, 1, kMethods[i])), truth);
       std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.1fx |\n", m.name.c_str(), texelsPerPixel, diameter, error[0],
                   error[1], error[2], error[0] / error[2]);
       std::fflush(stdout);
@@ -44,13 +46,13 @@ void printTable() {
 void drawPicture(const char* path) {
   const geometry::Mesh sphere = test::normalMappedSphere(test::testMaps(kMapSize)[0].map, kTilesAround);
   const render::PreviewRenderer renderer(sphere);
-  constexpr int kTile = 160, kColumns = 4;
+  constexpr int kTile = 160, kColumns = 1 + int(kMethods.size());
   Image sheet(kColumns * kTile, int(kTexelsPerPixel.size()) * kTile, 3, PixelFormat::UInt8);
   for (size_t row = 0; row < kTexelsPerPixel.size(); ++row) {
     const int diameter = test::sphereDiameter(kMapSize, kTilesAround, kTexelsPerPixel[row]);
     for (int column = 0; column < kColumns; ++column) {
       const Image v = renderer.render(column == 0 ? test::sphereView(diameter, 1024, NormalMapFiltering::Mip)
-                                                  : test::sphereView(diameter, 4, NormalMapFiltering(column - 1)));
+                                                  : test::sphereView(diameter, 4, kMethods[size_t(column - 1)]));
       // Over white: the view's centre where it is larger than the tile, else the view enlarged
       // (nearest) to the tile.
       const bool crop = v.width >= kTile;

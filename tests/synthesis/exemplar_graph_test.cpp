@@ -366,11 +366,11 @@ std::vector<Image> magnifiedSweep(const Image& image, int side, int octaves) {
     for (int y = 0; y < side; ++y)
       for (int x = 0; x < side; ++x) {
         const double fx = std::max(0.0, (x + 0.5) * scale - 0.5), fy = std::max(0.0, (y + 0.5) * scale - 0.5);
-        const int x0 = int(fx), y0 = int(fy);
+        const int x0 = int(fx), y0 = int(fy), x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
         const double sx = fx - x0, sy = fy - y0;
         for (int c = 0; c < image.channels; ++c)
-          view.at(x, y, c) = float((1 - sy) * ((1 - sx) * image.at(x0, y0, c) + sx * image.at(x0 + 1, y0, c)) +
-                                   sy * ((1 - sx) * image.at(x0, y0 + 1, c) + sx * image.at(x0 + 1, y0 + 1, c)));
+          view.at(x, y, c) = float((1 - sy) * ((1 - sx) * image.at(x0, y0, c) + sx * image.at(x1, y0, c)) +
+                                   sy * ((1 - sx) * image.at(x0, y1, c) + sx * image.at(x1, y1, c)));
       }
     sweep.push_back(std::move(view));
   }
@@ -379,9 +379,9 @@ std::vector<Image> magnifiedSweep(const Image& image, int side, int octaves) {
 
 // The zoom sweep through the rock -> stone graph (zoom 1 to 16, a view each octave) and three
 // references: a single exemplar's synthesis zoomed by box-filtered views of one large synthesis
-// (detail at every zoom, no jump; the smaller of the two exemplars' figures), the rock magnified
-// (no jump, no new detail) and a sweep that cuts from the magnified rock to a stone synthesis
-// halfway (a jump). Computed once for the tests below.
+// (detail at every zoom, no jump; of the two exemplars, the larger step and the smaller detail),
+// the rock magnified (no jump, no new detail) and a sweep that cuts from the magnified rock to a
+// stone synthesis halfway (a jump). Computed once for the tests below.
 struct ZoomSweeps {
   ZoomSweepMeasures graph, single, magnified, jump;
 };
