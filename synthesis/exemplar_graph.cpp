@@ -12,6 +12,7 @@
 #include "synthesis/coord_map.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <climits>
 #include <cmath>
@@ -27,7 +28,7 @@ namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
-constexpr uint32_t kGraphCacheVersion = 3;         // bump whenever the graph analysis changes
+constexpr uint32_t kGraphCacheVersion = 4;         // bump whenever the graph analysis changes
 
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
@@ -69,9 +70,9 @@ std::vector<Tile> admissible(const ExemplarGraph& g, int levels, Tile from, int 
 
 // Appearance vectors of every atlas texel in one PCA space (see the header's deviations): the
 // basis and the quantization scale from a regular sample of about kExactAnalysisPixels
-// neighborhoods over all tiles, every texel projected by fixed-order sums.
-std::vector<int8_t> appearanceOf(const std::vector<std::vector<Image>>& stacks, const GraphAnalysis& a,
-                                 const Context& ctx) {
+// neighborhoods over all tiles, every texel projected by fixed-order sums. Also the projection's
+// response to a uniform RGB offset (GraphAnalysis::transferAppearance).
+void appearanceOf(const std::vector<std::vector<Image>>& stacks, GraphAnalysis& a, const Context& ctx) {
   const int m = a.side, tiles = a.nodes * a.levels;
   const int dims = (2 * kPatchRadius + 1) * (2 * kPatchRadius + 1) * 3;
   const std::vector<float> weights = patchWeights();
@@ -93,6 +94,13 @@ std::vector<int8_t> appearanceOf(const std::vector<std::vector<Image>>& stacks, 
   const float scale = maxAbs > 0 ? 127.0f / maxAbs : 0.0f;
   raw.resize(0, 0);
   const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> b = basis;
+  for (int c = 0; c < 3; ++c)
+    for (int d = 0; d < kAppearanceDims; ++d) {
+      double response = 0;  // of a unit offset of channel c: every sample's weighted value moves
+      for (size_t s = 0; s < weights.size(); ++s) response += double(weights[s]) * b(int(s) * 3 + c, d);
+      a.transferAppearance[size_t(d * 3 + c)] =
+          int32_t(std::lrint(response * scale * double(1 << kTransferAppearanceBits) / kTransferOne));
+    }
 
   const int aw = a.atlasWidth();
   std::vector<int8_t> out(size_t(aw) * size_t(a.atlasHeight()) * kAppearanceDims);
@@ -106,7 +114,7 @@ std::vector<int8_t> appearanceOf(const std::vector<std::vector<Image>>& stacks, 
         projectPatch(p.data(), dims, mean, b.data(), scale, &out[(size_t(y) * aw + x) * kAppearanceDims]);
       }
   }, 4);
-  return out;
+  a.appearance = std::move(out);
 }
 
 // Each texel's 4 diagonal appearance vectors at its level's spacing, wrapped in its tile.
@@ -213,6 +221,44 @@ std::vector<uint32_t> candidatesOf(const ExemplarGraph& graph, const GraphAnalys
       }
   }, 1);
   return candidates;
+}
+
+// Thesis §5.3's offset b per candidate slot: the mean of (texel - candidate) over their 5x5
+// neighbourhoods at their levels' spacings, in fixed-order float sums; 0 within an exemplar.
+// Empty when every offset is 0.
+std::vector<int16_t> transfersOf(const GraphAnalysis& a, const Context& ctx) {
+  const int m = a.side, aw = a.atlasWidth();
+  const auto colour = [&](int ax, int ay, int dx, int dy) {  // wrapped in the tile of (ax, ay)
+    return a.colors.pixel(ax - ax % m + ((ax % m + dx) % m + m) % m, ay - ay % m + ((ay % m + dy) % m + m) % m);
+  };
+  std::vector<int16_t> transfers(a.candidates.size() * 3, 0);
+  std::atomic<bool> any = false;
+  parallelFor(0, a.atlasHeight(), ctx, [&](int y0, int y1) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < aw; ++x)
+        for (int o = 0; o < a.k; ++o) {
+          const size_t slot = (size_t(y) * aw + x) * size_t(a.k) + size_t(o);
+          const uint32_t c = a.candidates[slot];
+          const int cx = int(coordU(c)), cy = int(coordV(c));
+          if (cy / m == y / m) continue;
+          const int h = a.spacing(x / m), hc = a.spacing(cx / m);
+          float sum[3] = {};
+          for (int dy = -kPatchRadius; dy <= kPatchRadius; ++dy)
+            for (int dx = -kPatchRadius; dx <= kPatchRadius; ++dx) {
+              const float* p = colour(x, y, dx * h, dy * h);
+              const float* q = colour(cx, cy, dx * hc, dy * hc);
+              for (int ch = 0; ch < 3; ++ch) sum[ch] += p[ch] - q[ch];
+            }
+          constexpr int samples = (2 * kPatchRadius + 1) * (2 * kPatchRadius + 1);
+          for (int ch = 0; ch < 3; ++ch) {
+            const long b = std::clamp(std::lrint(sum[ch] / samples * kTransferOne), -32767L, 32767L);
+            transfers[slot * 3 + size_t(ch)] = int16_t(b);
+            if (b != 0) any = true;
+          }
+        }
+  }, 4);
+  if (!any) transfers.clear();
+  return transfers;
 }
 
 } // namespace
@@ -400,7 +446,7 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
   stacks.finish();
 
   Stage appearance(ctx, "appearance");
-  a.appearance = appearanceOf(stack, a, appearance.inner());
+  appearanceOf(stack, a, appearance.inner());
   a.neighborhood = neighborhoodsOf(a);
   appearance.finish();
 
@@ -429,6 +475,7 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
     }
   a.k = 1 + options.candidatesPerLevel * int(widest);
   a.candidates = candidatesOf(graph, a, admissibleOf, options, ctx);
+  if (options.correctInconsistency) a.transfers = transfersOf(a, ctx);
   candidates.finish();
 
   a.depth = shallowestDepths(graph);
@@ -454,6 +501,7 @@ uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions
   hash.add(options.candidatesPerLevel);
   hash.add(options.minSpread);
   hash.add(options.minEntryLevel);
+  hash.add(options.correctInconsistency);
   return hash.h;
 }
 
@@ -471,6 +519,9 @@ void writeGraphAnalysis(const GraphAnalysis& a, const std::filesystem::path& pat
     w.vec(a.appearance);
     w.vec(a.neighborhood);
     w.vec(a.candidates);
+    w.value(uint8_t(!a.transfers.empty()));
+    w.vec(a.transfers);
+    w.value(a.transferAppearance);
     w.vec(a.selfAdmissible);
     w.vec(a.moves);
     w.vec(a.depth);
@@ -501,6 +552,10 @@ std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path
   r.vec(a.appearance, texels * kAppearanceDims);
   r.vec(a.neighborhood, texels * kNeighborhoodDims);
   r.vec(a.candidates, texels * size_t(a.k));
+  uint8_t hasTransfers = 0;
+  r.value(hasTransfers);
+  r.vec(a.transfers, hasTransfers ? texels * size_t(a.k) * 3 : 0);
+  r.value(a.transferAppearance);
   r.vec(a.selfAdmissible, texels);
   r.vec(a.moves, texels);
   r.vec(a.depth, size_t(a.nodes));

@@ -30,13 +30,15 @@
 //     stays, as a leaf's does;
 //   * exemplars are toroidal (coordinates wrap in their tile), square, all of one power-of-two
 //     side m, as the thesis assumes for exposition;
-//   * no inconsistency correction (§5.3's transfer functions): exemplars of one graph should come
-//     from one source or agree in colour.
+//   * inconsistency correction (§5.3) with the thesis' constant RGB offsets b, fitted per candidate
+//     as the mean 5x5 difference; k-nearest candidates are chosen without them, as in the thesis.
 
 #include "core/context.h"
 #include "core/image.h"
 #include "synthesis/analysis_cache.h"
+#include "synthesis/exemplar_analysis.h"
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -109,8 +111,18 @@ struct GraphAnalysisOptions {
   /// thesis admits any level >= 0): coarser ones are a few blurred texels that cannot hold the
   /// source's structure at that scale, and texels that entered them showed flat blobs.
   int minEntryLevel = 3;
+  /// Thesis §5.3: fit a colour offset to every candidate in another exemplar, which synthesis
+  /// carries per texel, so that a finer exemplar takes on the colours of the coarser one it
+  /// details. Off: a finer exemplar shows its own colours (the thesis' "fine dictates coarse").
+  bool correctInconsistency = true;
   void validate() const;
 };
+
+/// Transfer offsets (GraphAnalysis::transfers, synthesis' per-texel R) are integers in units of
+/// 1/kTransferOne of a colour value.
+inline constexpr int kTransferOne = 4096;
+/// GraphAnalysis::transferAppearance's fixed point: 2^-kTransferAppearanceBits appearance units.
+inline constexpr int kTransferAppearanceBits = 16;
 
 /// What graph synthesis reads: the packed stack levels and their tables.
 struct GraphAnalysis {
@@ -123,6 +135,15 @@ struct GraphAnalysis {
   std::vector<int8_t> appearance;    ///< per atlas texel, kAppearanceDims
   std::vector<int8_t> neighborhood;  ///< per atlas texel, kNeighborhoodDims (diagonals at the level's spacing)
   std::vector<uint32_t> candidates;  ///< per atlas texel, k packed atlas coordinates
+  /// Thesis §5.3's transfer functions, per atlas texel and candidate slot (k * 3, RGB): the offset b
+  /// that takes the candidate's colours to the texel's, the mean difference of their 5x5
+  /// neighbourhoods at their levels' spacings (0 within an exemplar). Empty when every b is 0 or
+  /// correction is off (GraphAnalysisOptions::correctInconsistency).
+  std::vector<int16_t> transfers;
+  /// How an RGB offset moves appearance vectors: row d, column c is the change of dimension d per
+  /// transfer unit of channel c, in 2^-kTransferAppearanceBits (the appearance projection is linear
+  /// in the patch's colours).
+  std::array<int32_t, kAppearanceDims * 3> transferAppearance{};
   /// Per atlas texel: may a texel keep its level while synthesis goes finer (every level but the
   /// finest; at the finest, texels of a leaf and texels no edge's region covers).
   std::vector<uint8_t> selfAdmissible;

@@ -47,7 +47,20 @@ double pearson(const std::vector<float>& lum, int w, int h, int dx, int dy) {
   return cov / std::sqrt(va * vb);
 }
 
-double fidelityOf(std::span<const float> patches, const Image& exemplar, int radius, bool toroidal, const Context& ctx) {
+// A neighbourhood of n samples as 8-bit values, with removeMean less their channel's rounded mean.
+void quantizePatch(const float* patch, int n, int channels, bool removeMean, int16_t* out) {
+  for (int d = 0; d < n * channels; ++d) out[d] = quantize(patch[d]);
+  if (!removeMean) return;
+  for (int ch = 0; ch < channels; ++ch) {
+    int32_t sum = 0;
+    for (int i = 0; i < n; ++i) sum += out[i * channels + ch];
+    const int32_t mean = (sum + n / 2) / n;
+    for (int i = 0; i < n; ++i) out[i * channels + ch] = int16_t(out[i * channels + ch] - mean);
+  }
+}
+
+double fidelityOf(std::span<const float> patches, const Image& exemplar, int radius, bool toroidal, bool removeMean,
+                  const Context& ctx) {
   const int r = radius, side = 2 * r + 1;
   if (r < 0 || r > 8) throw Error("fidelity radius must be in [0, 8]");
   const int c = colorChannelCount(exemplar);
@@ -55,33 +68,36 @@ double fidelityOf(std::span<const float> patches, const Image& exemplar, int rad
   if (patches.empty() || patches.size() % size_t(dims) != 0)
     throw Error("fidelity: patches must hold a whole number of " + std::to_string(dims) + "-value neighborhoods");
 
-  // All exemplar neighborhoods (toroidal, or those wholly inside), 8-bit, one contiguous vector each.
+  // All exemplar neighborhoods (toroidal, or those wholly inside), quantized, one contiguous vector each.
   const int ew = exemplar.width, eh = exemplar.height;
   const int m = toroidal ? 0 : r;  // margin of the centres
   if (ew <= 2 * m || eh <= 2 * m) throw Error("fidelity: the exemplar is smaller than its neighborhoods");
   const size_t exemplarCount = size_t(ew - 2 * m) * size_t(eh - 2 * m);
-  std::vector<uint8_t> ex(exemplarCount * size_t(dims));
+  std::vector<int16_t> ex(exemplarCount * size_t(dims));
+  std::vector<float> gathered(static_cast<size_t>(dims));
   for (int y = m; y < eh - m; ++y)
     for (int x = m; x < ew - m; ++x) {
-      uint8_t* v = &ex[(size_t(y - m) * size_t(ew - 2 * m) + size_t(x - m)) * size_t(dims)];
+      float* v = gathered.data();
       for (int j = -r; j <= r; ++j)
         for (int i = -r; i <= r; ++i) {
           const float* p = exemplar.pixel(((x + i) % ew + ew) % ew, ((y + j) % eh + eh) % eh);
-          for (int ch = 0; ch < c; ++ch) *v++ = quantize(p[ch]);
+          for (int ch = 0; ch < c; ++ch) *v++ = p[ch];
         }
+      quantizePatch(gathered.data(), side * side, c, removeMean,
+                    &ex[(size_t(y - m) * size_t(ew - 2 * m) + size_t(x - m)) * size_t(dims)]);
     }
 
   const size_t count = patches.size() / size_t(dims);
   std::vector<double> nearest(count);
   parallelFor(0, int(count), ctx, [&](int begin, int end) {
-    std::vector<uint8_t> q(size_t(dims), 0);
+    std::vector<int16_t> q(size_t(dims), 0);
     for (int s = begin; s < end; ++s) {
-      for (int d = 0; d < dims; ++d) q[size_t(d)] = quantize(patches[size_t(s) * size_t(dims) + size_t(d)]);
+      quantizePatch(&patches[size_t(s) * size_t(dims)], side * side, c, removeMean, q.data());
       // Exact search with partial-distance elimination, one neighborhood row at a time.
       const int rowDims = side * c;
       int64_t best = std::numeric_limits<int64_t>::max();
       for (size_t e = 0; e < exemplarCount; ++e) {
-        const uint8_t* a = &ex[e * size_t(dims)];
+        const int16_t* a = &ex[e * size_t(dims)];
         int64_t sum = 0;
         for (int row = 0; row < side && sum < best; ++row) {
           int32_t rowSum = 0;
@@ -125,14 +141,14 @@ std::vector<float> sampledNeighborhoods(const Image& image, int r, int samples, 
 } // namespace
 
 double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx) {
-  return fidelityOf(patches, exemplar, radius, true, ctx);
+  return fidelityOf(patches, exemplar, radius, true, false, ctx);
 }
 
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, const Context& ctx) {
   if (colorChannelCount(image) != colorChannelCount(exemplar))
     throw Error("image and exemplar differ in colour channels (grey versus RGB)");
   return fidelityOf(sampledNeighborhoods(image, options.radius, options.samples, false), exemplar, options.radius,
-                    options.toroidal, ctx);
+                    options.toroidal, options.removeMean, ctx);
 }
 
 double neighborhoodCompleteness(const Image& image, const Image& exemplar, const FidelityOptions& options,
@@ -140,7 +156,7 @@ double neighborhoodCompleteness(const Image& image, const Image& exemplar, const
   if (colorChannelCount(image) != colorChannelCount(exemplar))
     throw Error("image and exemplar differ in colour channels (grey versus RGB)");
   return fidelityOf(sampledNeighborhoods(exemplar, options.radius, options.samples, options.toroidal), image,
-                    options.radius, false, ctx);
+                    options.radius, false, options.removeMean, ctx);
 }
 
 double histogramDistance(const Image& image, const Image& exemplar) {

@@ -19,6 +19,9 @@ struct FidelityOptions {
   int radius = 3;      ///< neighborhoods are (2*radius+1)^2: 7x7 by default
   int samples = 2048;  ///< neighborhoods measured on a regular grid (the image's; completeness: the exemplar's); 0 = all
   bool toroidal = true; ///< exemplar neighborhoods wrap; false: only those wholly inside it (a photograph)
+  /// Structure only: each neighbourhood's mean colour is removed on both sides, so that a colour
+  /// offset constant over a neighbourhood costs nothing (graph synthesis' transfers, exposure).
+  bool removeMean = false;
 };
 
 /// Neighborhood fidelity: mean over output neighborhoods of the RMS difference (values in [0,1])

@@ -69,6 +69,9 @@ struct LevelStats {
 struct SynthesisResult {
   CoordMap coords;
   std::vector<LevelStats> levels;
+  /// Graph synthesis' colour offsets (synthesize_graph.h): RGB per texel, added to the colours
+  /// the coordinates resolve to; empty where there are none.
+  Image colorOffsets;
 };
 
 /// Peak memory of synthesize2d on `window`, in bytes: two coordinate buffers while synthesizing,

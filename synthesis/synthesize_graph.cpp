@@ -22,6 +22,7 @@ namespace {
 using cpu::GraphAtlas;
 using cpu::kRowGrain;
 using cpu::LevelGrid;
+using cpu::Transfer;
 
 // Position q on a level of period p (0: none).
 int64_t wrap(int64_t q, int64_t p) { return p > 0 ? cpu::floorMod(q, p) : q; }
@@ -48,6 +49,25 @@ void upsample(const GraphAtlas& a, const uint32_t* parent, const LevelGrid& pg, 
   }
 }
 
+// Thesis §5.3's upsampling of transfers: each child's R interpolates its four nearest parents
+// bilinearly (weights 9, 3, 3, 1 / 16), the neighbours found as the parents of the children two
+// texels away, wrapped by (px, py) like the children. Integer, rounding half up.
+void upsampleTransfers(const Transfer* parent, const LevelGrid& pg, Transfer* out, const LevelGrid& g, int64_t px,
+                       int64_t py, int r0, int r1) {
+  const auto at = [&](int64_t qx, int64_t qy) {
+    return parent[size_t((wrap(qy, py) >> 1) - pg.y0) * size_t(pg.width) + size_t((wrap(qx, px) >> 1) - pg.x0)];
+  };
+  for (int y = r0; y < r1; ++y) {
+    const int64_t qy = g.y0 + y, ny = qy + ((qy & 1) ? 2 : -2);
+    for (int x = 0; x < g.width; ++x) {
+      const int64_t qx = g.x0 + x, nx = qx + ((qx & 1) ? 2 : -2);
+      const Transfer &p = at(qx, qy), &h = at(nx, qy), &v = at(qx, ny), &d = at(nx, ny);
+      Transfer& r = out[size_t(y) * g.width + x];
+      for (size_t c = 0; c < 3; ++c) r[c] = int16_t((9 * p[c] + 3 * (h[c] + v[c]) + d[c] + 8) >> 4);
+    }
+  }
+}
+
 // Jitter: S[q] += round(strength h_k H(q)), H uniform in [-1, 1)^2 from texelHash(seed, t, q), the
 // strength and h_k those of the tile S[q] points to; in integers as cpu::jitterKernel. q wrapped by
 // the level's periods (px, py).
@@ -65,36 +85,69 @@ void jitter(const GraphAtlas& a, uint32_t* coords, const LevelGrid& g, uint32_t 
     }
 }
 
+// The coordinates and, with inconsistency correction, the transfers of one level (null without).
+struct LevelState {
+  uint32_t* coords;
+  Transfer* transfers;
+};
+
 // One correction sub-pass (cpu::correctKernel's rules): each texel of the class takes the best of
 // { C_i(S[q+D]) - h D } (h of each candidate's level, wrapped in its tile) in a node S[q] may move
 // to (GraphAnalysis::moves), and S[q] itself where it may stay, or at the output level (nothing
 // finer is synthesized, so a finest level may stay: the root shows its own pixels at zoom 1); ties
-// to S[q], then to the smallest coordinate.
-void correct(const GraphAtlas& a, const uint32_t* in, uint32_t* out, const LevelGrid& g, bool outputLevel, int interleave,
+// to S[q], then to the smallest coordinate. With transfers, neighbourhoods compare as seen and a
+// choice carries its transfer (cpu::GraphTransferChoice).
+template <bool kTransfers>
+void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid& g, bool outputLevel, int interleave,
              int cx, int cy, int x0, int x1, int r0, int r1) {
   const auto w = size_t(g.width);
   const int firstX = x0 + int(cpu::floorMod(cx - (g.x0 + x0), interleave));
   for (int y = r0; y < r1; ++y) {
-    const uint32_t* row = in + size_t(y) * w;
-    uint32_t* outRow = out + size_t(y) * w;
-    for (int x = x0; x < x1; ++x) outRow[x] = row[x];
+    const size_t row = size_t(y) * w;
+    std::copy(in.coords + row + x0, in.coords + row + x1, out.coords + row + x0);
+    if constexpr (kTransfers) std::copy(in.transfers + row + x0, in.transfers + row + x1, out.transfers + row + x0);
     if (cpu::floorMod(g.y0 + y - cy, interleave) != 0) continue;
     for (int x = firstX; x < x1; x += interleave) {
-      alignas(32) int8_t target[kNeighborhoodDims];
-      for (int i = 0; i < kNeighborhoodSamples; ++i) {
-        const uint32_t s = in[size_t(y + kDiagonalY[i]) * w + size_t(x + kDiagonalX[i])];
-        std::copy_n(a.appearance + a.texel(s) * kAppearanceDims, kAppearanceDims, target + i * kAppearanceDims);
-      }
-      cpu::GraphChoice choice(a, target, row[x], outputLevel);
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const uint32_t* cand = a.candidates + a.texel(in[size_t(y + dy) * w + size_t(x + dx)]) * size_t(a.k);
-          for (int i = 0; i < a.k; ++i) {
-            const int h = a.spacing(cand[i]);
-            choice.offer(a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy));
-          }
+      const auto at = [&](int dx, int dy) { return size_t(y + dy) * w + size_t(x + dx); };
+      if constexpr (kTransfers) {
+        int16_t target[kNeighborhoodDims];  // as seen: each appearance vector moved by A R
+        for (int i = 0; i < kNeighborhoodSamples; ++i) {
+          const size_t q = at(kDiagonalX[i], kDiagonalY[i]);
+          int16_t* t = target + i * kAppearanceDims;
+          a.appearanceShift(in.transfers[q], t);
+          const int8_t* v = a.appearance + a.texel(in.coords[q]) * kAppearanceDims;
+          for (int d = 0; d < kAppearanceDims; ++d) t[d] = int16_t(t[d] + v[d]);
         }
-      outRow[x] = choice.best();
+        cpu::GraphTransferChoice choice(a, target, in.coords[row + x], in.transfers[row + x], outputLevel);
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const size_t q = at(dx, dy);
+            const uint32_t* cand = a.candidates + a.texel(in.coords[q]) * size_t(a.k);
+            const int16_t* b = a.transfersOf(in.coords[q]);
+            choice.frame(in.transfers[q]);
+            for (int i = 0; i < a.k; ++i) {
+              const int h = a.spacing(cand[i]);
+              choice.offer(a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy), b + 3 * i);
+            }
+          }
+        out.coords[row + x] = choice.best();
+        out.transfers[row + x] = choice.transfer();
+      } else {
+        alignas(32) int8_t target[kNeighborhoodDims];
+        for (int i = 0; i < kNeighborhoodSamples; ++i)
+          std::copy_n(a.appearance + a.texel(in.coords[at(kDiagonalX[i], kDiagonalY[i])]) * kAppearanceDims,
+                      kAppearanceDims, target + i * kAppearanceDims);
+        cpu::GraphChoice choice(a, target, in.coords[row + x], outputLevel);
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const uint32_t* cand = a.candidates + a.texel(in.coords[at(dx, dy)]) * size_t(a.k);
+            for (int i = 0; i < a.k; ++i) {
+              const int h = a.spacing(cand[i]);
+              choice.offer(a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy));
+            }
+          }
+        out.coords[row + x] = choice.best();
+      }
     }
   }
 }
@@ -153,8 +206,9 @@ std::vector<int64_t> graphJitterAmplitudes256(const GraphAnalysis& analysis, con
 }
 
 double synthesizeGraphMemoryBytes(const Window& window) {
-  // Three coordinate buffers of the padded finest level, then RGB floats.
-  return double(window.width + 64) * double(window.height + 64) * (3 * sizeof(uint32_t) + 3 * sizeof(float));
+  // Three coordinate and transfer buffers of the padded finest level, then RGB offsets and colours.
+  return double(window.width + 64) * double(window.height + 64) *
+         (3 * (sizeof(uint32_t) + sizeof(Transfer)) + 6 * sizeof(float));
 }
 
 SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& window,
@@ -173,7 +227,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   LevelGrid valid{window.x, window.y, window.width, window.height};
   for (int t = finest; t >= 0; --t) {
     padded[size_t(t)] = cpu::expand(valid, subpasses);
-    valid = cpu::parentOf(padded[size_t(t)]);
+    valid = cpu::expand(cpu::parentOf(padded[size_t(t)]), 1);  // and their neighbours, for transfers
     if (t != first || t == 0) continue;
     // The first periodic level reads its parent at wrapped positions [0, p): parents [0, (p + 1) / 2).
     if (const int64_t p = period(options.periodX, t)) valid.x0 = 0, valid.width = int((p + 1) / 2);
@@ -187,6 +241,8 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
 
   SynthesisResult result;
   std::vector<uint32_t> previous, current, scratch;
+  const bool transfers = atlas.transfers != nullptr;
+  std::vector<Transfer> previousR, currentR, scratchR;  // with transfers only
   for (int t = 0; t <= finest; ++t) {
     const auto start = std::chrono::steady_clock::now();
     Stage stage(ctx, "level " + std::to_string(t + 1) + "/" + std::to_string(finest + 1));
@@ -194,26 +250,32 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
     const auto rows = [&](auto&& kernel) { parallelFor(0, g.height, ctx, kernel, kRowGrain); };
     current.assign(size_t(g.width) * size_t(g.height), 0);  // t = 0: the root's coarsest level, at (0, 0)
     const int64_t px = period(options.periodX, t), py = period(options.periodY, t);
+    if (transfers) currentR.assign(current.size(), Transfer{});
+    const int64_t wx = t == first ? px : 0, wy = t == first ? py : 0;  // wrapped reads of the parent
     if (t > 0)
       rows([&](int r0, int r1) {
-        upsample(atlas, previous.data(), padded[size_t(t - 1)], current.data(), g, t == first ? px : 0,
-                 t == first ? py : 0, r0, r1);
+        upsample(atlas, previous.data(), padded[size_t(t - 1)], current.data(), g, wx, wy, r0, r1);
+        if (transfers) upsampleTransfers(previousR.data(), padded[size_t(t - 1)], currentR.data(), g, wx, wy, r0, r1);
       });
     rows([&](int r0, int r1) { jitter(atlas, current.data(), g, options.seed, t, amplitude256, px, py, r0, r1); });
     scratch.assign(current.size(), 0);
+    if (transfers) scratchR.assign(current.size(), Transfer{});
     int inset = 0;
     for (int pass = 0; pass < options.passes; ++pass)
       for (int cy = 0; cy < options.interleave; ++cy)
         for (int cx = 0; cx < options.interleave; ++cx) {
           ++inset;
+          const LevelState in{current.data(), currentR.data()}, out{scratch.data(), scratchR.data()};
           parallelFor(inset, g.height - inset, ctx, [&](int r0, int r1) {
-            correct(atlas, current.data(), scratch.data(), g, t == finest, options.interleave, cx, cy, inset,
-                    g.width - inset, r0, r1);
+            const auto kernel = transfers ? correct<true> : correct<false>;
+            kernel(atlas, in, out, g, t == finest, options.interleave, cx, cy, inset, g.width - inset, r0, r1);
           }, kRowGrain);
           current.swap(scratch);
+          currentR.swap(scratchR);
           stage.advance(inset, subpasses);
         }
     previous.swap(current);
+    previousR.swap(currentR);
     result.levels.push_back({t, int64_t(g.width) * g.height, secondsSince(start)});
     stage.finish();
   }
@@ -225,10 +287,25 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   out.exemplarHeight = analysis.atlasHeight();
   out.coords.resize(size_t(window.width) * size_t(window.height));
   const LevelGrid& g = padded[size_t(finest)];
+  const auto finalIndex = [&](int x, int y) { return size_t(y + subpasses) * size_t(g.width) + size_t(x + subpasses); };
   for (int y = 0; y < window.height; ++y)
-    std::copy_n(&previous[size_t(y + subpasses) * size_t(g.width) + size_t(subpasses)], window.width,
-                &out.coords[size_t(y) * size_t(window.width)]);
+    std::copy_n(&previous[finalIndex(0, y)], window.width, &out.coords[size_t(y) * size_t(window.width)]);
+  if (transfers) {
+    result.colorOffsets = Image(window.width, window.height, 3, PixelFormat::Float);
+    for (int y = 0; y < window.height; ++y)
+      for (int x = 0; x < window.width; ++x)
+        for (int c = 0; c < 3; ++c)
+          result.colorOffsets.at(x, y, c) = float(previousR[finalIndex(x, y)][size_t(c)]) / kTransferOne;
+  }
   return result;
+}
+
+Image graphColors(const SynthesisResult& result, const GraphAnalysis& analysis, const Context& ctx) {
+  Image colors = applyCoords(result.coords, analysis.colors, ctx);
+  if (result.colorOffsets.empty()) return colors;
+  for (size_t i = 0; i < colors.pixels.size(); ++i)
+    colors.pixels[i] = std::clamp(colors.pixels[i] + result.colorOffsets.pixels[i], 0.0f, 1.0f);
+  return colors;
 }
 
 } // namespace texfab::synthesis

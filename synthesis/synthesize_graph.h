@@ -6,7 +6,8 @@
 // Based on:
 //   C. Han, E. Risser, R. Ramamoorthi, E. Grinspun. Multiscale texture synthesis. SIGGRAPH 2008;
 //     C. Han, PhD thesis, 2011, §5.2 (per-texel pointers (i, k, u) and spacing h_k, upsampling to
-//     the next stack level, jitter, correction in sub-passes over admissible candidates).
+//     the next stack level, jitter, correction in sub-passes over admissible candidates) and §5.3
+//     (inconsistency correction: a cumulative colour offset R per texel, bilinear on upsampling).
 //   S. Lefebvre, H. Hoppe. Parallel controllable texture synthesis. SIGGRAPH 2005 (the pyramid
 //     this extends; texfab's synthesize2d).
 // Notes: docs/exemplar-graphs.md.
@@ -21,7 +22,8 @@
 // Deviations (beyond exemplar_graph.h's): jitter strength follows the stack level a texel points
 // to, counted from near where texels enter its exemplar, not the synthesis level (without jitter there,
 // texels that entered an exemplar copied coherent blocks of it, which showed as squares); a leaf
-// exemplar's finest level, zoomed further, is magnified.
+// exemplar's finest level, zoomed further, is magnified; a candidate's offset composes onto the
+// transfer of the neighbour that offered it (cpu::GraphTransferChoice).
 
 #include "core/context.h"
 #include "synthesis/coord_map.h"
@@ -77,8 +79,13 @@ std::vector<int64_t> graphJitterAmplitudes256(const GraphAnalysis& analysis, con
 double synthesizeGraphMemoryBytes(const Window& window);
 
 /// Synthesizes the atlas coordinates of `window` (at most kMaxImageSide per side) at the options'
-/// zoom; their colours are applyCoords(result.coords, analysis.colors). Reports "level t/T" stages.
+/// zoom, and with the analysis' transfers (GraphAnalysis::transfers) the colour offsets they are
+/// shown with (result.colorOffsets); graphColors resolves both. Reports "level t/T" stages.
 SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& window,
                                 const GraphSynthesisOptions& options, const Context& ctx = {});
+
+/// The colours of a graph synthesis: its coordinates' colours in the atlas plus its colour offsets,
+/// clamped to [0, 1]. Companion maps take the coordinates alone (applyCoords).
+Image graphColors(const SynthesisResult& result, const GraphAnalysis& analysis, const Context& ctx = {});
 
 } // namespace texfab::synthesis

@@ -169,7 +169,7 @@ void runGraphSynth(const SynthJob& job) {
   synth.finish(std::to_string(job.window.width) + "x" + std::to_string(job.window.height) + " at zoom " +
                figure(job.zoom));
   Stage write(run.ctx(), "write");
-  writeImage(applyCoords(result.coords, analysis.colors, run.ctx()), out);
+  writeImage(graphColors(result, analysis, run.ctx()), out);
   if (!coordsOut.empty()) writeCoordMap(result.coords, coordsOut);  // positions in the packed exemplars
   for (const Companion& c : companions) writeImage(applyCoords(result.coords, c.map, run.ctx()), c.output);
   write.finish(job.output);

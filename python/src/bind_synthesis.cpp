@@ -137,9 +137,10 @@ SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& s
     const GraphAnalysis a = analyzeGraph(graph, {}, call.analysisCache(), call.ctx());
     options.validate(a);
     Stage stage(call.ctx(), "synthesis");
-    out.coords = synthesizeGraph(a, w, options, stage.inner()).coords;
+    const SynthesisResult result = synthesizeGraph(a, w, options, stage.inner());
     stage.finish();
-    out.image = applyCoords(out.coords, a.colors, call.ctx());
+    out.coords = result.coords;
+    out.image = graphColors(result, a, call.ctx());
     for (const GraphMap& map : graph.maps) out.maps[map.name] = applyCoords(out.coords, graphMapAtlas(map), call.ctx());
     return out;
   });

@@ -8,12 +8,25 @@
 #include "synthesis/cpu/synthesis_kernels.h"
 #include "synthesis/exemplar_graph.h"
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <climits>
 #include <cstddef>
 #include <cstdint>
 
 namespace texfab::synthesis::cpu {
+
+/// A texel's cumulative transfer R (thesis §5.3): the RGB offset its colour is shown with, in
+/// 1/kTransferOne.
+using Transfer = std::array<int16_t, 3>;
+
+/// R composed with a candidate's offset b (three values), saturating.
+inline Transfer compose(const Transfer& r, const int16_t* b) {
+  Transfer out;
+  for (int c = 0; c < 3; ++c) out[size_t(c)] = int16_t(std::clamp(int32_t(r[size_t(c)]) + b[c], -32767, 32767));
+  return out;
+}
 
 struct GraphAtlas {
   int bits = 0;     ///< subpixel bits of a coordinate
@@ -24,12 +37,15 @@ struct GraphAtlas {
   const uint32_t* candidates = nullptr;
   const uint8_t* selfAdmissible = nullptr;
   const uint32_t* moves = nullptr;
+  const int16_t* transfers = nullptr;  ///< k * 3 per texel; null without inconsistency correction
+  const int32_t* transferAppearance = nullptr;
 
   explicit GraphAtlas(const GraphAnalysis& a, int subpixelBits = 0)
       : bits(subpixelBits), shift(std::countr_zero(unsigned(a.side)) + subpixelBits), finest(a.finestLevel()),
         levels(a.levels), width(a.atlasWidth()), k(a.k), appearance(a.appearance.data()),
         neighborhood(a.neighborhood.data()), candidates(a.candidates.data()), selfAdmissible(a.selfAdmissible.data()),
-        moves(a.moves.data()) {}
+        moves(a.moves.data()), transfers(a.transfers.empty() ? nullptr : a.transfers.data()),
+        transferAppearance(a.transferAppearance.data()) {}
 
   uint32_t mask() const { return (1u << shift) - 1; }
   int level(uint32_t c) const { return int(coordU(c) >> shift); }
@@ -48,6 +64,18 @@ struct GraphAtlas {
   }
   /// The coordinate of atlas pixel `pixel` (a candidate), in coordinate units.
   uint32_t fromPixel(uint32_t pixel) const { return packCoord(coordU(pixel) << bits, coordV(pixel) << bits); }
+  /// The offsets b of the candidates of texel c (k * 3 values).
+  const int16_t* transfersOf(uint32_t c) const { return transfers + texel(c) * size_t(k) * 3; }
+  /// A r: how offset r moves an appearance vector, in whole appearance units (rounded half up,
+  /// clamped to +-4096).
+  void appearanceShift(const Transfer& r, int16_t* out) const {
+    constexpr int64_t half = int64_t(1) << (kTransferAppearanceBits - 1);
+    for (int d = 0; d < kAppearanceDims; ++d) {
+      const int64_t exact = int64_t(transferAppearance[d * 3]) * r[0] + int64_t(transferAppearance[d * 3 + 1]) * r[1] +
+                            int64_t(transferAppearance[d * 3 + 2]) * r[2];
+      out[d] = int16_t(std::clamp<int64_t>((exact + half) >> kTransferAppearanceBits, -4096, 4096));
+    }
+  }
 
  private:
   uint32_t pixelOf(uint32_t x) const {
@@ -80,6 +108,70 @@ class GraphChoice {
   const GraphAtlas& a_;
   const int8_t* target_;
   uint32_t current_, best_;
+  int32_t distance_;
+};
+
+/// GraphChoice with thesis §5.3's inconsistency correction: every option is a coordinate with the
+/// transfer R it would be shown with, and neighbourhoods compare as seen, each appearance vector
+/// moved by A R (GraphAtlas::appearanceShift, rounded). A candidate from neighbour q's list is shown with
+/// R_q composed with its offset b (the thesis composes b onto R_p, whose frame b was not fitted
+/// in where R_q != R_p): frame(R_q) before offering q's candidates. The target is compared in
+/// that frame, target - A R_q, and a candidate's neighbourhood moved by A b. `current` competes with R_p where it may stay; ties as GraphChoice's.
+class GraphTransferChoice {
+ public:
+  /// `target`: the diagonal neighbours' appearance as seen (kNeighborhoodDims values, rounded).
+  GraphTransferChoice(const GraphAtlas& a, const int16_t* target, uint32_t current, const Transfer& r,
+                      bool outputLevel)
+      : a_(a), target_(target), current_(current), best_(current), transfer_(r) {
+    frame(r);
+    static constexpr int16_t none[3] = {};
+    distance_ = outputLevel || a.selfAdmissible[a.texel(current)] ? distanceTo(current, none) : INT32_MAX;
+  }
+
+  /// The frame of the candidates offered next: the transfer of the neighbour whose list they are in.
+  void frame(const Transfer& r) {
+    if (framed_ && r == frame_) return;
+    framed_ = true;
+    frame_ = r;
+    int16_t shift[kAppearanceDims];
+    a_.appearanceShift(r, shift);
+    for (int i = 0; i < kNeighborhoodSamples; ++i)
+      for (int d = 0; d < kAppearanceDims; ++d)
+        seen_[i * kAppearanceDims + d] = int16_t(target_[i * kAppearanceDims + d] - shift[d]);
+  }
+  /// Candidate c with offset b (three values) in the current frame.
+  void offer(uint32_t c, const int16_t* b) {
+    if (!a_.mayTake(current_, c)) return;
+    const int32_t d = distanceTo(c, b);
+    if (d < distance_ || (d == distance_ && best_ != current_ && c < best_))
+      distance_ = d, best_ = c, transfer_ = compose(frame_, b);
+  }
+  uint32_t best() const { return best_; }
+  const Transfer& transfer() const { return transfer_; }
+
+ private:
+  int32_t distanceTo(uint32_t c, const int16_t* b) {
+    const int16_t* t = seen_;
+    if (b[0] | b[1] | b[2]) {  // the candidate's neighbourhood moved by A b: the target moved back
+      int16_t shift[kAppearanceDims];
+      a_.appearanceShift({b[0], b[1], b[2]}, shift);
+      for (int i = 0; i < kNeighborhoodDims; ++i) shifted_[i] = int16_t(seen_[i] - shift[i % kAppearanceDims]);
+      t = shifted_;
+    }
+    const int8_t* n = a_.neighborhood + a_.texel(c) * kNeighborhoodDims;
+    int32_t sum = 0;
+    for (int i = 0; i < kNeighborhoodDims; ++i) {
+      const int32_t e = int32_t(t[i]) - int32_t(n[i]);
+      sum += e * e;
+    }
+    return sum;
+  }
+  const GraphAtlas& a_;
+  const int16_t* target_;
+  uint32_t current_, best_;
+  Transfer transfer_, frame_{};
+  bool framed_ = false;
+  int16_t seen_[kNeighborhoodDims], shifted_[kNeighborhoodDims];
   int32_t distance_;
 };
 

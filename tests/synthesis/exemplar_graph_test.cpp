@@ -160,6 +160,41 @@ TEST(ExemplarGraph, CachedAnalysesAreTheComputedOnesAndDamagedFilesAreRecomputed
   const GraphAnalysis third = analyzeGraph(g, {}, cache, {}, &cached);
   EXPECT_FALSE(cached);
   EXPECT_EQ(third.candidates, first.candidates);
+  EXPECT_EQ(second.transfers, first.transfers);
+  EXPECT_EQ(second.transferAppearance, first.transferAppearance);
+}
+
+// Thesis §5.3's convention: coarser exemplars decide the colours of finer levels. A fine exemplar
+// that is the coarse one's pattern made 0.25 darker keeps, zoomed in, the coarse one's mean colour
+// with transfers, and shows its own without them. Within an exemplar a transfer is 0.
+TEST(SynthesizeGraph, TransfersKeepTheCoarseExemplarsColours) {
+  ExemplarGraph g = twoNodes(64, 2);
+  for (float& v : g.exemplars[0].pixels) v = 0.3f + 0.7f * v;
+  g.exemplars[1] = g.exemplars[0];
+  for (float& v : g.exemplars[1].pixels) v -= 0.25f;
+  const auto mean = [](const Image& image) {
+    double sum = 0;
+    for (float v : image.pixels) sum += v;
+    return sum / double(image.pixels.size());
+  };
+  GraphAnalysisOptions off;
+  off.correctInconsistency = false;
+  const GraphAnalysis a = analyzeGraph(g), b = analyzeGraph(g, off);
+  EXPECT_TRUE(b.transfers.empty());
+  ASSERT_EQ(a.transfers.size(), a.candidates.size() * 3);
+  for (size_t slot = 0; slot < a.candidates.size(); ++slot) {
+    const size_t node = slot / size_t(a.k) / size_t(a.atlasWidth()) / size_t(a.side);
+    if (coordV(a.candidates[slot]) / uint32_t(a.side) != node) continue;
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(a.transfers[slot * 3 + size_t(c)], 0) << "slot " << slot;
+  }
+  GraphSynthesisOptions options;
+  options.zoomOctaves = 5;  // the fine exemplar at its finest level
+  const Window w{0, 0, 96, 96};
+  const SynthesisResult corrected = synthesizeGraph(a, w, options), plain = synthesizeGraph(b, w, options);
+  for (uint32_t c : corrected.coords.coords) ASSERT_EQ(coordV(c) / uint32_t(a.side), 1u) << "all texels in the fine exemplar";
+  const double coarse = mean(g.exemplars[0]);
+  EXPECT_NEAR(mean(graphColors(corrected, a)), coarse, 0.03);
+  EXPECT_NEAR(mean(graphColors(plain, b)), coarse - 0.25, 0.03);
 }
 
 // Every output texel is a function of its position: windows agree with larger requests, at any
@@ -171,16 +206,22 @@ TEST(SynthesizeGraph, WindowsAgreeWithLargerRequestsAndThreadCounts) {
     options.zoomOctaves = zoom;
     options.seed = 7;
     const Window outer{-21, -13, 80, 70};
-    const CoordMap big = synthesizeGraph(a, outer, options, Context{.threads = 2}).coords;
+    const SynthesisResult big = synthesizeGraph(a, outer, options, Context{.threads = 2});
+    ASSERT_FALSE(big.colorOffsets.empty()) << "the two exemplars differ in colour: transfers are expected";
     for (const Window inner : {Window{-21, -13, 80, 70}, Window{-5, 4, 31, 17}, Window{40, 30, 19, 27}}) {
-      const CoordMap part = synthesizeGraph(a, inner, options, Context{.threads = 1}).coords;
+      const SynthesisResult part = synthesizeGraph(a, inner, options, Context{.threads = 1});
       for (int y = 0; y < inner.height; ++y)
-        for (int x = 0; x < inner.width; ++x)
-          ASSERT_EQ(part.at(x, y), big.at(int(inner.x - outer.x) + x, int(inner.y - outer.y) + y))
+        for (int x = 0; x < inner.width; ++x) {
+          const int bx = int(inner.x - outer.x) + x, by = int(inner.y - outer.y) + y;
+          ASSERT_EQ(part.coords.at(x, y), big.coords.at(bx, by))
               << "zoom 2^" << zoom << " texel (" << inner.x + x << ", " << inner.y + y << ")";
+          for (int c = 0; c < 3; ++c)
+            ASSERT_EQ(part.colorOffsets.at(x, y, c), big.colorOffsets.at(bx, by, c))
+                << "zoom 2^" << zoom << " offset at (" << inner.x + x << ", " << inner.y + y << ")";
+        }
     }
     options.seed = 8;
-    EXPECT_NE(synthesizeGraph(a, outer, options).coords.coords, big.coords) << "the seed changes nothing";
+    EXPECT_NE(synthesizeGraph(a, outer, options).coords.coords, big.coords.coords) << "the seed changes nothing";
   }
 }
 
@@ -196,14 +237,18 @@ TEST(SynthesizeGraph, TileableOutputsRepeatAtTheirPeriod) {
     SCOPED_TRACE("zoom 2^" + std::to_string(zoom) + ", period " + std::to_string(period) + ", periodic from level " +
                  std::to_string(graphFirstPeriodicLevel(a, options)));
     const Window w{-period / 2, -7, 2 * period + 5, 2 * period + 3};
-    const CoordMap out = synthesizeGraph(a, w, options).coords;
+    const SynthesisResult result = synthesizeGraph(a, w, options);
+    const CoordMap& out = result.coords;
+    const Image colors = graphColors(result, a);
     for (int y = 0; y < w.height; ++y)
       for (int x = 0; x < w.width; ++x) {
         if (x + period < w.width) {
           ASSERT_EQ(out.at(x, y), out.at(x + period, y)) << "texel (" << x << ", " << y << ")";
+          ASSERT_EQ(colors.at(x, y, 1), colors.at(x + period, y, 1)) << "colour at (" << x << ", " << y << ")";
         }
         if (y + period < w.height) {
           ASSERT_EQ(out.at(x, y), out.at(x, y + period)) << "texel (" << x << ", " << y << ")";
+          ASSERT_EQ(colors.at(x, y, 1), colors.at(x, y + period, 1)) << "colour at (" << x << ", " << y << ")";
         }
       }
     // The tile is not one exemplar texel repeated.
@@ -218,23 +263,37 @@ TEST(SynthesizeGraph, TileableOutputsRepeatAtTheirPeriod) {
 }
 
 // The two-node target on photographs: a coarse exemplar (rock) detailed by a fine one
-// (stone) at 1/16 the scale. At zoom 1 the output is the rock's, at zoom 16 the stone's, each
-// within 1.3x the 7x7 fidelity of a single-exemplar synthesis of that exemplar.
+// (stone) at 1/16 the scale. At every zoom from 1 to 16 the output's 7x7 fidelity to the exemplar
+// that governs it is within 1.3x a single-exemplar synthesis' seen the same way: at zoom 1 the
+// rock, at zoom z > 1 the stone box-filtered by 16 / z (against a single synthesis 16 / z times
+// as large, box-filtered alike). The stone is shown with the rock's colours (thesis §5.3's
+// transfers), so it is measured by structure, each neighbourhood's mean removed; the rock by
+// colour too.
 TEST(SynthesizeGraph, EachScaleIsAsFaithfulAsASingleExemplarSynthesis) {
   const ExemplarGraph g = rockAndStone();
   const GraphAnalysis a = analyzeGraph(g);
-  const Window window{0, 0, 192, 192};
-  for (const auto& [zoom, node] : {std::pair{0, 0}, std::pair{4, 1}}) {
+  const int side = 192;
+  FidelityOptions colour, structure;
+  structure.removeMean = true;
+  for (int zoom = 0; zoom <= 4; ++zoom) {
+    const int node = zoom == 0 ? 0 : 1, factor = zoom == 0 ? 1 : 1 << (4 - zoom);
     const Image& exemplar = g.exemplars[size_t(node)];
     GraphSynthesisOptions options;
     options.zoomOctaves = zoom;
-    const Image graph = applyCoords(synthesizeGraph(a, window, options).coords, a.colors);
+    const Image graph = graphColors(synthesizeGraph(a, {0, 0, side, side}, options), a);
     AnalysisOptions single;
     single.wrap = detectExemplarWrap(exemplar);
-    const Image alone = applyCoords(synthesize2d(analyzeExemplar(exemplar, single), window, {}).coords, exemplar);
-    const double ratio = neighborhoodFidelity(graph, exemplar) / neighborhoodFidelity(alone, exemplar);
-    EXPECT_LE(ratio, 1.3) << g.names[size_t(node)] << " at zoom " << (1 << zoom);
-    RecordProperty(g.names[size_t(node)] + "_fidelity_ratio", std::to_string(ratio));
+    const Window large{0, 0, side * factor, side * factor};
+    const Image alone =
+        downsample(applyCoords(synthesize2d(analyzeExemplar(exemplar, single), large, {}).coords, exemplar), factor);
+    const Image governing = downsample(exemplar, factor);
+    for (const FidelityOptions& f : zoom == 0 ? std::vector{colour, structure} : std::vector{structure}) {
+      const double ratio = neighborhoodFidelity(graph, governing, f) / neighborhoodFidelity(alone, governing, f);
+      const std::string what = g.names[size_t(node)] + (f.removeMean ? " structure" : " colour") + " at zoom " +
+                               std::to_string(1 << zoom);
+      EXPECT_LE(ratio, 1.3) << what;
+      RecordProperty(what, std::to_string(ratio));
+    }
   }
 }
 
@@ -265,7 +324,7 @@ TEST(SynthesizeGraph, EdgeRegionsDecideWhichExemplarDetailsWhere) {
   GraphSynthesisOptions options;
   options.zoomOctaves = -1;
   const int side = 512;
-  const Image coarse = applyCoords(synthesizeGraph(a, {0, 0, side / 32, side / 32}, options).coords, a.colors);
+  const Image coarse = graphColors(synthesizeGraph(a, {0, 0, side / 32, side / 32}, options), a);
   options.zoomOctaves = 4;
   const CoordMap fine = synthesizeGraph(a, {0, 0, side, side}, options).coords;
   int agree = 0, stone = 0;
@@ -396,7 +455,7 @@ const ZoomSweeps& zoomSweeps() {
     for (int z = 0; z <= octaves; ++z) {
       GraphSynthesisOptions options;
       options.zoomOctaves = z;
-      graphSweep.push_back(applyCoords(synthesizeGraph(a, {0, 0, side, side}, options).coords, a.colors));
+      graphSweep.push_back(graphColors(synthesizeGraph(a, {0, 0, side, side}, options), a));
     }
     m.graph = measureZoomSweep(graphSweep);
     std::vector<Image> alone;  // a side^2 synthesis of each exemplar
@@ -444,12 +503,10 @@ TEST(SynthesizeGraph, AZoomSweepAddsDetailAtEveryZoom) {
   EXPECT_GE(m.graph.leastNewDetail, 0.5 * m.single.leastNewDetail);
 }
 
-// Disabled: the "no visible scale jump" does not hold yet. Between zoom 1 and 2 the view
-// loses the rock's large bumps (step 1.6 against a single exemplar's 0.28 and a cut's 2.0): from
-// zoom 2 on every texel points into the stone, at its coarse stack levels, and shows their
-// colours instead of the rock's. Thesis §5.3's inconsistency correction (not built yet,
-// docs/exemplar-graphs.md) is what keeps them.
-TEST(SynthesizeGraph, DISABLED_AZoomSweepHasNoScaleJump) {
+// The "no visible scale jump": the persisting features change at most twice as much as in
+// a single exemplar's zoom. Thesis §5.3's transfers carry the rock's colours into the stone's
+// coarse levels (without them: 1.61, near the cut's 2.03).
+TEST(SynthesizeGraph, AZoomSweepHasNoScaleJump) {
   const ZoomSweeps& m = zoomSweeps();
   EXPECT_LE(m.graph.largestPersistingStep, 2 * m.single.largestPersistingStep);
 }

@@ -39,6 +39,22 @@ TEST(QualityMeasures, FidelityOfAConstantOffsetIsThatOffset) {
   EXPECT_NEAR(f, 0.1, 1.0 / 255.0);
 }
 
+TEST(QualityMeasures, StructureFidelityIgnoresAConstantOffset) {
+  // The tiled exemplar made 0.2 brighter: its colour fidelity is about 0.2 and its structure
+  // fidelity (each neighbourhood's mean removed) about 0, as the tiling's own.
+  const Image exemplar = test::noiseImage(16, 16);
+  Image brighter = applyCoords(tiling(50, 40, 16, 16), exemplar);
+  for (float& v : brighter.pixels) v = v * 0.7f + 0.2f;
+  Image dimmer = exemplar;
+  for (float& v : dimmer.pixels) v *= 0.7f;
+  FidelityOptions structure{3, 0};
+  structure.removeMean = true;
+  EXPECT_NEAR(neighborhoodFidelity(brighter, dimmer, {3, 0}), 0.2, 1.5 / 255.0);
+  EXPECT_LE(neighborhoodFidelity(brighter, dimmer, structure), 1.0 / 255.0);
+  // Structure is not blind: noise stays far from the exemplar.
+  EXPECT_GT(neighborhoodFidelity(test::noiseImage(40, 40, 9), dimmer, structure), 0.05);
+}
+
 TEST(QualityMeasures, FidelityOfNoiseIsWorseThanOfTheTiling) {
   const Image exemplar = test::noiseImage(16, 16);
   const double noise = neighborhoodFidelity(test::noiseImage(40, 40, 99), exemplar, {3, 0});
