@@ -52,35 +52,41 @@ constexpr std::array<std::pair<uint8_t, uint8_t>, 20> kModeCodes = {{{0x01, 4}, 
                                                                      {0x05, 7}, {0x15, 6}, {0x25, 6}, {0x09, 4}, {0x45, 7}}};
 constexpr int kSolidMode = 8;
 
-// ASTC BISE ranges used here (DFS 23.11): 11 = 0..31 (5 bits), 19 = 0..191 (6 bits + a trit),
-// 20 = 0..255 (8 bits).
+// ASTC BISE ranges used here (DFS 23.11): 11 = 0..31 (5 bits), 18 = 0..159 (5 bits + a quint),
+// 19 = 0..191 (6 bits + a trit), 20 = 0..255 (8 bits).
 struct Mode {
   int index;
   int weightBits;     ///< weight levels = 1 << weightBits
   int endpointRange;  ///< BISE range of the six endpoint values
+  int planes;         ///< 2: the channel `ccs` has its own weights
 };
-constexpr std::array<Mode, 3> kModes = {{{0, 4, 19}, {5, 3, 20}, {18, 5, 11}}};
+constexpr std::array<Mode, 4> kModes = {{{0, 4, 19, 1}, {5, 3, 20, 1}, {18, 5, 11, 1}, {6, 2, 18, 2}}};
 
-int endpointLevels(int range) { return range == 19 ? 192 : range == 20 ? 256 : 32; }
+int endpointLevels(int range) { return range == 18 ? 160 : range == 19 ? 192 : range == 20 ? 256 : 32; }
 
-// Unquantized value (0..255) of a BISE endpoint value; trit values are stored as
-// bits | trit << 6 (UASTC keeps the trit and the bits of a value together).
+// Unquantized value (0..255) of a BISE endpoint value; trit and quint values are stored as
+// bits | digit << bits (UASTC keeps the digit and the bits of a value together).
 int unquantEndpoint(int range, int v) {
   if (range == 20) return v;
   if (range == 11) return (v << 3) | (v >> 2);  // bit replication
-  // 0..191: A = a replicated, B = "fedcb000f", C = 5, D = trit (DFS 23.11, table of
-  // colour unquantization parameters).
-  const int bits = v & 63, trit = v >> 6;
+  // A = bit a replicated, B from the bits, C, D = the trit or quint (DFS 23.11, table of colour
+  // unquantization parameters): 0..191 B = "fedcb000f", C = 5; 0..159 B = "edcb0000e", C = 6.
+  const bool trit = range == 19;
+  const int bits = trit ? v & 63 : v & 31, digit = trit ? v >> 6 : v >> 5;
   const auto bit = [bits](int k) { return (bits >> k) & 1; };
   const int a = (bits & 1) ? 0x1FF : 0;
-  const int b = (bit(5) << 8) | (bit(4) << 7) | (bit(3) << 6) | (bit(2) << 5) | (bit(1) << 4) | bit(5);
-  const int t = (trit * 5 + b) ^ a;
+  const int b = trit ? (bit(5) << 8) | (bit(4) << 7) | (bit(3) << 6) | (bit(2) << 5) | (bit(1) << 4) | bit(5)
+                     : (bit(4) << 8) | (bit(3) << 7) | (bit(2) << 6) | (bit(1) << 5) | bit(4);
+  const int t = (digit * (trit ? 5 : 6) + b) ^ a;
   return (a & 0x80) | (t >> 2);
 }
 
 // Weight 0..64 of a quantized weight (DFS 23.12: bit replication to 6 bits, +1 above 32).
 int unquantWeight(int weightBits, int v) {
-  int w = weightBits == 3 ? (v << 3) | v : weightBits == 4 ? (v << 2) | (v >> 2) : (v << 1) | (v >> 4);
+  const int w = weightBits == 2 ? (v << 4) | (v << 2) | v
+                : weightBits == 3 ? (v << 3) | v
+                : weightBits == 4 ? (v << 2) | (v >> 2)
+                                  : (v << 1) | (v >> 4);
   return w > 32 ? w + 1 : w;
 }
 
@@ -114,8 +120,8 @@ Quantizer makeQuantizer(int range) {
 }
 
 const Quantizer& quantizer(int range) {
-  static const Quantizer q11 = makeQuantizer(11), q19 = makeQuantizer(19), q20 = makeQuantizer(20);
-  return range == 11 ? q11 : range == 19 ? q19 : q20;
+  static const Quantizer q11 = makeQuantizer(11), q18 = makeQuantizer(18), q19 = makeQuantizer(19), q20 = makeQuantizer(20);
+  return range == 11 ? q11 : range == 18 ? q18 : range == 19 ? q19 : q20;
 }
 
 // ---- Fitting ----
@@ -125,12 +131,15 @@ using Rgb = std::array<std::array<int, 3>, 16>;
 int64_t divRound(int64_t n, int64_t d) { return n >= 0 ? (n + d / 2) / d : -((-n + d / 2) / d); }
 
 struct Fit {
+  int ccs = -1;             ///< dual plane: the channel on plane 1
   std::array<int, 6> ep{};  ///< BISE values r0 r1 g0 g1 b0 b1 (ASTC CEM 8 order)
-  std::array<uint8_t, 16> w{};
+  std::array<std::array<uint8_t, 16>, 2> w{};  ///< per plane, per texel
   int64_t err = std::numeric_limits<int64_t>::max();
 };
 
-// Picks each texel's nearest weight level for the fit's endpoints; sets w and err.
+size_t planeOf(const Fit& f, size_t channel) { return int(channel) == f.ccs ? 1 : 0; }
+
+// Picks each texel's nearest weight level (per plane) for the fit's endpoints; sets w and err.
 void chooseWeights(const Mode& m, const Rgb& px, Fit& f) {
   const Quantizer& q = quantizer(m.endpointRange);
   const int levels = 1 << m.weightBits;
@@ -140,51 +149,62 @@ void chooseWeights(const Mode& m, const Rgb& px, Fit& f) {
       palette[size_t(l)][size_t(c)] = interpolate(q.unquant[size_t(f.ep[size_t(2 * c)])], q.unquant[size_t(f.ep[size_t(2 * c + 1)])],
                                                   unquantWeight(m.weightBits, l));
   f.err = 0;
-  for (size_t i = 0; i < 16; ++i) {
-    int best = std::numeric_limits<int>::max(), bestLevel = 0;
-    for (int l = 0; l < levels; ++l) {
-      int e = 0;
-      for (size_t c = 0; c < 3; ++c) {
-        const int d = palette[size_t(l)][c] - px[i][c];
-        e += d * d;
+  for (size_t plane = 0; plane < size_t(m.planes); ++plane)
+    for (size_t i = 0; i < 16; ++i) {
+      int best = std::numeric_limits<int>::max(), bestLevel = 0;
+      for (int l = 0; l < levels; ++l) {
+        int e = 0;
+        for (size_t c = 0; c < 3; ++c) {
+          const int d = palette[size_t(l)][c] - px[i][c];
+          e += planeOf(f, c) == plane ? d * d : 0;
+        }
+        if (e < best) best = e, bestLevel = l;
       }
-      if (e < best) best = e, bestLevel = l;
+      f.w[plane][i] = uint8_t(bestLevel);
+      f.err += best;
     }
-    f.w[i] = uint8_t(bestLevel);
-    f.err += best;
-  }
 }
 
-Fit quantizeFit(const Mode& m, const Rgb& px, const std::array<int, 6>& endpoints8) {
+Fit quantizeFit(const Mode& m, const Rgb& px, const std::array<int, 6>& endpoints8, int ccs) {
   Fit f;
+  f.ccs = ccs;
   const Quantizer& q = quantizer(m.endpointRange);
   for (size_t k = 0; k < 6; ++k) f.ep[k] = q.nearest[size_t(std::clamp(endpoints8[k], 0, 255))];
   chooseWeights(m, px, f);
   return f;
 }
 
-// Least-squares endpoints (8-bit, r0 r1 g0 g1 b0 b1) for the fit's weights; false when all
-// texels share one weight.
-bool leastSquares(const Mode& m, const Rgb& px, const Fit& f, std::array<int, 6>& endpoints8) {
-  int64_t a = 0, b = 0, d = 0;
-  std::array<int64_t, 3> r0{}, r1{};
-  for (size_t i = 0; i < 16; ++i) {
-    const int64_t w = unquantWeight(m.weightBits, f.w[i]), u = 64 - w;
-    a += u * u, b += u * w, d += w * w;
-    for (size_t c = 0; c < 3; ++c) r0[c] += u * px[i][c] * 64, r1[c] += w * px[i][c] * 64;
-  }
-  const int64_t det = a * d - b * b;
-  if (det <= 0) return false;
+// Least-squares endpoints (8-bit, r0 r1 g0 g1 b0 b1) for the fit's weights; a plane whose
+// texels share one weight keeps its quantized endpoints.
+void leastSquares(const Mode& m, const Rgb& px, const Fit& f, std::array<int, 6>& endpoints8) {
+  const Quantizer& q = quantizer(m.endpointRange);
   for (size_t c = 0; c < 3; ++c) {
-    endpoints8[2 * c] = int(std::clamp<int64_t>(divRound(d * r0[c] - b * r1[c], det), 0, 255));
-    endpoints8[2 * c + 1] = int(std::clamp<int64_t>(divRound(a * r1[c] - b * r0[c], det), 0, 255));
+    const size_t plane = planeOf(f, c);
+    int64_t a = 0, b = 0, d = 0, r0 = 0, r1 = 0;
+    for (size_t i = 0; i < 16; ++i) {
+      const int64_t w = unquantWeight(m.weightBits, f.w[plane][i]), u = 64 - w;
+      a += u * u, b += u * w, d += w * w;
+      r0 += u * px[i][c] * 64, r1 += w * px[i][c] * 64;
+    }
+    const int64_t det = a * d - b * b;
+    for (size_t e = 0; e < 2; ++e) endpoints8[2 * c + e] = q.unquant[size_t(f.ep[2 * c + e])];
+    if (det <= 0) continue;
+    endpoints8[2 * c] = int(std::clamp<int64_t>(divRound(d * r0 - b * r1, det), 0, 255));
+    endpoints8[2 * c + 1] = int(std::clamp<int64_t>(divRound(a * r1 - b * r0, det), 0, 255));
   }
-  return true;
 }
 
 // Endpoints at the extremes of the texels' projections on their principal axis (integer power
-// iteration on the covariance matrix).
-std::array<int, 6> principalEndpoints(const Rgb& px) {
+// iteration on the covariance matrix); with a plane-1 channel `ccs`, the axis of the other two
+// and that channel's own extremes.
+std::array<int, 6> principalEndpoints(Rgb px, int ccs) {
+  if (ccs >= 0) {
+    int lo = 255, hi = 0;
+    for (auto& p : px) lo = std::min(lo, p[size_t(ccs)]), hi = std::max(hi, p[size_t(ccs)]), p[size_t(ccs)] = 0;
+    std::array<int, 6> endpoints8 = principalEndpoints(px, -1);
+    endpoints8[size_t(2 * ccs)] = lo, endpoints8[size_t(2 * ccs + 1)] = hi;
+    return endpoints8;
+  }
   std::array<int64_t, 3> sum{};
   for (const auto& p : px)
     for (size_t c = 0; c < 3; ++c) sum[c] += p[c];
@@ -228,12 +248,12 @@ std::array<int, 6> principalEndpoints(const Rgb& px) {
 }
 
 // Principal-axis start, two rounds of least squares, then ±1 steps on each endpoint value.
-Fit fitMode(const Mode& m, const Rgb& px, const std::array<int, 6>& start) {
-  Fit best = quantizeFit(m, px, start);
+Fit fitMode(const Mode& m, const Rgb& px, int ccs) {
+  Fit best = quantizeFit(m, px, principalEndpoints(px, ccs), ccs);
   for (int round = 0; round < 2 && best.err > 0; ++round) {
     std::array<int, 6> endpoints8{};
-    if (!leastSquares(m, px, best, endpoints8)) break;
-    Fit f = quantizeFit(m, px, endpoints8);
+    leastSquares(m, px, best, endpoints8);
+    Fit f = quantizeFit(m, px, endpoints8, ccs);
     if (f.err >= best.err) break;
     best = f;
   }
@@ -374,16 +394,19 @@ Block packSolid(const std::array<int, 3>& rgb) {
 
 Block packFit(const Mode& m, Fit f, const Etc1Hints& h) {
   const int levels = 1 << m.weightBits;
-  if (f.w[0] >= levels / 2) {  // the first weight is stored without its top bit
-    for (size_t c = 0; c < 3; ++c) std::swap(f.ep[2 * c], f.ep[2 * c + 1]);
-    for (auto& w : f.w) w = uint8_t(levels - 1 - w);
-  }
+  for (size_t plane = 0; plane < size_t(m.planes); ++plane)
+    if (f.w[plane][0] >= levels / 2) {  // each plane's first weight is stored without its top bit
+      for (size_t c = 0; c < 3; ++c)
+        if (planeOf(f, c) == plane) std::swap(f.ep[2 * c], f.ep[2 * c + 1]);
+      for (auto& w : f.w[plane]) w = uint8_t(levels - 1 - w);
+    }
   BitWriter out;
   putModeCode(out, m.index);
   out.put(0, 1), out.put(0, 1);  // BC1 hints 0 and 1: off
   out.put(uint32_t(h.flip), 1), out.put(uint32_t(h.diff), 1);
   out.put(uint32_t(h.inten0), 3), out.put(uint32_t(h.inten1), 3);
   out.put(kNeutralBias, 5);
+  if (m.planes == 2) out.put(uint32_t(f.ccs), 2);
   if (m.endpointRange == 19) {
     // Trits first: five per 8-bit group (base 3, first value least significant), the sixth
     // alone in 2 bits; then the low 6 bits of each value.
@@ -392,12 +415,20 @@ Block packFit(const Mode& m, Fit f, const Etc1Hints& h) {
     out.put(group, 8);
     out.put(uint32_t(f.ep[5] >> 6), 2);
     for (int v : f.ep) out.put(uint32_t(v & 63), 6);
+  } else if (m.endpointRange == 18) {
+    // Quints first: three per 7-bit group (base 5, first value least significant); then the
+    // low 5 bits of each value.
+    for (size_t g = 0; g < 6; g += 3)
+      out.put(uint32_t((f.ep[g + 2] >> 5) * 25 + (f.ep[g + 1] >> 5) * 5 + (f.ep[g] >> 5)), 7);
+    for (int v : f.ep) out.put(uint32_t(v & 31), 5);
   } else {
     const int bits = m.endpointRange == 20 ? 8 : 5;
     for (int v : f.ep) out.put(uint32_t(v), bits);
   }
-  out.put(f.w[0], m.weightBits - 1);
-  for (size_t i = 1; i < 16; ++i) out.put(f.w[i], m.weightBits);
+  // Weights texel by texel (plane 0 then plane 1 for dual plane); each plane's first weight
+  // (the anchor) has one bit less.
+  for (size_t i = 0; i < 16; ++i)
+    for (size_t plane = 0; plane < size_t(m.planes); ++plane) out.put(f.w[plane][i], i == 0 ? m.weightBits - 1 : m.weightBits);
   return out.block();
 }
 
@@ -426,8 +457,15 @@ bool decodeBlock(const Block& block, Texels& texels) {
   const auto m = std::find_if(kModes.begin(), kModes.end(), [&](const Mode& x) { return x.index == mode; });
   if (m == kModes.end()) return false;
   in.get(15);  // hints
+  const int ccs = m->planes == 2 ? int(in.get(2)) : -1;
   std::array<int, 6> ep{};
-  if (m->endpointRange == 19) {
+  if (m->endpointRange == 18) {
+    for (size_t g = 0; g < 6; g += 3) {
+      uint32_t group = in.get(7);
+      for (size_t k = g; k < g + 3; ++k, group /= 5) ep[k] = int((group % 5) << 5);
+    }
+    for (auto& v : ep) v |= int(in.get(5));
+  } else if (m->endpointRange == 19) {
     uint32_t group = in.get(8);
     const uint32_t last = in.get(2);
     for (size_t k = 0; k < 6; ++k) {
@@ -440,9 +478,12 @@ bool decodeBlock(const Block& block, Texels& texels) {
     for (auto& v : ep) v = int(in.get(m->endpointRange == 20 ? 8 : 5));
   }
   for (size_t i = 0; i < 16; ++i) {
-    const int w = unquantWeight(m->weightBits, int(in.get(i == 0 ? m->weightBits - 1 : m->weightBits)));
+    std::array<int, 2> w{};
+    for (int plane = 0; plane < m->planes; ++plane)
+      w[size_t(plane)] = unquantWeight(m->weightBits, int(in.get(i == 0 ? m->weightBits - 1 : m->weightBits)));
     for (size_t c = 0; c < 3; ++c)
-      texels[4 * i + c] = uint8_t(interpolate(unquantEndpoint(m->endpointRange, ep[2 * c]), unquantEndpoint(m->endpointRange, ep[2 * c + 1]), w));
+      texels[4 * i + c] = uint8_t(interpolate(unquantEndpoint(m->endpointRange, ep[2 * c]), unquantEndpoint(m->endpointRange, ep[2 * c + 1]),
+                                              w[int(c) == ccs ? 1 : 0]));
     texels[4 * i + 3] = 255;
   }
   return true;
@@ -466,12 +507,12 @@ Block encodeBlock(const Texels& texels) {
     mean[c] = (sum[c] + 8) / 16;
     for (const auto& p : px) solidErr += (p[c] - mean[c]) * (p[c] - mean[c]);
   }
-  const std::array<int, 6> start = principalEndpoints(px);
   const Mode* bestMode = nullptr;
   Fit best;
   best.err = solidErr;
   for (const Mode& m : kModes)
-    if (Fit f = fitMode(m, px, start); f.err < best.err) best = f, bestMode = &m;
+    for (int ccs = m.planes == 2 ? 0 : -1; ccs < (m.planes == 2 ? 3 : 0); ++ccs)
+      if (Fit f = fitMode(m, px, ccs); f.err < best.err) best = f, bestMode = &m;
   if (!bestMode) return packSolid(mean);
 
   Block block = packFit(*bestMode, best, {});

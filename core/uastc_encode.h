@@ -7,22 +7,26 @@
 // builds on (Khronos Data Format Specification 1.3, section 23 "ASTC": 23.11 endpoint
 // unquantization, 23.12 weight unquantization, 23.13 weight interpolation).
 //
-// Deliberate subset (all blocks are opaque, RGB, one subset, one plane):
+// Deliberate subset (all blocks are opaque, RGB, one subset):
 //   mode 0  - RGB, endpoints 0..191 (6 bits + a trit), 16 weight levels: the all-rounder;
-//   mode 5  - RGB, endpoints 0..255 (8 bits), 8 weight levels: blocks of small, precise ranges;
+//   mode 5  - RGB, endpoints 0..255 (8 bits), 8 weight levels: few, exact colours;
 //   mode 18 - RGB, endpoints 0..31 (5 bits), 32 weight levels: long smooth ramps;
+//   mode 6  - RGB dual plane (one channel, ccs, has its own weights), endpoints 0..159 (5 bits
+//             + a quint), 4 weight levels per plane: unrelated channels such as roughness (G) and
+//             metallic (B), whose colours in a block span a plane rather than a line;
 //   mode 8  - solid colour: constant blocks, bit-exact.
-// Every block tries each and keeps the one whose decoded pixels are nearest the input (sum of
-// squared RGB errors, ties to the earlier mode in the list 8, 0, 5, 18). Not used: the 2- and 3-
-// subset modes (edges), dual-plane modes (uncorrelated channels) and every alpha/LA mode; input
-// alpha is ignored and decodes as 255.
-// Endpoints: the principal axis of the block's colours (integer power iteration), then least
-// squares for the endpoints given the chosen weights, then a ±1 step search on each quantized
-// endpoint value. Weights: each texel takes the level whose decoded colour is nearest, using the
+// Every block tries each (mode 6 with each ccs) and keeps the one whose decoded pixels are nearest
+// the input (sum of squared RGB errors, ties to the earlier in the order 8, 0, 5, 18, 6). Not
+// used: the 2- and 3-subset modes (edges) and every alpha/LA mode; input alpha is ignored and
+// decodes as 255.
+// Endpoints: the principal axis of the block's colours (of the plane-0 channels, for mode 6;
+// integer power iteration), then least squares for the endpoints given the chosen weights, then
+// a ±1 step search on each quantized endpoint value. Weights: each texel takes the level whose decoded colour is nearest, using the
 // exact ASTC interpolation, so the encoder's error is the decoder's error.
 // Hints: BC1 hints are 0 (the transcoder re-encodes BC1 from the pixels); the ETC1 hints (flip,
 // diff, intensity tables, neutral bias 13) are chosen by trying them on the block, solid blocks
-// get the best ETC1 colour, intensity and selector. Only BC7/ASTC/RGBA transcodes are tested.
+// get the best ETC1 colour, intensity and selector. The test checks that every target transcodes,
+// but compares pixels only for RGBA32 (which equal decodeBlock's, bit for bit).
 // Everything is integer arithmetic: the same input gives the same bytes on every machine.
 
 #include "core/image.h"
@@ -43,7 +47,7 @@ using Texels = std::array<uint8_t, 64>;
 /// Encodes one block (see the header comment for the modes used).
 Block encodeBlock(const Texels& texels);
 
-/// Decodes a block written by encodeBlock (modes 0, 5, 8 and 18) to RGBA8, as the UASTC
+/// Decodes a block written by encodeBlock (modes 0, 5, 6, 8 and 18) to RGBA8, as the UASTC
 /// specification and basis_universal's transcoder do. Returns false for any other mode.
 bool decodeBlock(const Block& block, Texels& texels);
 
