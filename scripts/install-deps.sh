@@ -68,5 +68,13 @@ if [ ! -f "$repo/.tools/node_modules/gltf-validator/package.json" ]; then
 else
   echo "install-deps: gltf-validator present"
 fi
+# three.js, whose Basis Universal transcoder (the one its KTX2Loader runs) reads back the KTX2/UASTC
+# textures texfab writes (tests/core/ktx2_transcode.mjs); also into .tools/.
+if [ ! -f "$repo/.tools/node_modules/three/package.json" ]; then
+  echo "install-deps: installing three into .tools/"
+  npm install --prefix "$repo/.tools" --no-audit --no-fund --loglevel=error three
+else
+  echo "install-deps: three present"
+fi
 # CGAL's mesh data set for the tests that want more meshes (models/cgal/, ignored).
 if [ ! -f "$repo/models/cgal/elephant.off" ]; then "$repo/models/fetch" || true; fi
