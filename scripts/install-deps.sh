@@ -72,7 +72,7 @@ fi
 # textures texfab writes (tests/core/ktx2_transcode.mjs); also into .tools/.
 if [ ! -f "$repo/.tools/node_modules/three/package.json" ]; then
   echo "install-deps: installing three into .tools/"
-  npm install --prefix "$repo/.tools" --no-audit --no-fund --loglevel=error three
+  npm install --prefix "$repo/.tools" --no-audit --no-fund --loglevel=error three@0.187.0
 else
   echo "install-deps: three present"
 fi
