@@ -28,7 +28,7 @@ namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
-constexpr uint32_t kGraphCacheVersion = 4;         // bump whenever the graph analysis changes
+constexpr uint32_t kGraphCacheVersion = 5;         // bump whenever the graph analysis changes
 
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
@@ -224,7 +224,8 @@ std::vector<uint32_t> candidatesOf(const ExemplarGraph& graph, const GraphAnalys
 }
 
 // Thesis §5.3's offset b per candidate slot: the mean of (texel - candidate) over their 5x5
-// neighbourhoods at their levels' spacings, in fixed-order float sums; 0 within an exemplar.
+// neighbourhoods at their levels' spacings, in the colours texels show (GraphAnalysis::colors: the
+// offsets correct what is seen), in fixed-order float sums; 0 within an exemplar.
 // Empty when every offset is 0.
 std::vector<int16_t> transfersOf(const GraphAnalysis& a, const Context& ctx) {
   const int m = a.side, aw = a.atlasWidth();
@@ -397,6 +398,34 @@ const GraphMap* ExemplarGraph::map(const std::string& name) const {
 
 namespace {
 
+// What a texel at level k shows: the image averaged over its footprint, a box h_k = 2^(L-k) pixels
+// wide centred on it (weights 1/2 at the two ends where h_k is even), toroidal, separable, in
+// fixed-order float sums. The Gaussian stack's level k, which synthesis matches, is blurred twice
+// as far (binomial passes at 1 .. h_k / 2: sigma about 0.58 h_k against the box's 0.29 h_k);
+// shown, it made every zoom blurrier than the next and read as a scale jump.
+std::vector<Image> footprintStack(const Image& image) {
+  const int m = image.width, levels = std::countr_zero(unsigned(m)) + 1, channels = image.channels;
+  std::vector<Image> stack;
+  for (int k = 0; k < levels; ++k) {
+    const int h = 1 << (levels - 1 - k), half = h / 2;
+    const auto weight = [&](int o) { return (h % 2 == 0 && (o == -half || o == half)) ? 0.5f : 1.0f; };
+    const auto pass = [&](const Image& in, int dx, int dy) {
+      Image out(m, m, channels, in.format);
+      for (int y = 0; y < m; ++y)
+        for (int x = 0; x < m; ++x)
+          for (int c = 0; c < channels; ++c) {
+            float sum = 0;
+            for (int o = -half; o <= half; ++o)
+              sum += weight(o) * in.at(((x + o * dx) % m + m) % m, ((y + o * dy) % m + m) % m, c);
+            out.at(x, y, c) = sum / float(h);
+          }
+      return out;
+    };
+    stack.push_back(h == 1 ? image : pass(pass(image, 1, 0), 0, 1));
+  }
+  return stack;
+}
+
 // Level k of stacks[i] into the m x m tile at (k m, i m).
 Image packStacks(const std::vector<std::vector<Image>>& stacks) {
   const Image& first = stacks.front().front();
@@ -413,7 +442,7 @@ Image packStacks(const std::vector<std::vector<Image>>& stacks) {
 
 Image graphMapAtlas(const GraphMap& map) {
   std::vector<std::vector<Image>> stacks;
-  for (const Image& image : map.perNode) stacks.push_back(gaussianStack(image, ExemplarWrap::Tile));
+  for (const Image& image : map.perNode) stacks.push_back(footprintStack(image));
   return packStacks(stacks);
 }
 
@@ -441,8 +470,13 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
 
   Stage stacks(ctx, "stacks");
   std::vector<std::vector<Image>> stack;
-  for (int i = 0; i < a.nodes; ++i) stack.push_back(gaussianStack(rgbOf(graph.exemplars[size_t(i)]), ExemplarWrap::Tile));
-  a.colors = packStacks(stack);
+  std::vector<std::vector<Image>> shown;
+  for (int i = 0; i < a.nodes; ++i) {
+    const Image rgb = rgbOf(graph.exemplars[size_t(i)]);
+    stack.push_back(gaussianStack(rgb, ExemplarWrap::Tile));
+    shown.push_back(footprintStack(rgb));
+  }
+  a.colors = packStacks(shown);
   stacks.finish();
 
   Stage appearance(ctx, "appearance");
@@ -475,7 +509,7 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
     }
   a.k = 1 + options.candidatesPerLevel * int(widest);
   a.candidates = candidatesOf(graph, a, admissibleOf, options, ctx);
-  if (options.correctInconsistency) a.transfers = transfersOf(a, ctx);
+  if (graph.coarseColors) a.transfers = transfersOf(a, ctx);
   candidates.finish();
 
   a.depth = shallowestDepths(graph);
@@ -501,7 +535,7 @@ uint64_t graphAnalysisKey(const ExemplarGraph& graph, const GraphAnalysisOptions
   hash.add(options.candidatesPerLevel);
   hash.add(options.minSpread);
   hash.add(options.minEntryLevel);
-  hash.add(options.correctInconsistency);
+  hash.add(graph.coarseColors);
   return hash.h;
 }
 

@@ -87,6 +87,10 @@ struct ExemplarGraph {
   std::vector<Image> exemplars;    ///< node i's exemplar; node 0 is the root (the coarsest)
   std::vector<GraphEdge> edges;
   std::vector<GraphMap> maps;      ///< companion maps (each for every node), none by default
+  /// Thesis §5.3's inconsistency correction: a finer exemplar takes on the colours of the coarser
+  /// one it details (a colour offset per candidate in another exemplar, carried per texel). False:
+  /// every exemplar shows its own colours.
+  bool coarseColors = true;
 
   /// The map named `name`, or null.
   const GraphMap* map(const std::string& name) const;
@@ -111,10 +115,6 @@ struct GraphAnalysisOptions {
   /// thesis admits any level >= 0): coarser ones are a few blurred texels that cannot hold the
   /// source's structure at that scale, and texels that entered them showed flat blobs.
   int minEntryLevel = 3;
-  /// Thesis §5.3: fit a colour offset to every candidate in another exemplar, which synthesis
-  /// carries per texel, so that a finer exemplar takes on the colours of the coarser one it
-  /// details. Off: a finer exemplar shows its own colours (the thesis' "fine dictates coarse").
-  bool correctInconsistency = true;
   void validate() const;
 };
 
@@ -131,14 +131,16 @@ struct GraphAnalysis {
   int nodes = 0;
   int k = 0;           ///< candidates per atlas texel
   int entryLevel = 0;  ///< the coarsest level an edge leads to (GraphAnalysisOptions::minEntryLevel)
-  Image colors;        ///< the atlas of stack levels: levels*m x nodes*m, RGB
+  /// What texels show, levels*m x nodes*m, RGB: tile (k, i) holds exemplar i averaged over the
+  /// footprint of a level-k texel (a box h_k wide), not the blurrier Gaussian stack it is matched by.
+  Image colors;
   std::vector<int8_t> appearance;    ///< per atlas texel, kAppearanceDims
   std::vector<int8_t> neighborhood;  ///< per atlas texel, kNeighborhoodDims (diagonals at the level's spacing)
   std::vector<uint32_t> candidates;  ///< per atlas texel, k packed atlas coordinates
   /// Thesis §5.3's transfer functions, per atlas texel and candidate slot (k * 3, RGB): the offset b
   /// that takes the candidate's colours to the texel's, the mean difference of their 5x5
   /// neighbourhoods at their levels' spacings (0 within an exemplar). Empty when every b is 0 or
-  /// correction is off (GraphAnalysisOptions::correctInconsistency).
+  /// correction is off (ExemplarGraph::coarseColors).
   std::vector<int16_t> transfers;
   /// How an RGB offset moves appearance vectors: row d, column c is the change of dimension d per
   /// transfer unit of channel c, in 2^-kTransferAppearanceBits (the appearance projection is linear
@@ -169,7 +171,7 @@ GraphAnalysis analyzeGraph(const ExemplarGraph& graph, const GraphAnalysisOption
                            const Context& ctx = {});
 
 /// A companion map packed as GraphAnalysis::colors packs the colours (level k of node i is the m x m
-/// tile at (k m, i m), the Gaussian stack of node i's map), with the map's channels: what a
+/// tile at (k m, i m), node i's map averaged over a level-k footprint), with the map's channels: what a
 /// synthesized coordinate reads (applyCoords, sampleSurfaceGraph), so that the map follows the
 /// colours through every exemplar and level.
 Image graphMapAtlas(const GraphMap& map);

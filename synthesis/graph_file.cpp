@@ -110,9 +110,15 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
     throw Error(file + ": not valid JSON (" + std::string(e.what()) + ")");
   }
   if (!doc.is_object()) throw Error(file + ": expected an object with \"exemplars\" and \"edges\"");
-  onlyKeys(doc, {"exemplars", "edges", "root"}, file);
+  onlyKeys(doc, {"exemplars", "edges", "root", "colors"}, file);
 
   ExemplarGraph graph;
+  if (doc.contains("colors")) {
+    const std::string colors = get<std::string>(doc, "colors", file);
+    if (colors != "coarse" && colors != "own")
+      throw Error(file + ": colors '" + colors + "' must be 'coarse' (finer exemplars take the coarser ones' colours) or 'own'");
+    graph.coarseColors = colors == "coarse";
+  }
   std::vector<std::string> images;
   std::vector<std::map<std::string, std::string>> mapFiles;  // per exemplar: map name -> image
   for (const json& e : get<json>(doc, "exemplars", file)) {

@@ -6,7 +6,8 @@
 //     "exemplars": [ {"name": "regions", "image": "regions.png", "maps": {"height": "regions-h.png"}},
 //                    {"name": "grain", "image": "grain.png", "maps": {"height": "grain-h.png"}} ],
 //     "root": "regions",
-//     "edges": [ {"from": "regions", "to": "grain", "scale": 16, "region": "grain-mask.png"} ]
+//     "edges": [ {"from": "regions", "to": "grain", "scale": 16, "region": "grain-mask.png"} ],
+//     "colors": "coarse"
 //   }
 //
 // Images are read relative to the file's folder. "root" is optional (default: the first
@@ -15,6 +16,8 @@
 // limits it to part of `from`: [x, y, width, height] in pixels (wrapping), or a mask image of the
 // exemplars' size whose first channel is at least 0.5 inside. An exemplar's optional "maps" are its
 // companion maps ("normal", "roughness", "height"), each given for every exemplar or for none.
+// "colors" (optional): "coarse" (default), finer exemplars take on the colours of the coarser ones
+// they detail (ExemplarGraph::coarseColors); "own", each exemplar shows its own.
 
 #include "synthesis/exemplar_graph.h"
 

@@ -22,6 +22,7 @@ namespace {
 using cpu::GraphAtlas;
 using cpu::kRowGrain;
 using cpu::LevelGrid;
+using cpu::TexelTransfer;
 using cpu::Transfer;
 
 // Position q on a level of period p (0: none).
@@ -52,18 +53,19 @@ void upsample(const GraphAtlas& a, const uint32_t* parent, const LevelGrid& pg, 
 // Thesis §5.3's upsampling of transfers: each child's R interpolates its four nearest parents
 // bilinearly (weights 9, 3, 3, 1 / 16), the neighbours found as the parents of the children two
 // texels away, wrapped by (px, py) like the children. Integer, rounding half up.
-void upsampleTransfers(const Transfer* parent, const LevelGrid& pg, Transfer* out, const LevelGrid& g, int64_t px,
-                       int64_t py, int r0, int r1) {
-  const auto at = [&](int64_t qx, int64_t qy) {
-    return parent[size_t((wrap(qy, py) >> 1) - pg.y0) * size_t(pg.width) + size_t((wrap(qx, px) >> 1) - pg.x0)];
+void upsampleTransfers(const GraphAtlas& a, const TexelTransfer* parent, const LevelGrid& pg, TexelTransfer* out,
+                       const LevelGrid& g, int64_t px, int64_t py, int r0, int r1) {
+  const auto at = [&](int64_t qx, int64_t qy) -> const Transfer& {
+    return parent[size_t((wrap(qy, py) >> 1) - pg.y0) * size_t(pg.width) + size_t((wrap(qx, px) >> 1) - pg.x0)].r;
   };
   for (int y = r0; y < r1; ++y) {
     const int64_t qy = g.y0 + y, ny = qy + ((qy & 1) ? 2 : -2);
     for (int x = 0; x < g.width; ++x) {
       const int64_t qx = g.x0 + x, nx = qx + ((qx & 1) ? 2 : -2);
       const Transfer &p = at(qx, qy), &h = at(nx, qy), &v = at(qx, ny), &d = at(nx, ny);
-      Transfer& r = out[size_t(y) * g.width + x];
+      Transfer r;
       for (size_t c = 0; c < 3; ++c) r[c] = int16_t((9 * p[c] + 3 * (h[c] + v[c]) + d[c] + 8) >> 4);
+      out[size_t(y) * g.width + x] = a.texelTransfer(r);
     }
   }
 }
@@ -88,7 +90,7 @@ void jitter(const GraphAtlas& a, uint32_t* coords, const LevelGrid& g, uint32_t 
 // The coordinates and, with inconsistency correction, the transfers of one level (null without).
 struct LevelState {
   uint32_t* coords;
-  Transfer* transfers;
+  TexelTransfer* transfers;
 };
 
 // One correction sub-pass (cpu::correctKernel's rules): each texel of the class takes the best of
@@ -113,10 +115,9 @@ void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid
         int16_t target[kNeighborhoodDims];  // as seen: each appearance vector moved by A R
         for (int i = 0; i < kNeighborhoodSamples; ++i) {
           const size_t q = at(kDiagonalX[i], kDiagonalY[i]);
-          int16_t* t = target + i * kAppearanceDims;
-          a.appearanceShift(in.transfers[q], t);
           const int8_t* v = a.appearance + a.texel(in.coords[q]) * kAppearanceDims;
-          for (int d = 0; d < kAppearanceDims; ++d) t[d] = int16_t(t[d] + v[d]);
+          for (int d = 0; d < kAppearanceDims; ++d)
+            target[i * kAppearanceDims + d] = int16_t(v[d] + in.transfers[q].shift[size_t(d)]);
         }
         cpu::GraphTransferChoice choice(a, target, in.coords[row + x], in.transfers[row + x], outputLevel);
         for (int dy = -1; dy <= 1; ++dy)
@@ -131,7 +132,7 @@ void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid
             }
           }
         out.coords[row + x] = choice.best();
-        out.transfers[row + x] = choice.transfer();
+        out.transfers[row + x] = a.texelTransfer(choice.transfer());
       } else {
         alignas(32) int8_t target[kNeighborhoodDims];
         for (int i = 0; i < kNeighborhoodSamples; ++i)
@@ -208,7 +209,7 @@ std::vector<int64_t> graphJitterAmplitudes256(const GraphAnalysis& analysis, con
 double synthesizeGraphMemoryBytes(const Window& window) {
   // Three coordinate and transfer buffers of the padded finest level, then RGB offsets and colours.
   return double(window.width + 64) * double(window.height + 64) *
-         (3 * (sizeof(uint32_t) + sizeof(Transfer)) + 6 * sizeof(float));
+         (3 * (sizeof(uint32_t) + sizeof(TexelTransfer)) + 6 * sizeof(float));
 }
 
 SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& window,
@@ -242,7 +243,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   SynthesisResult result;
   std::vector<uint32_t> previous, current, scratch;
   const bool transfers = atlas.transfers != nullptr;
-  std::vector<Transfer> previousR, currentR, scratchR;  // with transfers only
+  std::vector<TexelTransfer> previousR, currentR, scratchR;  // with transfers only
   for (int t = 0; t <= finest; ++t) {
     const auto start = std::chrono::steady_clock::now();
     Stage stage(ctx, "level " + std::to_string(t + 1) + "/" + std::to_string(finest + 1));
@@ -250,16 +251,17 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
     const auto rows = [&](auto&& kernel) { parallelFor(0, g.height, ctx, kernel, kRowGrain); };
     current.assign(size_t(g.width) * size_t(g.height), 0);  // t = 0: the root's coarsest level, at (0, 0)
     const int64_t px = period(options.periodX, t), py = period(options.periodY, t);
-    if (transfers) currentR.assign(current.size(), Transfer{});
+    if (transfers) currentR.assign(current.size(), TexelTransfer{});
     const int64_t wx = t == first ? px : 0, wy = t == first ? py : 0;  // wrapped reads of the parent
     if (t > 0)
       rows([&](int r0, int r1) {
         upsample(atlas, previous.data(), padded[size_t(t - 1)], current.data(), g, wx, wy, r0, r1);
-        if (transfers) upsampleTransfers(previousR.data(), padded[size_t(t - 1)], currentR.data(), g, wx, wy, r0, r1);
+        if (transfers)
+          upsampleTransfers(atlas, previousR.data(), padded[size_t(t - 1)], currentR.data(), g, wx, wy, r0, r1);
       });
     rows([&](int r0, int r1) { jitter(atlas, current.data(), g, options.seed, t, amplitude256, px, py, r0, r1); });
     scratch.assign(current.size(), 0);
-    if (transfers) scratchR.assign(current.size(), Transfer{});
+    if (transfers) scratchR.assign(current.size(), TexelTransfer{});
     int inset = 0;
     for (int pass = 0; pass < options.passes; ++pass)
       for (int cy = 0; cy < options.interleave; ++cy)
@@ -295,7 +297,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
     for (int y = 0; y < window.height; ++y)
       for (int x = 0; x < window.width; ++x)
         for (int c = 0; c < 3; ++c)
-          result.colorOffsets.at(x, y, c) = float(previousR[finalIndex(x, y)][size_t(c)]) / kTransferOne;
+          result.colorOffsets.at(x, y, c) = float(previousR[finalIndex(x, y)].r[size_t(c)]) / kTransferOne;
   }
   return result;
 }

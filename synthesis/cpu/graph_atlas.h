@@ -28,6 +28,13 @@ inline Transfer compose(const Transfer& r, const int16_t* b) {
   return out;
 }
 
+/// A texel's transfer with the shift A R it gives appearance vectors (GraphAtlas::appearanceShift),
+/// computed when R changes rather than at every comparison.
+struct TexelTransfer {
+  Transfer r{};
+  std::array<int16_t, kAppearanceDims> shift{};
+};
+
 struct GraphAtlas {
   int bits = 0;     ///< subpixel bits of a coordinate
   int shift = 0;    ///< log2 of a tile's side in coordinate units
@@ -76,6 +83,11 @@ struct GraphAtlas {
       out[d] = int16_t(std::clamp<int64_t>((exact + half) >> kTransferAppearanceBits, -4096, 4096));
     }
   }
+  TexelTransfer texelTransfer(const Transfer& r) const {
+    TexelTransfer t{r, {}};
+    appearanceShift(r, t.shift.data());
+    return t;
+  }
 
  private:
   uint32_t pixelOf(uint32_t x) const {
@@ -116,28 +128,25 @@ class GraphChoice {
 /// moved by A R (GraphAtlas::appearanceShift, rounded). A candidate from neighbour q's list is shown with
 /// R_q composed with its offset b (the thesis composes b onto R_p, whose frame b was not fitted
 /// in where R_q != R_p): frame(R_q) before offering q's candidates. The target is compared in
-/// that frame, target - A R_q, and a candidate's neighbourhood moved by A b. `current` competes with R_p where it may stay; ties as GraphChoice's.
+/// that frame, target - A R_q, and a candidate's neighbourhood moved by A b. `current` competes
+/// with R_p where it may stay; ties as GraphChoice's.
 class GraphTransferChoice {
  public:
   /// `target`: the diagonal neighbours' appearance as seen (kNeighborhoodDims values, rounded).
-  GraphTransferChoice(const GraphAtlas& a, const int16_t* target, uint32_t current, const Transfer& r,
+  GraphTransferChoice(const GraphAtlas& a, const int16_t* target, uint32_t current, const TexelTransfer& r,
                       bool outputLevel)
-      : a_(a), target_(target), current_(current), best_(current), transfer_(r) {
+      : a_(a), target_(target), current_(current), best_(current), transfer_(r.r) {
     frame(r);
     static constexpr int16_t none[3] = {};
     distance_ = outputLevel || a.selfAdmissible[a.texel(current)] ? distanceTo(current, none) : INT32_MAX;
   }
 
   /// The frame of the candidates offered next: the transfer of the neighbour whose list they are in.
-  void frame(const Transfer& r) {
-    if (framed_ && r == frame_) return;
-    framed_ = true;
-    frame_ = r;
-    int16_t shift[kAppearanceDims];
-    a_.appearanceShift(r, shift);
+  void frame(const TexelTransfer& r) {
+    frame_ = r.r;
     for (int i = 0; i < kNeighborhoodSamples; ++i)
       for (int d = 0; d < kAppearanceDims; ++d)
-        seen_[i * kAppearanceDims + d] = int16_t(target_[i * kAppearanceDims + d] - shift[d]);
+        seen_[i * kAppearanceDims + d] = int16_t(target_[i * kAppearanceDims + d] - r.shift[size_t(d)]);
   }
   /// Candidate c with offset b (three values) in the current frame.
   void offer(uint32_t c, const int16_t* b) {
@@ -170,7 +179,6 @@ class GraphTransferChoice {
   const int16_t* target_;
   uint32_t current_, best_;
   Transfer transfer_, frame_{};
-  bool framed_ = false;
   int16_t seen_[kNeighborhoodDims], shifted_[kNeighborhoodDims];
   int32_t distance_;
 };

@@ -60,11 +60,12 @@ def test_synthesize_equals_the_command_line(tmp_path, cache):
 def test_synthesize_graph_equals_the_command_line(tmp_path, cache):
     photos = SOURCE / "models" / "exemplars" / "photos"
     graph = tmp_path / "g.json"
-    # Each exemplar's own image as its normal map: the synthesized normal map is the colour output.
+    # Each exemplar's own image as its normal map: with every exemplar in its own colours, the
+    # synthesized normal map is the colour output.
     exemplar = lambda name: {"name": name, "image": str(photos / f"{name}.png"),
                              "maps": {"normal": str(photos / f"{name}.png")}}
     graph.write_text(json.dumps({"exemplars": [exemplar("rock"), exemplar("stone")],
-                                 "edges": [{"from": "rock", "to": "stone", "scale": 16}]}))
+                                 "edges": [{"from": "rock", "to": "stone", "scale": 16}], "colors": "own"}))
     cli("synth", "--graph", graph, "--zoom", "4", "--window", "-8,5,40,32", "-o", tmp_path / "cli.png",
         "--apply", f"normal:{tmp_path / 'cli_n.png'}", cache_dir=cache)
     result = texfab.synthesize_graph(graph, window=(-8, 5, 40, 32), zoom=4, cache_dir=cache)
@@ -75,6 +76,17 @@ def test_synthesize_graph_equals_the_command_line(tmp_path, cache):
     assert same_bytes(tmp_path / "cli_n.png", tmp_path / "py.png")
     with pytest.raises(texfab.Error, match="zoom: expected a power of two"):
         texfab.synthesize_graph(graph, (8, 8), zoom=3)
+    # By default the stone takes on the rock's colours (colour offsets the maps do not take): the
+    # command line's bytes still.
+    coarse = tmp_path / "coarse.json"
+    coarse.write_text(json.dumps({"exemplars": [exemplar("rock"), exemplar("stone")],
+                                  "edges": [{"from": "rock", "to": "stone", "scale": 16}]}))
+    cli("synth", "--graph", coarse, "--zoom", "4", "--window", "-8,5,40,32", "-o", tmp_path / "cli_c.png",
+        cache_dir=cache)
+    result = texfab.synthesize_graph(coarse, window=(-8, 5, 40, 32), zoom=4, cache_dir=cache)
+    texfab.write_image(result.image, tmp_path / "py_c.png")
+    assert same_bytes(tmp_path / "cli_c.png", tmp_path / "py_c.png")
+    assert not np.array_equal(result.maps["normal"], result.image)
     # A tile: the command line's bytes.
     cli("synth", "--graph", graph, "--tileable", "--size", "64", "-o", tmp_path / "cli_t.png", cache_dir=cache)
     tile = texfab.synthesize_graph(graph, (64, 64), tileable=True, cache_dir=cache)

@@ -245,14 +245,23 @@ TEST(CliSynth, ExemplarGraphCompanionMapsFollowTheColours) {
       for (int x = 0; x < e.width; ++x) red.at(x, y, 0) = e.at(x, y, 0);
     writeImage(red, dir / (std::string(name) + "-h.png"));
   }
-  auto graphFile = [&](const std::string& name, const std::string& rockMaps, const std::string& stoneMaps) {
+  auto graphFile = [&](const std::string& name, const std::string& rockMaps, const std::string& stoneMaps,
+                       const std::string& colors = "own") {
     std::ofstream(dir / name) << R"({"exemplars": [{"name": "rock", "image": ")" << photos << R"(rock.png", "maps": )"
                               << rockMaps << R"(}, {"name": "stone", "image": ")" << photos << R"(stone.png", "maps": )"
-                              << stoneMaps << R"(}], "edges": [{"from": "rock", "to": "stone", "scale": 16}]})";
+                              << stoneMaps << R"(}], "edges": [{"from": "rock", "to": "stone", "scale": 16}], "colors": ")"
+                              << colors << R"("})";
     return (dir / name).string();
   };
-  const std::string graph = graphFile("g.json", R"({"normal": ")" + photos + R"(rock.png", "height": "rock-h.png"})",
-                                      R"({"normal": ")" + photos + R"(stone.png", "height": "stone-h.png"})");
+  const std::string rockMaps = R"({"normal": ")" + photos + R"(rock.png", "height": "rock-h.png"})";
+  const std::string stoneMaps = R"({"normal": ")" + photos + R"(stone.png", "height": "stone-h.png"})";
+  const std::string graph = graphFile("g.json", rockMaps, stoneMaps);
+  // In the rock's colours (the default) the stone's colours move, its maps do not.
+  const Outcome coarse = texfab("synth --graph " + graphFile("coarse.json", rockMaps, stoneMaps, "coarse") +
+                                " --zoom 16 --size 96 -q -o " + (dir / "cc.png").string() + " --apply normal:" +
+                                (dir / "cn.png").string());
+  ASSERT_EQ(coarse.status, 0) << coarse.err;
+  EXPECT_NE(readImage(dir / "cn.png").pixels, readImage(dir / "cc.png").pixels);
   for (const char* zoom : {"1", "16"}) {
     SCOPED_TRACE(zoom);
     const Outcome o = texfab("synth --graph " + graph + " --zoom " + zoom + " --size 96 -q -o " +
@@ -278,6 +287,7 @@ TEST(CliSynth, ExemplarGraphCompanionMapsFollowTheColours) {
        "the height map of exemplar 'stone' is 128x96, its exemplar 128x128"},
       {graphFile("m3.json", R"({"gloss": "rock-h.png"})", R"({"gloss": "stone-h.png"})"), "unknown field 'gloss'"},
       {graph + " --apply roughness:" + (dir / "r.png").string(), "gives no 'roughness' map"},
+      {graphFile("c.json", rockMaps, stoneMaps, "fine"), "colors 'fine' must be 'coarse'"},
   };
   for (const auto& [args, mention] : cases) {
     SCOPED_TRACE(args);

@@ -177,9 +177,10 @@ TEST(SynthesizeGraph, TransfersKeepTheCoarseExemplarsColours) {
     for (float v : image.pixels) sum += v;
     return sum / double(image.pixels.size());
   };
-  GraphAnalysisOptions off;
-  off.correctInconsistency = false;
-  const GraphAnalysis a = analyzeGraph(g), b = analyzeGraph(g, off);
+  ExemplarGraph own = g;
+  own.coarseColors = false;
+  const GraphAnalysis a = analyzeGraph(g), b = analyzeGraph(own);
+  EXPECT_NE(a.key, b.key);
   EXPECT_TRUE(b.transfers.empty());
   ASSERT_EQ(a.transfers.size(), a.candidates.size() * 3);
   for (size_t slot = 0; slot < a.candidates.size(); ++slot) {
