@@ -111,6 +111,21 @@ void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid
     if (cpu::floorMod(g.y0 + y - cy, interleave) != 0) continue;
     for (int x = firstX; x < x1; x += interleave) {
       const auto at = [&](int dx, int dy) { return size_t(y + dy) * w + size_t(x + dx); };
+      // The candidates of the 3x3 neighbours, each moved to align with this texel.
+      const auto offerCandidates = [&](auto& choice) {
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const size_t q = at(dx, dy);
+            const uint32_t* cand = a.candidates + a.texel(in.coords[q]) * size_t(a.k);
+            if constexpr (kTransfers) choice.frame(in.transfers[q]);
+            for (int i = 0; i < a.k; ++i) {
+              const int h = a.spacing(cand[i]);
+              const uint32_t moved = a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy);
+              if constexpr (kTransfers) choice.offer(moved, a.transfersOf(in.coords[q]) + 3 * i);
+              else choice.offer(moved);
+            }
+          }
+      };
       if constexpr (kTransfers) {
         int16_t target[kNeighborhoodDims];  // as seen: each appearance vector moved by A R
         for (int i = 0; i < kNeighborhoodSamples; ++i) {
@@ -120,17 +135,7 @@ void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid
             target[i * kAppearanceDims + d] = int16_t(v[d] + in.transfers[q].shift[size_t(d)]);
         }
         cpu::GraphTransferChoice choice(a, target, in.coords[row + x], in.transfers[row + x], outputLevel);
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const size_t q = at(dx, dy);
-            const uint32_t* cand = a.candidates + a.texel(in.coords[q]) * size_t(a.k);
-            const int16_t* b = a.transfersOf(in.coords[q]);
-            choice.frame(in.transfers[q]);
-            for (int i = 0; i < a.k; ++i) {
-              const int h = a.spacing(cand[i]);
-              choice.offer(a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy), b + 3 * i);
-            }
-          }
+        offerCandidates(choice);
         out.coords[row + x] = choice.best();
         out.transfers[row + x] = a.texelTransfer(choice.transfer());
       } else {
@@ -139,14 +144,7 @@ void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid
           std::copy_n(a.appearance + a.texel(in.coords[at(kDiagonalX[i], kDiagonalY[i])]) * kAppearanceDims,
                       kAppearanceDims, target + i * kAppearanceDims);
         cpu::GraphChoice choice(a, target, in.coords[row + x], outputLevel);
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const uint32_t* cand = a.candidates + a.texel(in.coords[at(dx, dy)]) * size_t(a.k);
-            for (int i = 0; i < a.k; ++i) {
-              const int h = a.spacing(cand[i]);
-              choice.offer(a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy));
-            }
-          }
+        offerCandidates(choice);
         out.coords[row + x] = choice.best();
       }
     }
