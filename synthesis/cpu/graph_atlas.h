@@ -28,6 +28,10 @@ inline Transfer compose(const Transfer& r, const int16_t* b) {
   return out;
 }
 
+/// The largest appearance shift kept: 8x an appearance vector's range, and small enough that a
+/// distance between shifted neighbourhoods (32 terms of at most (127 + 3 * 1024)^2) fits an int32.
+inline constexpr int kMaxAppearanceShift = 1024;
+
 /// A texel's transfer with the shift A R it gives appearance vectors (GraphAtlas::appearanceShift),
 /// computed when R changes rather than at every comparison.
 struct TexelTransfer {
@@ -74,13 +78,14 @@ struct GraphAtlas {
   /// The offsets b of the candidates of texel c (k * 3 values).
   const int16_t* transfersOf(uint32_t c) const { return transfers + texel(c) * size_t(k) * 3; }
   /// A r: how offset r moves an appearance vector, in whole appearance units (rounded half up,
-  /// clamped to +-4096).
+  /// clamped to +-kMaxAppearanceShift).
   void appearanceShift(const Transfer& r, int16_t* out) const {
     constexpr int64_t half = int64_t(1) << (kTransferAppearanceBits - 1);
     for (int d = 0; d < kAppearanceDims; ++d) {
       const int64_t exact = int64_t(transferAppearance[d * 3]) * r[0] + int64_t(transferAppearance[d * 3 + 1]) * r[1] +
                             int64_t(transferAppearance[d * 3 + 2]) * r[2];
-      out[d] = int16_t(std::clamp<int64_t>((exact + half) >> kTransferAppearanceBits, -4096, 4096));
+      out[d] = int16_t(std::clamp<int64_t>((exact + half) >> kTransferAppearanceBits, -kMaxAppearanceShift,
+                                           kMaxAppearanceShift));
     }
   }
   TexelTransfer texelTransfer(const Transfer& r) const {
@@ -125,7 +130,7 @@ class GraphChoice {
 
 /// GraphChoice with thesis §5.3's inconsistency correction: every option is a coordinate with the
 /// transfer R it would be shown with, and neighbourhoods compare as seen, each appearance vector
-/// moved by A R (GraphAtlas::appearanceShift, rounded). A candidate from neighbour q's list is shown with
+/// moved by A R (GraphAtlas::appearanceShift). A candidate from neighbour q's list is shown with
 /// R_q composed with its offset b (the thesis composes b onto R_p, whose frame b was not fitted
 /// in where R_q != R_p): frame(R_q) before offering q's candidates. The target is compared in
 /// that frame, target - A R_q, and a candidate's neighbourhood moved by A b. `current` competes
