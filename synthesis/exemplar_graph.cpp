@@ -28,7 +28,7 @@ namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
-constexpr uint32_t kGraphCacheVersion = 5;         // bump whenever the graph analysis changes
+constexpr uint32_t kGraphCacheVersion = 6;         // bump whenever the graph analysis changes
 
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
@@ -399,29 +399,37 @@ const GraphMap* ExemplarGraph::map(const std::string& name) const {
 namespace {
 
 // What a texel at level k shows: the image averaged over its footprint, a box h_k = 2^(L-k) pixels
-// wide centred on it (weights 1/2 at the two ends where h_k is even), toroidal, separable, in
-// fixed-order float sums. The Gaussian stack's level k, which synthesis matches, is blurred twice
-// as far (binomial passes at 1 .. h_k / 2: sigma about 0.58 h_k against the box's 0.29 h_k);
-// shown, it made every zoom blurrier than the next and read as a scale jump.
+// wide centred on it (h_k + 1 taps, 1/2 at the two ends), toroidal, separable. The
+// Gaussian stack's level k, which synthesis matches, is blurred twice as far (binomial passes at
+// 1 .. h_k / 2: sigma about 0.58 h_k against the box's 0.29 h_k); shown, it made every zoom
+// blurrier than the next and read as a scale jump. Running sums in double, in a fixed order.
 std::vector<Image> footprintStack(const Image& image) {
   const int m = image.width, levels = std::countr_zero(unsigned(m)) + 1, channels = image.channels;
+  // One pass along x or y, h even: out = (the sum of the h + 1 values centred on i, less half of
+  // the two end values) / h.
+  const auto pass = [&](const Image& in, int h, bool alongX) {
+    Image out(m, m, channels, in.format);
+    const int half = h / 2;
+    const auto at = [&](int line, int i, int c) {
+      const int j = ((i % m) + m) % m;
+      return double(alongX ? in.at(j, line, c) : in.at(line, j, c));
+    };
+    for (int line = 0; line < m; ++line)
+      for (int c = 0; c < channels; ++c) {
+        double sum = 0;  // of the h + 1 values centred on i
+        for (int o = -half; o <= half; ++o) sum += at(line, o, c);
+        for (int i = 0; i < m; ++i) {
+          const double ends = 0.5 * (at(line, i - half, c) + at(line, i + half, c));
+          (alongX ? out.at(i, line, c) : out.at(line, i, c)) = float((sum - ends) / h);
+          sum += at(line, i + half + 1, c) - at(line, i - half, c);
+        }
+      }
+    return out;
+  };
   std::vector<Image> stack;
   for (int k = 0; k < levels; ++k) {
-    const int h = 1 << (levels - 1 - k), half = h / 2;
-    const auto weight = [&](int o) { return (h % 2 == 0 && (o == -half || o == half)) ? 0.5f : 1.0f; };
-    const auto pass = [&](const Image& in, int dx, int dy) {
-      Image out(m, m, channels, in.format);
-      for (int y = 0; y < m; ++y)
-        for (int x = 0; x < m; ++x)
-          for (int c = 0; c < channels; ++c) {
-            float sum = 0;
-            for (int o = -half; o <= half; ++o)
-              sum += weight(o) * in.at(((x + o * dx) % m + m) % m, ((y + o * dy) % m + m) % m, c);
-            out.at(x, y, c) = sum / float(h);
-          }
-      return out;
-    };
-    stack.push_back(h == 1 ? image : pass(pass(image, 1, 0), 0, 1));
+    const int h = 1 << (levels - 1 - k);
+    stack.push_back(h == 1 ? image : pass(pass(image, h, true), h, false));
   }
   return stack;
 }
