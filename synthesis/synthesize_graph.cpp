@@ -117,11 +117,12 @@ void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid
           for (int dx = -1; dx <= 1; ++dx) {
             const size_t q = at(dx, dy);
             const uint32_t* cand = a.candidates + a.texel(in.coords[q]) * size_t(a.k);
+            [[maybe_unused]] const int16_t* b = kTransfers ? a.transfersOf(in.coords[q]) : nullptr;
             if constexpr (kTransfers) choice.frame(in.transfers[q]);
             for (int i = 0; i < a.k; ++i) {
               const int h = a.spacing(cand[i]);
               const uint32_t moved = a.move(cand[i], -int64_t(h) * dx, -int64_t(h) * dy);
-              if constexpr (kTransfers) choice.offer(moved, a.transfersOf(in.coords[q]) + 3 * i);
+              if constexpr (kTransfers) choice.offer(moved, b + 3 * i);
               else choice.offer(moved);
             }
           }
