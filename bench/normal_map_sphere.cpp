@@ -3,10 +3,12 @@
 // sphere whose normal map (256^2, tiled 16 x 8 times) is seen at 4, 16 and 64 texels per pixel at
 // the sphere's centre, rendered with each NormalMapFiltering at one sample per pixel and compared
 // with the supersampled truth (full-resolution normals, 256-4096 samples per pixel): the RMS
-// error of the 8-bit sRGB pixels the sphere covers, for the three test materials. With a path it
+// error of the 8-bit sRGB pixels the sphere covers, for the three test materials; and the glTF
+// route (render/material_mips.h: the roughness MIP chain a viewer samples with MIP-mapped
+// normals), with its levels as stored and through UASTC as KTX2 carries them. With a path it
 // also draws the picture of docs/normal-map-filtering.md (the stone: the truth at 1024 samples per
-// pixel, then MIP-mapped normals, Toksvig and the fitted lobes at 4; the near view's centre, the far
-// views enlarged).
+// pixel, then MIP-mapped normals, Toksvig, the fitted lobes and the glTF route through UASTC at 4;
+// the near view's centre, the far views enlarged).
 //   build/bench/normal_map_sphere [docs/images/normal_map_filtering.png]
 #include "core/image_io.h"
 #include "tests/render/test_normal_maps.h"
@@ -24,20 +26,24 @@ constexpr std::array<NormalMapFiltering, 3> kMethods = {NormalMapFiltering::Mip,
                                                         NormalMapFiltering::Lobes};
 
 void printTable() {
-  std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | MIP / lobes |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | glTF route | "
+              "glTF route, UASTC | MIP / lobes | MIP / route |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const test::TestMap& m : test::testMaps(kMapSize)) {
     const geometry::Mesh sphere = test::normalMappedSphere(m.map, kTilesAround);
-    const render::PreviewRenderer renderer(sphere);
+    const geometry::Mesh routeSphere = test::withGltfRoute(sphere, false), uastcSphere = test::withGltfRoute(sphere, true);
+    const render::PreviewRenderer renderer(sphere), route(routeSphere), routeUastc(uastcSphere);
     for (int texelsPerPixel : kTexelsPerPixel) {
       const int diameter = test::sphereDiameter(kMapSize, kTilesAround, texelsPerPixel);
       const Image truth =
           renderer.render(test::sphereView(diameter, test::truthSamples(texelsPerPixel), NormalMapFiltering::Mip));
-      std::array<double, kMethods.size()> error{};
+      std::array<double, kMethods.size() + 2> error{};
       for (size_t i = 0; i < kMethods.size(); ++i)
         error[i] = test::coveredRms(renderer.render(test::sphereView(diameter, 1, kMethods[i])), truth);
-      std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.1fx |\n", m.name.c_str(), texelsPerPixel, diameter, error[0],
-                  error[1], error[2], error[0] / error[2]);
+      error[3] = test::coveredRms(route.render(test::sphereView(diameter, 1, NormalMapFiltering::Mip)), truth);
+      error[4] = test::coveredRms(routeUastc.render(test::sphereView(diameter, 1, NormalMapFiltering::Mip)), truth);
+      std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.4f | %.4f | %.1fx | %.1fx |\n", m.name.c_str(), texelsPerPixel,
+                  diameter, error[0], error[1], error[2], error[3], error[4], error[0] / error[2], error[0] / error[3]);
       std::fflush(stdout);
     }
   }
@@ -45,14 +51,16 @@ void printTable() {
 
 void drawPicture(const char* path) {
   const geometry::Mesh sphere = test::normalMappedSphere(test::testMaps(kMapSize)[0].map, kTilesAround);
-  const render::PreviewRenderer renderer(sphere);
-  constexpr int kTile = 160, kColumns = 1 + int(kMethods.size());
+  const geometry::Mesh routeSphere = test::withGltfRoute(sphere, true);
+  const render::PreviewRenderer renderer(sphere), route(routeSphere);
+  constexpr int kTile = 160, kColumns = 2 + int(kMethods.size());
   Image sheet(kColumns * kTile, int(kTexelsPerPixel.size()) * kTile, 3, PixelFormat::UInt8);
   for (size_t row = 0; row < kTexelsPerPixel.size(); ++row) {
     const int diameter = test::sphereDiameter(kMapSize, kTilesAround, kTexelsPerPixel[row]);
     for (int column = 0; column < kColumns; ++column) {
-      const Image v = renderer.render(column == 0 ? test::sphereView(diameter, 1024, NormalMapFiltering::Mip)
-                                                  : test::sphereView(diameter, 4, kMethods[size_t(column - 1)]));
+      const Image v = column == 0               ? renderer.render(test::sphereView(diameter, 1024, NormalMapFiltering::Mip))
+                      : column == kColumns - 1 ? route.render(test::sphereView(diameter, 4, NormalMapFiltering::Mip))
+                                               : renderer.render(test::sphereView(diameter, 4, kMethods[size_t(column - 1)]));
       // Over white: the view's centre where it is larger than the tile, else the view enlarged
       // (nearest) to the tile.
       const bool crop = v.width >= kTile;

@@ -4,6 +4,8 @@
 #include "core/error.h"
 #include "core/uastc_encode.h"
 
+#include <zstd.h>
+
 #include <algorithm>
 #include <array>
 #include <string>
@@ -15,7 +17,8 @@ namespace {
 constexpr std::array<uint8_t, 12> kIdentifier = {0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A};
 constexpr uint32_t kHeaderBytes = 80;      // identifier, 9 header words, index (4 x 32 + 2 x 64 bits)
 constexpr uint32_t kLevelIndexBytes = 24;  // byteOffset, byteLength, uncompressedByteLength
-constexpr uint32_t kLevelAlignment = 16;   // lcm(16-byte UASTC blocks, 4)
+constexpr uint32_t kLevelAlignment = 16;   // lcm(16-byte UASTC blocks, 4); 1 when supercompressed
+constexpr uint32_t kSupercompressionZstd = 2;
 
 // Khronos Data Format Specification 1.3, section 5 (basic descriptor block) and 5.6-5.8.
 constexpr uint32_t kDfModelUastc = 166;
@@ -40,6 +43,14 @@ void pad(std::vector<uint8_t>& out, size_t alignment) {
 
 std::string size(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
+std::vector<uint8_t> zstdCompressed(const std::vector<uint8_t>& data, int level) {
+  std::vector<uint8_t> out(ZSTD_compressBound(data.size()));
+  const size_t n = ZSTD_compress(out.data(), out.size(), data.data(), data.size(), level);
+  if (ZSTD_isError(n)) throw Error(std::string("KTX2: Zstandard: ") + ZSTD_getErrorName(n));
+  out.resize(n);
+  return out;
+}
+
 } // namespace
 
 std::vector<uint8_t> encodeKtx2Uastc(std::span<const Image> levels, const Ktx2Options& options) {
@@ -50,10 +61,13 @@ std::vector<uint8_t> encodeKtx2Uastc(std::span<const Image> levels, const Ktx2Op
     throw Error("KTX2: base level " + size(width, height) + " is not a multiple of 4 (KHR_texture_basisu requires it)");
   int maxLevels = 1;
   while (std::max(width, height) >> maxLevels) ++maxLevels;
+  if (options.zstdLevel < 0 || options.zstdLevel > ZSTD_maxCLevel())
+    throw Error("KTX2: Zstandard level " + std::to_string(options.zstdLevel) + " is out of range (0 to " +
+                std::to_string(ZSTD_maxCLevel()) + ")");
   if (int(levels.size()) > maxLevels)
     throw Error("KTX2: " + std::to_string(levels.size()) + " MIP levels for a " + size(width, height) + " base (at most " +
                 std::to_string(maxLevels) + ")");
-  std::vector<std::vector<uint8_t>> blocks(levels.size());
+  std::vector<std::vector<uint8_t>> blocks(levels.size()), stored(levels.size());
   for (size_t i = 0; i < levels.size(); ++i) {
     const int w = std::max(1, width >> i), h = std::max(1, height >> i);
     if (levels[i].width != w || levels[i].height != h)
@@ -63,6 +77,7 @@ std::vector<uint8_t> encodeKtx2Uastc(std::span<const Image> levels, const Ktx2Op
     } catch (const Error& e) {
       throw Error("KTX2: MIP level " + std::to_string(i) + ": " + e.what());
     }
+    stored[i] = options.zstdLevel > 0 ? zstdCompressed(blocks[i], options.zstdLevel) : blocks[i];
   }
 
   const uint32_t levelCount = uint32_t(levels.size());
@@ -77,7 +92,7 @@ std::vector<uint8_t> encodeKtx2Uastc(std::span<const Image> levels, const Ktx2Op
   put32(out, 0);  // layerCount: not an array
   put32(out, 1);  // faceCount
   put32(out, levelCount);
-  put32(out, 0);  // supercompressionScheme: none
+  put32(out, options.zstdLevel > 0 ? kSupercompressionZstd : 0);  // supercompressionScheme
   // Index: DFD, key/value data (filled below), no supercompression global data.
   put32(out, dfdOffset);
   put32(out, dfdBytes);
@@ -120,12 +135,12 @@ std::vector<uint8_t> encodeKtx2Uastc(std::span<const Image> levels, const Ktx2Op
 
   // Level images, smallest first (section 3.9.7), each aligned; the index lists the base first.
   for (size_t i = levels.size(); i-- > 0;) {
-    pad(out, kLevelAlignment);
+    pad(out, options.zstdLevel > 0 ? 1 : kLevelAlignment);
     const size_t at = levelIndexAt + kLevelIndexBytes * i;
     set64(out, at, out.size());
-    set64(out, at + 8, blocks[i].size());
+    set64(out, at + 8, stored[i].size());
     set64(out, at + 16, blocks[i].size());
-    out.insert(out.end(), blocks[i].begin(), blocks[i].end());
+    out.insert(out.end(), stored[i].begin(), stored[i].end());
   }
   return out;
 }

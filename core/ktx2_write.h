@@ -3,7 +3,8 @@
 // KTX 2.0 files holding UASTC LDR 4x4 textures with their own MIP chains: the image format of
 // glTF's KHR_texture_basisu. Layout per the KTX File Format Specification 2.0 (section 3: header,
 // index, level index, DFD, key/value data, level images smallest first, each at a multiple of
-// 16 bytes = lcm(texel block size, 4)); supercompressionScheme 0 (none), vkFormat 0 (undefined),
+// 16 bytes = lcm(texel block size, 4), or 1 when supercompressed); supercompressionScheme 0 (none)
+// or 2 (Zstandard: each level compressed on its own, no global data), vkFormat 0 (undefined),
 // one Khronos basic Data Format Descriptor (Khronos Data Format Specification 1.3, section 5)
 // with colour model KHR_DF_MODEL_UASTC (166), one 128-bit sample KHR_DF_CHANNEL_UASTC_RGB, and
 // one KTXwriter key. Blocks come from core/uastc_encode.h (opaque RGB modes only).
@@ -29,6 +30,9 @@ struct Ktx2Options {
   bool srgb = false;  ///< colour data (sRGB transfer, BT.709 primaries); false: linear, unspecified
   bool gltf = true;   ///< enforce KHR_texture_basisu's base size rule (multiples of 4)
   std::string writer = "texfab";  ///< the KTXwriter value
+  /// Zstandard supercompression (supercompressionScheme 2, which KHR_texture_basisu allows for
+  /// UASTC) of each level at this level, 1 to ZSTD_maxCLevel(); 0: none.
+  int zstdLevel = 0;
 };
 
 /// A KTX2 file of UASTC blocks from a MIP chain: levels[0] is the base, each next level is

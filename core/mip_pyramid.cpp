@@ -15,14 +15,15 @@ float linearToSrgb(float c) {
   return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-MipPyramid buildMipPyramid(const Image& image, bool srgb) {
-  MipPyramid pyramid;
-  if (image.empty()) return pyramid;
-  Image base(image.width, image.height, 4, PixelFormat::Float);
+namespace {
+
+// A level as the pyramid holds it: 4 float channels, linear when `srgb`.
+Image expanded(const Image& image, bool srgb) {
+  Image level(image.width, image.height, 4, PixelFormat::Float);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x) {
       const float* s = image.pixel(x, y);
-      float* d = base.pixel(x, y);
+      float* d = level.pixel(x, y);
       const int c = image.channels;
       const float r = s[0], g = c >= 3 ? s[1] : s[0], b = c >= 3 ? s[2] : s[0];
       const float a = c == 2 ? s[1] : c >= 4 ? s[3] : 1.0f;
@@ -31,7 +32,21 @@ MipPyramid buildMipPyramid(const Image& image, bool srgb) {
       d[2] = srgb ? srgbToLinear(b) : b;
       d[3] = a;
     }
-  pyramid.levels.push_back(std::move(base));
+  return level;
+}
+
+} // namespace
+
+MipPyramid mipPyramidOf(std::span<const Image> levels, bool srgb) {
+  MipPyramid pyramid;
+  for (const Image& level : levels) pyramid.levels.push_back(expanded(level, srgb));
+  return pyramid;
+}
+
+MipPyramid buildMipPyramid(const Image& image, bool srgb) {
+  MipPyramid pyramid;
+  if (image.empty()) return pyramid;
+  pyramid.levels.push_back(expanded(image, srgb));
   while (pyramid.levels.back().width > 1 || pyramid.levels.back().height > 1) {
     const Image& src = pyramid.levels.back();
     Image dst((src.width + 1) / 2, (src.height + 1) / 2, 4, PixelFormat::Float);

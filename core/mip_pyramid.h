@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <span>
 #include <vector>
 
 namespace texfab {
@@ -22,6 +23,10 @@ struct MipPyramid {
 /// Builds the pyramid. When `srgb` (colour textures), values are decoded from sRGB to linear first
 /// so that averaging happens in linear light; alpha is always linear.
 MipPyramid buildMipPyramid(const Image& image, bool srgb);
+
+/// The pyramid of a texture's own MIP chain (levels[0] the finest), each level expanded as
+/// buildMipPyramid expands the base.
+MipPyramid mipPyramidOf(std::span<const Image> levels, bool srgb);
 
 /// Bilinear lookup in one level at (u, v) with v up (v = 0 is the bottom row), wrapping.
 Eigen::Vector4f sampleBilinear(const Image& level, float u, float v);

@@ -36,6 +36,12 @@ struct Texture {
   /// these bytes instead of re-encoding (MeshWriteOptions::textures). Describes `image`: code that
   /// replaces `image` resets it.
   std::shared_ptr<const EncodedImage> encoded;
+  /// A MIP chain of the texture's own, for viewers that can take one: levels[0] has `image`'s
+  /// size and each next level halves each side (rounding down, at least 1) down to 1x1. The glTF
+  /// writers add it as a KTX2 image (KHR_texture_basisu, UASTC) beside `image`, which stays the
+  /// fallback; null: viewers make their own MIPs. Describes `image`: code that replaces `image`
+  /// resets it.
+  std::shared_ptr<const std::vector<Image>> mips;
 
   explicit operator bool() const { return image != nullptr; }
   bool hasTransform() const { return offset != Eigen::Vector2f(0, 0) || scale != Eigen::Vector2f(1, 1) || rotation != 0; }

@@ -115,7 +115,8 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
   auto pyramid = [&](const geometry::Texture& t, bool srgb) -> MipPyramid {
     if (!t || !mesh.hasUvs()) return {};
     auto it = cache.find(t.image.get());
-    if (it == cache.end()) it = cache.emplace(t.image.get(), buildMipPyramid(*t.image, srgb)).first;
+    if (it == cache.end())
+      it = cache.emplace(t.image.get(), t.mips ? mipPyramidOf(*t.mips, srgb) : buildMipPyramid(*t.image, srgb)).first;
     return it->second;
   };
   for (const geometry::Material& m : mesh.materials)

@@ -47,7 +47,9 @@ struct RenderOptions {
   bool shadows = true;            ///< key-light shadow rays
   /// Lobes: minified normal maps shade from their filtered normal distributions (fitted on the
   /// first render that asks, about 3-5 s for a 1024^2 map on 2 cores, and not for rough
-  /// dielectrics, where it cannot show: those shade as Mip).
+  /// dielectrics, where it cannot show: those shade as Mip). Textures with a MIP chain of their own
+  /// (geometry::Texture::mips) are sampled from it, as a viewer of the written file samples them;
+  /// Mip then shows what such a viewer shows.
   NormalMapFiltering normalMapFiltering = NormalMapFiltering::Lobes;
   /// Where fitted normal distributions are kept between runs (the analysis cache); none: fitted
   /// every time.

@@ -15,8 +15,9 @@ packages=(
   # surface that cannot bound a solid rebuilt from its volume)
   libtinygltf-dev libdraco-dev draco lib3mf-dev libzip-dev libembree-dev libopenmesh-dev libcgal-dev libcgal-demo
   libopenvdb-dev
-  # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest), LittleCMS (ICC profiles)
-  zlib1g-dev libssl-dev liblcms2-dev
+  # slices: zlib (PNG checksums), OpenSSL (SHA-256 of layers in the manifest), LittleCMS (ICC profiles);
+  # Zstandard (KTX2 textures in glTF)
+  zlib1g-dev libssl-dev liblcms2-dev libzstd-dev
   # tests and benchmarks; real clients that check our outputs (Blender's glTF importer needs numpy,
   # which Debian's blender package does not pull in)
   libgtest-dev libbenchmark-dev assimp-utils nodejs npm blender python3-numpy prusa-slicer

@@ -148,4 +148,31 @@ inline std::string validateGltf(const std::filesystem::path& file) {
   return out;
 }
 
+/// three.js (npm three, for its Basis Universal transcoder) installed by scripts/install-deps.sh
+/// into .tools/, or the node_modules folder named by $TEXFAB_THREE.
+inline std::filesystem::path threeModules() {
+  if (const char* env = std::getenv("TEXFAB_THREE"); env && *env) return env;
+  return std::filesystem::path(TEXFAB_SOURCE_DIR) / ".tools" / "node_modules";
+}
+
+/// Why three's transcoder cannot run here (for GTEST_SKIP), or empty when it can.
+inline std::string threeMissing() {
+  if (std::system("command -v node >/dev/null 2>&1") != 0) return "node not installed";
+  if (!std::filesystem::exists(threeModules() / "three" / "examples" / "jsm" / "libs" / "basis" / "basis_transcoder.wasm"))
+    return "three not installed (run scripts/install-deps.sh)";
+  return {};
+}
+
+/// Runs tests/core/ktx2_transcode.mjs on a KTX2 file (each level's RGBA8 to <prefix><level>.rgba);
+/// returns its output, one JSON line.
+inline std::string transcode(const std::filesystem::path& file, const std::filesystem::path& prefix) {
+  const std::string command = "node " + quote(std::filesystem::path(TEXFAB_SOURCE_DIR) / "tests/core/ktx2_transcode.mjs") + " " +
+                              quote(threeModules()) + " " + quote(file) + " " + quote(prefix) + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), &pclose);
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (pipe && fgets(buffer.data(), int(buffer.size()), pipe.get())) out += buffer.data();
+  return out;
+}
+
 } // namespace texfab::test

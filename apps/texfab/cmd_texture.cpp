@@ -10,6 +10,7 @@
 #include "core/memory.h"
 #include "core/text.h"
 #include "geometry/io/mesh_io.h"
+#include "render/material_mips.h"
 #include "render/preview_renderer.h"
 #include "render/texture_mesh.h"
 #include "synthesis/graph_file.h"
@@ -153,6 +154,19 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
   return a;
 }
 
+// The mesh as written: for a glTF output with normal-map filtering on, each normal-mapped material
+// carries a roughness MIP chain widened by its normals' spread (render/material_mips.h).
+geometry::Mesh forFile(const geometry::Mesh& mesh, const TextureJob& job, const Run& run, const Context& ctx) {
+  const geometry::MeshFormat format = geometry::meshFormatOf(job.output);
+  if (job.previewOptions.normalMapFiltering == render::NormalMapFiltering::Mip ||
+      (format != geometry::MeshFormat::Glb && format != geometry::MeshFormat::Gltf))
+    return mesh;
+  std::vector<std::string> notes;
+  geometry::Mesh out = render::withFilteredMips(mesh, ctx, &notes);
+  for (const std::string& note : notes) run.note(note);
+  return out;
+}
+
 void runTexture(TextureJob& job) {
   Run run("texture", job.common);
   checkPrintSize(job.write, job.output);
@@ -201,7 +215,7 @@ void runTexture(TextureJob& job) {
 
   Stage write(run.ctx(), "write");
   job.write.up = geometry::upVector(upAxisFor(job.up, job.model));
-  geometry::writeMesh(result.mesh, out, job.write);
+  geometry::writeMesh(forFile(result.mesh, job, run, write.inner()), out, job.write);
   if (result.height) writeImage(*result.height, heightOut);
   write.finish(job.output + (result.height ? ", " + heightOut.filename().string() : ""));
   if (!job.preview.empty()) {

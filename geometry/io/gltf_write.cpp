@@ -4,12 +4,14 @@
 #include "core/error.h"
 #include "core/files.h"
 #include "core/image_io.h"
+#include "core/ktx2_write.h"
 #include "geometry/io/mesh_formats.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <map>
+#include <span>
 #include <tuple>
 
 namespace texfab::geometry::detail {
@@ -21,7 +23,7 @@ namespace {
 constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
-std::string encodeBase64(const std::vector<uint8_t>& data) {
+std::string encodeBase64(std::span<const uint8_t> data) {
   static const char* chars = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   out.reserve((data.size() + 2) / 3 * 4);
@@ -134,7 +136,7 @@ Mesh preparedForGltf(const Mesh& input, const MeshWriteOptions& options) {
 }
 
 bool sameTexture(const Texture& a, const Texture& b) {
-  return a.image == b.image && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
+  return a.image == b.image && a.mips == b.mips && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
 }
 
 bool sameMaterial(const Material& a, const Material& b) {
@@ -161,7 +163,8 @@ public:
 
 private:
   void sideFile(const std::string& name, std::string_view bytes);
-  json textureInfo(const Texture& t);
+  int addImage(std::span<const uint8_t> bytes, const char* mime, const char* extension);
+  json textureInfo(const Texture& t, bool colour);
   int material(const Material& m, bool textured, bool firstMesh);
   json primitives(const Mesh& mesh, const std::vector<int>& materialIndex);
 
@@ -170,11 +173,15 @@ private:
   const MeshWriteOptions& options_;
   std::vector<std::pair<fs::path, fs::path>>& sideFiles_;
   GltfBuilder b_;
-  bool usesTransform_ = false, usesWebp_ = false;
+  bool usesTransform_ = false, usesWebp_ = false, usesBasisu_ = false;
   json materials_ = json::array(), textures_ = json::array(), images_ = json::array();
   json meshes_ = json::array(), nodes_ = json::array();
-  std::map<const Image*, int> imageIndex_;  // one image per distinct Image object
-  std::vector<ImageCodec> codecs_;          // per image
+  struct StoredImage {
+    int index;          // in images_
+    ImageCodec codec;
+    int ktx2 = -1;      // the image of its own MIP chain (Texture::mips), when it has one
+  };
+  std::map<const Image*, StoredImage> stored_;  // one image per distinct Image object
   std::vector<std::pair<Material, bool>> written_;  // (material, textured) per materials_ entry
 };
 
@@ -202,36 +209,50 @@ void GltfDocument::sideFile(const std::string& name, std::string_view bytes) {
   writeFileBytes(side, bytes, final);
 }
 
-json GltfDocument::textureInfo(const Texture& t) {
-  int image;
-  const auto it = imageIndex_.find(t.image.get());
-  if (it != imageIndex_.end()) {
-    image = it->second;
+// A new entry of images_: in the GLB's buffer, a file beside a .gltf, or a data URI.
+int GltfDocument::addImage(std::span<const uint8_t> bytes, const char* mime, const char* extension) {
+  json entry;
+  if (binary_) {
+    entry = {{"bufferView", b_.bufferView(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}};
+  } else if (external_) {
+    const std::string name = path_.stem().string() + "_" + std::to_string(images_.size()) + extension;
+    sideFile(name, {reinterpret_cast<const char*>(bytes.data()), bytes.size()});
+    entry = {{"uri", uriOf(name)}};
   } else {
-    const EncodedImage file = storedImage(t, options_);
-    const char* mime = mimeTypeOf(file.codec);
-    json entry;
-    if (binary_) {
-      entry = {{"bufferView", b_.bufferView(file.bytes.data(), file.bytes.size(), 0)}, {"mimeType", mime}};
-    } else if (external_) {
-      const std::string name = path_.stem().string() + "_" + std::to_string(images_.size()) + extensionOf(file.codec);
-      sideFile(name, {reinterpret_cast<const char*>(file.bytes.data()), file.bytes.size()});
-      entry = {{"uri", uriOf(name)}};
-    } else {
-      entry = {{"uri", std::string("data:") + mime + ";base64," + encodeBase64(file.bytes)}};
-    }
-    images_.push_back(entry);
-    codecs_.push_back(file.codec);
-    image = int(images_.size() - 1);
-    imageIndex_[t.image.get()] = image;
+    entry = {{"uri", std::string("data:") + mime + ";base64," + encodeBase64(bytes)}};
   }
+  images_.push_back(entry);
+  return int(images_.size() - 1);
+}
+
+json GltfDocument::textureInfo(const Texture& t, bool colour) {
+  auto it = stored_.find(t.image.get());
+  if (it == stored_.end()) {
+    const EncodedImage file = storedImage(t, options_);
+    StoredImage image{addImage(file.bytes, mimeTypeOf(file.codec), extensionOf(file.codec)), file.codec};
+    if (t.mips) {
+      Ktx2Options ktx;
+      ktx.srgb = colour;
+      ktx.zstdLevel = 9;  // most of level 19's ratio in a tenth of its time (docs/normal-map-filtering.md)
+      image.ktx2 = addImage(encodeKtx2Uastc(*t.mips, ktx), "image/ktx2", ".ktx2");
+    }
+    it = stored_.emplace(t.image.get(), image).first;
+  }
+  const StoredImage& image = it->second;
   // A WebP image is the source of EXT_texture_webp (required: there is no fallback image).
-  if (codecs_[size_t(image)] == ImageCodec::Webp) {
-    textures_.push_back({{"sampler", 0}, {"extensions", {{"EXT_texture_webp", {{"source", image}}}}}});
+  json texture = {{"sampler", 0}};
+  if (image.codec == ImageCodec::Webp) {
+    texture["extensions"]["EXT_texture_webp"] = {{"source", image.index}};
     usesWebp_ = true;
   } else {
-    textures_.push_back({{"sampler", 0}, {"source", image}});
+    texture["source"] = image.index;
   }
+  // Its own MIP chain as KTX2 for viewers with KHR_texture_basisu; the image is the fallback.
+  if (image.ktx2 >= 0) {
+    texture["extensions"]["KHR_texture_basisu"] = {{"source", image.ktx2}};
+    usesBasisu_ = true;
+  }
+  textures_.push_back(texture);
   json info = {{"index", int(textures_.size() - 1)}};
   if (t.hasTransform()) {
     info["extensions"]["KHR_texture_transform"] = {
@@ -249,12 +270,12 @@ int GltfDocument::material(const Material& m, bool textured, bool firstMesh) {
   json pbr = {{"baseColorFactor", {m.baseColorFactor.x(), m.baseColorFactor.y(), m.baseColorFactor.z(), m.baseColorFactor.w()}},
               {"metallicFactor", m.metallicFactor},
               {"roughnessFactor", m.roughnessFactor}};
-  if (textured && m.baseColorTexture) pbr["baseColorTexture"] = textureInfo(m.baseColorTexture);
-  if (textured && m.metallicRoughnessTexture) pbr["metallicRoughnessTexture"] = textureInfo(m.metallicRoughnessTexture);
+  if (textured && m.baseColorTexture) pbr["baseColorTexture"] = textureInfo(m.baseColorTexture, true);
+  if (textured && m.metallicRoughnessTexture) pbr["metallicRoughnessTexture"] = textureInfo(m.metallicRoughnessTexture, false);
   json material = {{"pbrMetallicRoughness", pbr}};
   if (!m.name.empty()) material["name"] = m.name;
   if (textured && m.normalTexture) {
-    material["normalTexture"] = textureInfo(m.normalTexture);
+    material["normalTexture"] = textureInfo(m.normalTexture, false);
     if (m.normalScale != 1.0f) material["normalTexture"]["scale"] = m.normalScale;
   }
   if (m.doubleSided) material["doubleSided"] = true;
@@ -350,6 +371,7 @@ void GltfDocument::write() {
     doc["extensionsRequired"] = json::array({"KHR_draco_mesh_compression"});
   }
   if (usesTransform_) extensionsUsed.push_back("KHR_texture_transform");
+  if (usesBasisu_) extensionsUsed.push_back("KHR_texture_basisu");
   if (usesWebp_) {
     extensionsUsed.push_back("EXT_texture_webp");
     if (!doc.contains("extensionsRequired")) doc["extensionsRequired"] = json::array();

@@ -9,6 +9,7 @@
 #include "core/memory.h"
 #include "geometry/io/mesh_io.h"
 #include "render/break/break_model.h"
+#include "render/material_mips.h"
 #include "render/texture_mesh.h"
 #include "synthesis/graph_file.h"
 #include "synthesis/synthesize_surface_graph.h"
@@ -257,8 +258,11 @@ void bindJobs(py::module_& m) {
     const geometry::Mesh& mesh = s.mesh.cast<const geometry::Mesh&>();
     const std::filesystem::path p = toPath(path);
     py::gil_scoped_release release;
-    geometry::writeMesh(mesh, p, o);
-  }, "Writes the textured mesh (.glb .gltf .obj .3mf) as `texfab texture` does");
+    const geometry::MeshFormat format = geometry::meshFormatOf(p);
+    const bool gltf = format == geometry::MeshFormat::Glb || format == geometry::MeshFormat::Gltf;
+    geometry::writeMesh(gltf ? render::withFilteredMips(mesh) : mesh, p, o);
+  }, "Writes the textured mesh (.glb .gltf .obj .3mf) as `texfab texture` does (a normal-mapped glTF also "
+     "carries a roughness MIP chain widened by the normals' spread, as KTX2)");
 
   const render::TextureMeshOptions to;
   const synthesis::SolidSynthesisOptions so;

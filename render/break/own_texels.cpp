@@ -83,6 +83,7 @@ geometry::Mesh keepOwnTexels(const geometry::Mesh& input, int margin) {
             std::copy_n(full.pixel(x + crop.x0, y + crop.y0), full.channels, cropped->pixel(x, y));
       texture->image = std::move(cropped);
       texture->encoded.reset();
+      texture->mips.reset();
     }
     for (size_t t : triangles)
       for (int k = 0; k < 3; ++k) {

@@ -9,6 +9,7 @@
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>
+#include <zstd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -25,29 +26,6 @@ namespace texfab {
 namespace {
 
 using test::TempDir;
-
-std::filesystem::path threeModules() {
-  if (const char* env = std::getenv("TEXFAB_THREE"); env && *env) return env;
-  return std::filesystem::path(TEXFAB_SOURCE_DIR) / ".tools" / "node_modules";
-}
-
-std::string threeMissing() {
-  if (std::system("command -v node >/dev/null 2>&1") != 0) return "node not installed";
-  if (!std::filesystem::exists(threeModules() / "three" / "examples" / "jsm" / "libs" / "basis" / "basis_transcoder.wasm"))
-    return "three not installed (run scripts/install-deps.sh)";
-  return {};
-}
-
-/// Runs ktx2_transcode.mjs on a file; returns its output (one JSON line).
-std::string transcode(const std::filesystem::path& file, const std::filesystem::path& prefix) {
-  const std::string command = "node " + test::quote(std::filesystem::path(TEXFAB_SOURCE_DIR) / "tests/core/ktx2_transcode.mjs") + " " +
-                              test::quote(threeModules()) + " " + test::quote(file) + " " + test::quote(prefix) + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), &pclose);
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (pipe && fgets(buffer.data(), int(buffer.size()), pipe.get())) out += buffer.data();
-  return out;
-}
 
 /// A MIP chain whose every level is drawn directly from fn(u, v, level, channel) at its own size
 /// (as texfab's filtered chains are: not box averages of the level above).
@@ -121,16 +99,17 @@ LevelError compare(const Image& source, const std::string& rgba) {
 
 /// Writes the chain as KTX2, transcodes it with three, and checks every level: its size, alpha
 /// 255, the same pixels as our decoder, and the error against the source within bound(level).
-void readBackWithThree(const std::string& name, const std::vector<Image>& levels, const std::function<LevelError(const Image&)>& bound) {
+void readBackWithThree(const std::string& name, const std::vector<Image>& levels, const std::function<LevelError(const Image&)>& bound,
+                       const Ktx2Options& options = {}) {
   TempDir dir("texfab-ktx2");
   const std::filesystem::path file = dir / (name + ".ktx2");
-  const std::vector<uint8_t> bytes = encodeKtx2Uastc(levels);
+  const std::vector<uint8_t> bytes = encodeKtx2Uastc(levels, options);
   {
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "wb"), &std::fclose);
     ASSERT_TRUE(f);
     ASSERT_EQ(std::fwrite(bytes.data(), 1, bytes.size(), f.get()), bytes.size());
   }
-  const std::string report = transcode(file, dir / "level");
+  const std::string report = test::transcode(file, dir / "level");
   std::string expected = "\"ok\":true,\"uastc\":true,\"hasAlpha\":false,\"width\":" + std::to_string(levels[0].width) +
                          ",\"height\":" + std::to_string(levels[0].height) + ",\"levels\":[";
   for (size_t i = 0; i < levels.size(); ++i)
@@ -155,7 +134,7 @@ void readBackWithThree(const std::string& name, const std::vector<Image>& levels
 class ThreeTranscoder : public ::testing::Test {
 protected:
   void SetUp() override {
-    if (const std::string missing = threeMissing(); !missing.empty()) GTEST_SKIP() << missing;
+    if (const std::string missing = test::threeMissing(); !missing.empty()) GTEST_SKIP() << missing;
   }
 };
 
@@ -171,6 +150,8 @@ TEST_F(ThreeTranscoder, SmoothChainDecodesCloseToTheSource) {
   readBackWithThree("smooth", chain(256, 128, 9, smooth), smoothBound);
   // Not a power of two: levels 20x12, 10x6, 5x3, 2x1, 1x1 (partial blocks padded).
   readBackWithThree("smooth-odd", chain(20, 12, 5, smooth), smoothBound);
+  // Zstandard supercompression: the transcoder inflates each level to the same blocks.
+  readBackWithThree("smooth-zstd", chain(256, 128, 9, smooth), smoothBound, Ktx2Options{.zstdLevel = 9});
 }
 
 // White noise is the worst case for one line (or two planes) per 4x4 block: the decode must still
@@ -266,6 +247,24 @@ TEST(Ktx2, LayoutFollowsTheSpecification) {
   colour.srgb = true;
   const std::vector<uint8_t> g = encodeKtx2Uastc(levels, colour);
   EXPECT_EQ(get32(g, dfd + 12) & 0xFFFFFFu, 166u | (1u << 8) | (2u << 16));  // BT.709, sRGB
+
+  // Zstandard: scheme 2, each level's bytes inflate to the uncompressed file's, whose length the
+  // index keeps as uncompressedByteLength; levels follow one another without padding.
+  const std::vector<uint8_t> z = encodeKtx2Uastc(levels, Ktx2Options{.zstdLevel = 9});
+  EXPECT_EQ(get32(z, 44), 2u);
+  EXPECT_EQ(get32(z, 52), 44u);
+  EXPECT_EQ(get64(z, 72), 0u);  // no supercompression global data
+  for (size_t i = 0; i < 5; ++i) {
+    const uint64_t offset = get64(z, 80 + 24 * i), length = get64(z, 88 + 24 * i), raw = get64(z, 96 + 24 * i);
+    EXPECT_EQ(raw, get64(f, 88 + 24 * i));
+    std::vector<uint8_t> inflated(raw);
+    ASSERT_EQ(ZSTD_decompress(inflated.data(), inflated.size(), &z[offset], length), raw);
+    EXPECT_EQ(0, std::memcmp(inflated.data(), &f[get64(f, 80 + 24 * i)], raw)) << "level " << i;
+    if (i > 0) {
+      EXPECT_EQ(offset + length, get64(z, 80 + 24 * (i - 1)));
+    }
+  }
+  EXPECT_EQ(get64(z, 80) + get64(z, 88), z.size());
 }
 
 TEST(Ktx2, SameInputSameBytes) {
@@ -298,6 +297,8 @@ TEST(Ktx2, BadInputIsRefusedWithAClearError) {
   std::vector<Image> tooMany = chain(8, 4, 4, smooth);
   tooMany.push_back(tooMany.back());
   EXPECT_EQ(refusal(tooMany), "KTX2: 5 MIP levels for a 8x4 base (at most 4)");
+  EXPECT_EQ(refusal(chain(8, 8, 1, smooth), Ktx2Options{.zstdLevel = 99}),
+            "KTX2: Zstandard level 99 is out of range (0 to " + std::to_string(ZSTD_maxCLevel()) + ")");
   std::vector<Image> nan = chain(8, 8, 2, smooth);
   nan[1].at(1, 0, 2) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_EQ(refusal(nan), "KTX2: MIP level 1: UASTC: non-finite value at pixel 1");

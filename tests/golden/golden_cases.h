@@ -15,10 +15,12 @@
 #include "synthesis/synthesize_solid.h"
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 #include "atlas/generate_atlas.h"
+#include "core/ktx2_write.h"
 #include "geometry/io/mesh_io.h"
 #include "print/print_job.h"
 #include "render/break/break_model.h"
 #include "render/filter_normal_map.h"
+#include "render/material_mips.h"
 #include "render/texture_mesh.h"
 #include "tests/render/test_normal_maps.h"
 #include "tests/test_support.h"
@@ -67,7 +69,10 @@ inline constexpr Stage kGlbBytes[] = {{"bake", "42430333584d8224"}, {"encode", "
 inline constexpr Stage kFracture[] = {
     {"pieces", "d99fa5719320cec1"}, {"interior atlas", "a588d099a162a50b"}, {"interior bake", "a6a15d52f562e627"},
     {"encode", "4b1659ed76db330b"}};
-inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"}, {"lobes", "2efa9dab245331e8"}};
+inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"},
+                                         {"lobes", "2efa9dab245331e8"},
+                                         {"roughness MIPs", "6f586acca2e2a63f"},
+                                         {"ktx2", "8c73c145e1c7555b"}};
 inline constexpr Stage kSliceLayers[] = {{"layers", "dbd4250112e4a0bc"}, {"manifest", "c60d509d95f159fa"}};
 
 /// FNV-1a over bytes, continued from `h`.
@@ -409,7 +414,9 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
 
 
 /// The normal map of the bundled brick's luminance as a height field, and its NDF fitted per texel
-/// and MIP level (render/filter_normal_map.h, default options): every lobe of every level.
+/// and MIP level (render/filter_normal_map.h, default options): every lobe of every level; the glTF
+/// route's roughness MIP chain for a glossy metal with that map (render/material_mips.h) and its
+/// KTX2 file.
 inline Stages ndfMipChain() {
   const Image brick = readImage(bundled("exemplars/brick.png"));
   const Image map = test::normalMap(brick.width, 8, [&](int x, int y) {
@@ -418,7 +425,18 @@ inline Stages ndfMipChain() {
   const render::NdfMipChain chain = render::filterNormalMap(map, {}, Context{.threads = 2});
   uint64_t lobes = 0xcbf29ce484222325ull;
   for (const render::NdfLevel& l : chain.levels) lobes = hashOf(l.lobes, lobes);
-  return Stages().add("normal map", hashOf(map.pixels)).add("lobes", lobes);
+  geometry::Material metal;
+  metal.roughnessFactor = 0.3f;
+  metal.normalTexture.image = std::make_shared<const Image>(map);
+  const geometry::Material filtered = render::withFilteredMips(metal, Context{.threads = 2});
+  const std::vector<Image>& roughness = *filtered.metallicRoughnessTexture.mips;
+  uint64_t levels = 0xcbf29ce484222325ull;
+  for (const Image& level : roughness) levels = hashOf(level.pixels, levels);
+  return Stages()
+      .add("normal map", hashOf(map.pixels))
+      .add("lobes", lobes)
+      .add("roughness MIPs", levels)
+      .add("ktx2", hashOf(encodeKtx2Uastc(roughness)));
 }
 
 #endif

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -55,6 +56,23 @@ void expectValidGltf(const fs::path& file) {
   }
   const std::string report = texfab::test::validateGltf(file);
   EXPECT_EQ(report.rfind("errors=0 warnings=0 ", 0), 0u) << file << ":\n" << report;
+}
+
+// The bytes of the KTX2 image that a GLB's texture names as its KHR_texture_basisu source, or
+// empty when no texture names one.
+std::string basisuImageOf(const fs::path& glb) {
+  const std::string bytes = readText(glb);
+  uint32_t jsonLength = 0;
+  std::memcpy(&jsonLength, bytes.data() + 12, 4);
+  const nlohmann::json doc = nlohmann::json::parse(bytes.substr(20, jsonLength));
+  for (const nlohmann::json& t : doc.value("textures", nlohmann::json::array()))
+    if (const auto ext = t.value("extensions", nlohmann::json::object()); ext.contains("KHR_texture_basisu")) {
+      const nlohmann::json& image = doc["images"][ext["KHR_texture_basisu"]["source"].get<size_t>()];
+      EXPECT_EQ(image["mimeType"], "image/ktx2");
+      const nlohmann::json& view = doc["bufferViews"][image["bufferView"].get<size_t>()];
+      return bytes.substr(20 + jsonLength + 8 + view.value("byteOffset", size_t(0)), view["byteLength"].get<size_t>());
+    }
+  return {};
 }
 
 } // namespace
@@ -126,6 +144,18 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
   const texfab::geometry::Mesh withMaps = texfab::geometry::readMesh(d / "maps.glb");
   EXPECT_TRUE(withMaps.materials.at(0).normalTexture);
   EXPECT_TRUE(withMaps.materials.at(0).metallicRoughnessTexture);
+  // The normal map's spread widens roughness in a MIP chain of its own (KTX2, KHR_texture_basisu),
+  // which three.js's transcoder reads level by level down to 1x1; --no-ndf-filtering leaves it out.
+  const std::string ktx2 = basisuImageOf(d / "maps.glb");
+  ASSERT_FALSE(ktx2.empty());
+  std::ofstream(d / "mr.ktx2", std::ios::binary) << ktx2;
+  if (const std::string missing = texfab::test::threeMissing(); missing.empty()) {
+    const std::string report = texfab::test::transcode(d / "mr.ktx2", d / "mr");
+    EXPECT_NE(report.find(R"("ok":true,"uastc":true,"hasAlpha":false,"width":256,"height":256)"), std::string::npos) << report;
+    EXPECT_NE(report.find(R"({"width":1,"height":1,"bytes":4}]})"), std::string::npos) << report;
+  }
+  ASSERT_EQ(0, texture(withMapsTo(d / "plain.glb") << "--no-ndf-filtering").status);
+  EXPECT_TRUE(basisuImageOf(d / "plain.glb").empty());
   ASSERT_EQ(0, texture(withMapsTo(d / "maps.obj")).status);
   EXPECT_TRUE(fs::exists(d / "maps.mtl"));
 }

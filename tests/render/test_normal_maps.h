@@ -2,10 +2,13 @@
 #pragma once
 // Normal maps for the tests of normal-map filtering and of its shading in previews: three materials
 // as tiling height fields turned into tangent-space normal maps; a glossy metal sphere that wears
-// one, and the views and the error measure of its renders.
+// one, and the views and the error measure of its renders; the glTF route's materials as a viewer
+// of the written file sees them.
 #include "core/hash.h"
 #include "core/image.h"
+#include "core/uastc_encode.h"
 #include "geometry/mesh.h"
+#include "render/material_mips.h"
 #include "render/preview_renderer.h"
 
 #include <Eigen/Core>
@@ -137,6 +140,37 @@ inline double coveredRms(const Image& image, const Image& truth) {
       for (int c = 0; c < 3; ++c, ++n) sum += std::pow(double(image.at(x, y, c)) - truth.at(x, y, c), 2);
     }
   return std::sqrt(sum / double(std::max<size_t>(n, 1)));
+}
+
+// An image through UASTC: encoded, then decoded as a transcoder decodes it (3 channels).
+inline Image throughUastc(const Image& image) {
+  const std::vector<uint8_t> blocks = uastc::encodeImage(image);
+  const int blocksWide = (image.width + 3) / 4;
+  Image out(image.width, image.height, 3);
+  for (int by = 0; by < (image.height + 3) / 4; ++by)
+    for (int bx = 0; bx < blocksWide; ++bx) {
+      uastc::Block block;
+      std::copy_n(blocks.begin() + std::ptrdiff_t((size_t(by) * size_t(blocksWide) + size_t(bx)) * 16), 16, block.begin());
+      uastc::Texels texels;
+      uastc::decodeBlock(block, texels);
+      for (int y = 0; y < 4 && 4 * by + y < image.height; ++y)
+        for (int x = 0; x < 4 && 4 * bx + x < image.width; ++x)
+          for (int c = 0; c < 3; ++c) out.at(4 * bx + x, 4 * by + y, c) = float(texels[size_t(4 * (4 * y + x) + c)]) / 255.0f;
+    }
+  return out;
+}
+
+// The mesh as a viewer of texfab's glTF sees it with KHR_texture_basisu: each material with the
+// roughness MIP chain of render/material_mips.h, its levels through UASTC when `uastc`.
+inline geometry::Mesh withGltfRoute(geometry::Mesh mesh, bool uastc) {
+  for (geometry::Material& m : mesh.materials) {
+    m = render::withFilteredMips(m);
+    if (!uastc) continue;
+    auto levels = std::make_shared<std::vector<Image>>();
+    for (const Image& level : *m.metallicRoughnessTexture.mips) levels->push_back(throughUastc(level));
+    m.metallicRoughnessTexture.mips = std::move(levels);
+  }
+  return mesh;
 }
 
 // Supersampling that resolves every texel (each sample's footprint at most one texel), at least
