@@ -13,8 +13,6 @@
 namespace texfab {
 namespace {
 
-// KTX 2.0 section 3.1: «KTX 20»\r\n\x1A\n
-constexpr std::array<uint8_t, 12> kIdentifier = {0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A};
 constexpr uint32_t kHeaderBytes = 80;      // identifier, 9 header words, index (4 x 32 + 2 x 64 bits)
 constexpr uint32_t kLevelIndexBytes = 24;  // byteOffset, byteLength, uncompressedByteLength
 constexpr uint32_t kLevelAlignment = 16;   // lcm(16-byte UASTC blocks, 4); 1 when supercompressed
@@ -83,7 +81,7 @@ std::vector<uint8_t> encodeKtx2Uastc(std::span<const Image> levels, const Ktx2Op
   const uint32_t levelCount = uint32_t(levels.size());
   const uint32_t dfdOffset = kHeaderBytes + kLevelIndexBytes * levelCount;
   const uint32_t dfdBytes = 4 + kDfBlockBytes;
-  std::vector<uint8_t> out(kIdentifier.begin(), kIdentifier.end());
+  std::vector<uint8_t> out(kKtx2Identifier.begin(), kKtx2Identifier.end());
   put32(out, 0);  // vkFormat: VK_FORMAT_UNDEFINED (Basis Universal payload)
   put32(out, 1);  // typeSize
   put32(out, uint32_t(width));

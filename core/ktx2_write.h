@@ -19,6 +19,7 @@
 
 #include "core/image.h"
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -26,12 +27,17 @@
 
 namespace texfab {
 
+/// The first 12 bytes of every KTX 2.0 file (section 3.1): «KTX 20»\r\n\x1A\n.
+inline constexpr std::array<uint8_t, 12> kKtx2Identifier = {0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32,
+                                                            0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A};
+
 struct Ktx2Options {
   bool srgb = false;  ///< colour data (sRGB transfer, BT.709 primaries); false: linear, unspecified
   bool gltf = true;   ///< enforce KHR_texture_basisu's base size rule (multiples of 4)
   std::string writer = "texfab";  ///< the KTXwriter value
   /// Zstandard supercompression (supercompressionScheme 2, which KHR_texture_basisu allows for
-  /// UASTC) of each level at this level, 1 to ZSTD_maxCLevel(); 0: none.
+  /// UASTC) of each level at this level, 1 to ZSTD_maxCLevel(); 0: none. The compressed bytes may
+  /// differ between libzstd versions; the blocks they inflate to do not.
   int zstdLevel = 0;
 };
 

@@ -551,4 +551,24 @@ std::vector<uint8_t> encodeImage(const Image& image) {
   return out;
 }
 
+std::vector<uint8_t> decodeImage(std::span<const uint8_t> blocks, int width, int height) {
+  const int bw = (width + 3) / 4, bh = (height + 3) / 4;
+  if (width <= 0 || height <= 0 || blocks.size() != size_t(bw) * size_t(bh) * 16)
+    throw Error("UASTC: " + std::to_string(blocks.size()) + " bytes of blocks for a " + std::to_string(width) + "x" +
+                std::to_string(height) + " image");
+  std::vector<uint8_t> rgba(size_t(width) * size_t(height) * 4);
+  for (int by = 0; by < bh; ++by)
+    for (int bx = 0; bx < bw; ++bx) {
+      Block block;
+      std::copy_n(blocks.begin() + std::ptrdiff_t((size_t(by) * size_t(bw) + size_t(bx)) * 16), 16, block.begin());
+      Texels t{};
+      if (!decodeBlock(block, t)) throw Error("UASTC: block " + std::to_string(bx) + "," + std::to_string(by) + " holds mode " +
+                                              std::to_string(blockMode(block)) + ", which is not decoded here");
+      for (int y = 0; y < 4 && 4 * by + y < height; ++y)
+        for (int x = 0; x < 4 && 4 * bx + x < width; ++x)
+          std::copy_n(&t[size_t(4 * (4 * y + x))], 4, &rgba[(size_t(4 * by + y) * size_t(width) + size_t(4 * bx + x)) * 4]);
+    }
+  return rgba;
+}
+
 } // namespace texfab::uastc

@@ -61,4 +61,9 @@ int blockMode(const Block& block);
 /// or alpha other than 1.
 std::vector<uint8_t> encodeImage(const Image& image);
 
+/// Decodes the blocks of a width x height image (as encodeImage lays them out) to RGBA8, row-major,
+/// the padding cropped. Throws texfab::Error when the blocks do not cover that size or one holds a
+/// mode decodeBlock does not decode.
+std::vector<uint8_t> decodeImage(std::span<const uint8_t> blocks, int width, int height);
+
 } // namespace texfab::uastc

@@ -42,6 +42,9 @@ struct Texture {
   /// fallback; null: viewers make their own MIPs. Describes `image`: code that replaces `image`
   /// resets it.
   std::shared_ptr<const std::vector<Image>> mips;
+  /// The KTX2 file such a chain was read from (a glTF's KHR_texture_basisu image): writers carry
+  /// these bytes along when `mips` is null. Describes `image`: code that replaces `image` resets it.
+  std::shared_ptr<const std::vector<uint8_t>> encodedMips;
 
   explicit operator bool() const { return image != nullptr; }
   bool hasTransform() const { return offset != Eigen::Vector2f(0, 0) || scale != Eigen::Vector2f(1, 1) || rotation != 0; }

@@ -7,8 +7,8 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
-#include <limits>
 #include <memory>
 #include <vector>
 

@@ -5,6 +5,7 @@
 // image list, so it never touches image bytes).
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/ktx2_write.h"
 #include "geometry/io/mesh_formats.h"
 #include "geometry/io/model_path.h"
 
@@ -14,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -132,6 +134,8 @@ private:
   Texture texture(const json* textureInfo);
   // The decoded image and its file bytes.
   const std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>& image(int index);
+  // The bytes of image `index` as stored (owned holds them when they are not in a buffer).
+  std::pair<const uint8_t*, size_t> imageBytes(int index, std::vector<uint8_t>& owned, const std::string& where);
   Material material(size_t index);
 
   const fs::path& path_;
@@ -237,27 +241,27 @@ std::vector<uint32_t> GltfReader::readIndices(int index) const {
   return out;
 }
 
-const std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>& GltfReader::image(int index) {
+std::pair<const uint8_t*, size_t> GltfReader::imageBytes(int index, std::vector<uint8_t>& owned, const std::string& where) {
   if (!images_.is_array() || index < 0 || size_t(index) >= images_.size())
     throw Error(name_ + ": texture refers to image " + std::to_string(index) + " which does not exist");
-  auto& slot = imageCache_[index];
-  if (slot.first) return slot;
   const json& entry = images_[size_t(index)];
-  const std::string where = name_ + ": image " + std::to_string(index);
-  std::vector<uint8_t> owned;
-  const uint8_t* data = nullptr;
-  size_t size = 0;
   if (const json* uri = member(entry, "uri"); uri && uri->is_string()) {
     const std::string u = uri->get<std::string>();
     if (isDataUri(u)) owned = dataUriBytes(u, where);
     else owned = readFileBytes(resolveModelReference(path_, u, true), uint64_t(1) << 30);
-    data = owned.data();
-    size = owned.size();
-  } else if (const json* view = member(entry, "bufferView"); view && view->is_number_integer()) {
-    std::tie(data, size) = bufferViewBytes(view->get<int>(), where);
-  } else {
-    throw Error(where + " has neither a uri nor a bufferView");
+    return {owned.data(), owned.size()};
   }
+  if (const json* view = member(entry, "bufferView"); view && view->is_number_integer())
+    return bufferViewBytes(view->get<int>(), where);
+  throw Error(where + " has neither a uri nor a bufferView");
+}
+
+const std::pair<std::shared_ptr<const Image>, std::shared_ptr<const EncodedImage>>& GltfReader::image(int index) {
+  auto& slot = imageCache_[index];
+  if (slot.first) return slot;
+  const std::string where = name_ + ": image " + std::to_string(index);
+  std::vector<uint8_t> owned;
+  const auto [data, size] = imageBytes(index, owned, where);
   slot.first = std::make_shared<const Image>(decodeImage({data, size}, where));
   if (const std::optional<ImageCodec> codec = imageCodecOf({data, size}))
     slot.second = std::make_shared<const EncodedImage>(EncodedImage{{data, data + size}, *codec});
@@ -272,15 +276,26 @@ Texture GltfReader::texture(const json* info) {
   const int ti = index->get<int>();
   if (ti < 0 || size_t(ti) >= model_.textures.size())
     throw Error(name_ + ": material refers to texture " + std::to_string(ti) + " which does not exist");
-  int source = model_.textures[size_t(ti)].source;
+  int source = model_.textures[size_t(ti)].source, basisu = -1;
   // EXT_texture_webp names its WebP image in the texture's extension (the core source, if any, is
-  // a fallback for readers without it).
+  // a fallback for readers without it); KHR_texture_basisu a KTX2 image with its own MIP chain.
   if (const json* ts = member(doc_, "textures"); ts && ts->is_array() && size_t(ti) < ts->size())
-    if (const json* ext = member((*ts)[size_t(ti)], "extensions"))
+    if (const json* ext = member((*ts)[size_t(ti)], "extensions")) {
       if (const json* webp = member(*ext, "EXT_texture_webp"))
         if (const json* src = member(*webp, "source"); src && src->is_number_integer()) source = src->get<int>();
+      if (const json* ktx = member(*ext, "KHR_texture_basisu"))
+        if (const json* src = member(*ktx, "source"); src && src->is_number_integer()) basisu = src->get<int>();
+    }
   if (source < 0) return t;
   std::tie(t.image, t.encoded) = image(source);
+  // Kept as stored, for writers to carry along with the fallback; an optional extension that names
+  // no image is ignored, as a reader without it would.
+  if (basisu >= 0 && images_.is_array() && size_t(basisu) < images_.size()) {
+    std::vector<uint8_t> owned;
+    const auto [data, size] = imageBytes(basisu, owned, name_ + ": image " + std::to_string(basisu));
+    if (size >= 12 && std::equal(data, data + 12, kKtx2Identifier.begin()))
+      t.encodedMips = std::make_shared<const std::vector<uint8_t>>(data, data + size);
+  }
   if (images_.is_array() && size_t(source) < images_.size()) {
     const json* uri = member(images_[size_t(source)], "uri");
     if (uri && uri->is_string() && !isDataUri(uri->get<std::string>())) t.name = fs::path(uri->get<std::string>()).filename().string();

@@ -136,7 +136,7 @@ Mesh preparedForGltf(const Mesh& input, const MeshWriteOptions& options) {
 }
 
 bool sameTexture(const Texture& a, const Texture& b) {
-  return a.image == b.image && a.mips == b.mips && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
+  return a.image == b.image && a.mips == b.mips && a.encodedMips == b.encodedMips && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
 }
 
 bool sameMaterial(const Material& a, const Material& b) {
@@ -235,6 +235,8 @@ json GltfDocument::textureInfo(const Texture& t, bool colour) {
       ktx.srgb = colour;
       ktx.zstdLevel = 9;  // most of level 19's ratio in a tenth of its time (docs/normal-map-filtering.md)
       image.ktx2 = addImage(encodeKtx2Uastc(*t.mips, ktx), "image/ktx2", ".ktx2");
+    } else if (t.encodedMips) {
+      image.ktx2 = addImage(*t.encodedMips, "image/ktx2", ".ktx2");
     }
     it = stored_.emplace(t.image.get(), image).first;
   }

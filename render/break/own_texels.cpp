@@ -84,6 +84,7 @@ geometry::Mesh keepOwnTexels(const geometry::Mesh& input, int margin) {
       texture->image = std::move(cropped);
       texture->encoded.reset();
       texture->mips.reset();
+      texture->encodedMips.reset();
     }
     for (size_t t : triangles)
       for (int k = 0; k < 3; ++k) {

@@ -61,23 +61,9 @@ float noise(float u, float v, int level, int c) {
 
 uint8_t unorm8(float v) { return uint8_t(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f); }
 
-/// The pixels our own decoder gives for a level (UASTC blocks cropped to the level's size).
+/// The pixels our own decoder gives for a level.
 std::vector<uint8_t> decodeOwn(const Image& level) {
-  const std::vector<uint8_t> blocks = uastc::encodeImage(level);
-  const int bw = (level.width + 3) / 4;
-  std::vector<uint8_t> rgba(size_t(level.width) * size_t(level.height) * 4);
-  for (size_t b = 0; b < blocks.size() / 16; ++b) {
-    uastc::Block block{};
-    std::memcpy(block.data(), blocks.data() + 16 * b, 16);
-    uastc::Texels t{};
-    EXPECT_TRUE(uastc::decodeBlock(block, t));
-    const int bx = int(b) % bw, by = int(b) / bw;
-    for (int y = 0; y < 4; ++y)
-      for (int x = 0; x < 4; ++x)
-        if (4 * bx + x < level.width && 4 * by + y < level.height)
-          std::memcpy(&rgba[(size_t(4 * by + y) * size_t(level.width) + size_t(4 * bx + x)) * 4], &t[size_t(4 * (4 * y + x))], 4);
-  }
-  return rgba;
+  return uastc::decodeImage(uastc::encodeImage(level), level.width, level.height);
 }
 
 struct LevelError {
@@ -170,6 +156,16 @@ TEST(Uastc, SolidBlocksAreExact) {
     ASSERT_TRUE(uastc::decodeBlock(b, d));
     EXPECT_EQ(d, t);
   }
+}
+
+TEST(Uastc, DecodingAnImageCropsItsBlocksAndChecksThem) {
+  std::vector<uint8_t> black(5 * 3 * 4, 0);
+  for (size_t p = 3; p < black.size(); p += 4) black[p] = 255;
+  const std::vector<uint8_t> blocks = uastc::encodeImage(Image(5, 3, 3));
+  EXPECT_EQ(uastc::decodeImage(blocks, 5, 3), black);
+  EXPECT_THROW(uastc::decodeImage(blocks, 9, 3), Error);
+  std::vector<uint8_t> reserved(blocks.size(), 0xFF);
+  EXPECT_THROW(uastc::decodeImage(reserved, 5, 3), Error);
 }
 
 TEST(Uastc, RampsAreNearlyExactAndEveryModeIsUsed) {

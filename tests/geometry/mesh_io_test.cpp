@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Round trips through every mesh format, what each keeps, and the real clients that must load
 // our outputs (assimp, draco_decoder).
+#include "core/ktx2_write.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/mesh_connectivity.h"
 #include "tests/geometry/test_meshes.h"
@@ -192,6 +193,32 @@ TEST(MeshIo, GltfAndGlbRoundTripKeepEverything) {
       EXPECT_EQ(back.tagOf(ib.at(key)), cube.tagOf(t));
     }
     EXPECT_TRUE(computeConnectivity(back).closed);
+  }
+}
+
+// A texture's own MIP chain (KHR_texture_basisu) is read back as the KTX2 bytes it was written as,
+// beside the PNG fallback, and written again unchanged: converting a texfab glTF keeps it.
+TEST(MeshIo, GltfKeepsATexturesOwnMipChain) {
+  TempDir dir("texfab-ktx2");
+  Mesh cube = texturedCube();
+  auto mips = std::make_shared<std::vector<Image>>();
+  for (int side : {16, 8, 4, 2, 1}) mips->push_back(*texfab::test::gradientImage(side, side));
+  cube.materials[0].metallicRoughnessTexture.image = texfab::test::gradientImage(16, 16);
+  cube.materials[0].metallicRoughnessTexture.mips = mips;
+  for (const char* name : {"cube.glb", "cube.gltf"}) {
+    writeMesh(cube, dir / name);
+    const Mesh back = readMesh(dir / name);
+    const Texture& mr = back.materials.at(0).metallicRoughnessTexture;
+    ASSERT_TRUE(mr) << name;
+    EXPECT_EQ(mr.image->width, 16);
+    EXPECT_FALSE(mr.mips);
+    ASSERT_TRUE(mr.encodedMips) << name;
+    ASSERT_GT(mr.encodedMips->size(), 12u);
+    EXPECT_EQ(0, std::memcmp(mr.encodedMips->data(), kKtx2Identifier.data(), 12));
+    EXPECT_FALSE(back.materials.at(0).baseColorTexture.encodedMips);
+    const std::string again = std::string("again_") + name;
+    writeMesh(back, dir / again);
+    EXPECT_EQ(*readMesh(dir / again).materials.at(0).metallicRoughnessTexture.encodedMips, *mr.encodedMips) << name;
   }
 }
 
