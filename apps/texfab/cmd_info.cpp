@@ -52,6 +52,7 @@ nlohmann::json describeTexture(const geometry::Texture& t) {
   if (!t) return nullptr;
   nlohmann::json j = {{"width", t.image->width}, {"height", t.image->height}, {"channels", t.image->channels}};
   if (!t.name.empty()) j["name"] = t.name;
+  if (t.encodedMips) j["mip_chain"] = {{"format", "ktx2"}, {"bytes", t.encodedMips->size()}};
   if (t.hasTransform())
     j["transform"] = {{"offset", {t.offset.x(), t.offset.y()}}, {"scale", {t.scale.x(), t.scale.y()}}, {"rotation", t.rotation}};
   return j;
@@ -126,8 +127,9 @@ void runInfo(const InfoArgs& args) {
                 double(m.metallicFactor), double(m.roughnessFactor));
     auto texture = [](const char* what, const Texture& t) {
       if (t)
-        std::printf("        %-18s %dx%d, %d channels%s%s\n", what, t.image->width, t.image->height, t.image->channels,
-                    t.name.empty() ? "" : ", ", t.name.c_str());
+        std::printf("        %-18s %dx%d, %d channels%s%s%s\n", what, t.image->width, t.image->height, t.image->channels,
+                    t.name.empty() ? "" : ", ", t.name.c_str(),
+                    t.encodedMips ? ", and its own MIP chain (KTX2, KHR_texture_basisu)" : "");
     };
     texture("base color", m.baseColorTexture);
     texture("metallic-roughness", m.metallicRoughnessTexture);

@@ -154,6 +154,10 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
     EXPECT_NE(report.find(R"("ok":true,"uastc":true,"hasAlpha":false,"width":256,"height":256)"), std::string::npos) << report;
     EXPECT_NE(report.find(R"({"width":1,"height":1,"bytes":4}]})"), std::string::npos) << report;
   }
+  const texfab::test::CliResult info = texfab::test::runCli("info --json " + texfab::test::quote(d / "maps.glb"));
+  ASSERT_EQ(info.status, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["materials"][0]["metallic_roughness_texture"]["mip_chain"]["bytes"].get<size_t>(),
+            ktx2.size());
   ASSERT_EQ(0, texture(withMapsTo(d / "plain.glb") << "--no-ndf-filtering").status);
   EXPECT_TRUE(basisuImageOf(d / "plain.glb").empty());
   ASSERT_EQ(0, texture(withMapsTo(d / "maps.obj")).status);
