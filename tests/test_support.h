@@ -9,10 +9,13 @@
 #include <array>
 #include <atomic>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 
 #ifdef TEXFAB_CLI
 #include "synthesis/backend.h"
@@ -146,6 +149,14 @@ inline std::string validateGltf(const std::filesystem::path& file) {
   std::array<char, 4096> buffer{};
   while (pipe && fgets(buffer.data(), int(buffer.size()), pipe.get())) out += buffer.data();
   return out;
+}
+
+/// A GLB file's JSON chunk and what follows its binary chunk's header (the buffer, padded).
+inline std::pair<std::string, std::string> glbChunks(const std::string& glb) {
+  uint32_t jsonLength = 0;
+  if (glb.size() >= 20) std::memcpy(&jsonLength, glb.data() + 12, 4);
+  const size_t binAt = 20 + size_t(jsonLength) + 8;
+  return {glb.substr(std::min<size_t>(20, glb.size()), jsonLength), binAt < glb.size() ? glb.substr(binAt) : std::string()};
 }
 
 /// three.js (npm three, for its Basis Universal transcoder) installed by scripts/install-deps.sh

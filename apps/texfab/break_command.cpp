@@ -114,8 +114,7 @@ void runBreak(const std::string& command, BreakJob& job) {
   Run run(command, job.common);
   render::BreakModelOptions& o = job.options;
   // Everything checkable is checked, and every output reserved, before any work.
-  const geometry::MeshFormat format = geometry::meshFormatOf(job.output);
-  if (format != geometry::MeshFormat::Glb && format != geometry::MeshFormat::Gltf)
+  if (!geometry::meshFormatIsGltf(geometry::meshFormatOf(job.output)))
     throw UsageError(job.output + ": the pieces are glTF nodes; write .glb or .gltf");
   if (job.exemplar.empty() && job.interior.empty())
     throw UsageError("the cut faces show a solid texture: give --interior EX (or --exemplar EX to texture the outside too)");

@@ -25,7 +25,7 @@ void runConvert(ConvertJob& job) {
   Run run("convert", job.common);
   checkPrintSize(job.options, job.output);
   const MeshFormat out = meshFormatOf(job.output);  // a bad output name fails before reading
-  if (job.options.draco && out != MeshFormat::Glb && out != MeshFormat::Gltf)
+  if (job.options.draco && !meshFormatIsGltf(out))
     throw UsageError("--draco needs a .glb or .gltf output, not " + job.output);
   job.options.binary = !job.ascii;
   job.options.up = geometry::upVector(upAxisFor(job.up, job.input));

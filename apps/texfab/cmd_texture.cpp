@@ -157,9 +157,8 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
 // The mesh as written: for a glTF output with normal-map filtering on, each normal-mapped material
 // carries a roughness MIP chain widened by its normals' spread (render/material_mips.h).
 geometry::Mesh forFile(const geometry::Mesh& mesh, const TextureJob& job, const Run& run, const Context& ctx) {
-  const geometry::MeshFormat format = geometry::meshFormatOf(job.output);
   if (job.previewOptions.normalMapFiltering == render::NormalMapFiltering::Mip ||
-      (format != geometry::MeshFormat::Glb && format != geometry::MeshFormat::Gltf))
+      !geometry::meshFormatIsGltf(geometry::meshFormatOf(job.output)))
     return mesh;
   std::vector<std::string> notes;
   geometry::Mesh out = render::withFilteredMips(mesh, ctx, &notes);

@@ -46,8 +46,7 @@ const char* meshFormatName(MeshFormat format) {
 }
 
 bool meshFormatCarriesTextures(MeshFormat format) {
-  return format == MeshFormat::Obj || format == MeshFormat::Gltf || format == MeshFormat::Glb ||
-         format == MeshFormat::ThreeMf;  // base colour only
+  return format == MeshFormat::Obj || meshFormatIsGltf(format) || format == MeshFormat::ThreeMf;  // 3MF: base colour only
 }
 
 Mesh readMesh(const fs::path& path, const Context& ctx) {
@@ -95,7 +94,7 @@ void writeCommitted(const fs::path& path, Write&& write) {
 void writeMesh(const Mesh& mesh, const fs::path& path, const MeshWriteOptions& options) {
   const MeshFormat format = meshFormatOf(path);
   validateMesh(mesh, path.string());
-  if (options.draco && format != MeshFormat::Gltf && format != MeshFormat::Glb)
+  if (options.draco && !meshFormatIsGltf(format))
     throw Error(path.string() + ": Draco compression needs a .glb or .gltf output");
   writeCommitted(path, [&](const fs::path& tmp, SideFiles& sideFiles) {
     switch (format) {
@@ -133,7 +132,7 @@ double millimetresPerUnit(const Mesh& mesh, const MeshWriteOptions& options) {
 
 void writeScene(std::span<const SceneNode> nodes, const fs::path& path, const MeshWriteOptions& options) {
   const MeshFormat format = meshFormatOf(path);
-  if (format != MeshFormat::Gltf && format != MeshFormat::Glb)
+  if (!meshFormatIsGltf(format))
     throw Error(path.string() + ": a scene of several meshes needs a .glb or .gltf output");
   if (nodes.empty()) throw Error(path.string() + ": a scene needs at least one mesh");
   for (const SceneNode& node : nodes) validateMesh(node.mesh, path.string() + " (" + node.name + ")");

@@ -32,6 +32,9 @@ const char* meshFormatName(MeshFormat format);
 /// only); PLY, OFF and STL do not.
 bool meshFormatCarriesTextures(MeshFormat format);
 
+/// Whether the format is glTF (.gltf or .glb).
+inline bool meshFormatIsGltf(MeshFormat format) { return format == MeshFormat::Gltf || format == MeshFormat::Glb; }
+
 /// Reads a mesh. Texture images of OBJ and glTF materials are decoded (and their file bytes kept:
 /// Texture::encoded). An OBJ whose .mtl or texture file is missing loads with plain materials and
 /// a warning through ctx, as other OBJ readers do.

@@ -258,9 +258,7 @@ void bindJobs(py::module_& m) {
     const geometry::Mesh& mesh = s.mesh.cast<const geometry::Mesh&>();
     const std::filesystem::path p = toPath(path);
     py::gil_scoped_release release;
-    const geometry::MeshFormat format = geometry::meshFormatOf(p);
-    const bool gltf = format == geometry::MeshFormat::Glb || format == geometry::MeshFormat::Gltf;
-    geometry::writeMesh(gltf ? render::withFilteredMips(mesh) : mesh, p, o);
+    geometry::writeMesh(geometry::meshFormatIsGltf(geometry::meshFormatOf(p)) ? render::withFilteredMips(mesh) : mesh, p, o);
   }, "Writes the textured mesh (.glb .gltf .obj .3mf) as `texfab texture` does (a normal-mapped glTF also "
      "carries a roughness MIP chain widened by the normals' spread, as KTX2)");
 

@@ -304,15 +304,12 @@ TEST(MeshIo, DracoOutputDecodesWithDracoDecoder) {
   // The single primitive's Draco stream is the first buffer view: cut it out and decode it.
   std::ifstream in(dir / "cube.glb", std::ios::binary);
   const std::string glb((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  uint32_t jsonLength = 0;
-  std::memcpy(&jsonLength, glb.data() + 12, 4);
-  const std::string json = glb.substr(20, jsonLength);
+  const auto [json, bin] = texfab::test::glbChunks(glb);
   const size_t view = json.find("\"bufferViews\"");
   ASSERT_NE(view, std::string::npos);
   const size_t lengthAt = json.find("\"byteLength\":", view);
   const size_t offsetAt = json.find("\"byteOffset\":", view);
   const size_t length = std::stoul(json.substr(lengthAt + 13)), offset = std::stoul(json.substr(offsetAt + 13));
-  const std::string bin = glb.substr(20 + jsonLength + 8);
   std::ofstream(dir / "cube.drc", std::ios::binary) << bin.substr(offset, length);
   ASSERT_EQ(run("draco_decoder -i '" + (dir / "cube.drc").string() + "' -o '" + (dir / "decoded.obj").string() + "'"), 0);
   const Mesh decoded = readMesh(dir / "decoded.obj");

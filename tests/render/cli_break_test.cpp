@@ -83,8 +83,7 @@ TEST_F(CliBreak, FractureWritesValidPiecesAndAReport) {
   EXPECT_LE(r["measures"]["crack_edge_seams"]["ratio"].get<double>(), 1.1);
   // One node (named, placed at its centroid) and mesh per piece, two materials shared.
   const std::string glb = readText(dir / "pieces.glb");
-  const uint32_t jsonLength = *reinterpret_cast<const uint32_t*>(glb.data() + 12);
-  const nlohmann::json doc = nlohmann::json::parse(glb.substr(20, jsonLength));
+  const nlohmann::json doc = nlohmann::json::parse(texfab::test::glbChunks(glb).first);
   ASSERT_EQ(doc["nodes"].size(), 5u);
   EXPECT_EQ(doc["meshes"].size(), 5u);
   EXPECT_EQ(doc["materials"].size(), 2u);

@@ -61,16 +61,14 @@ void expectValidGltf(const fs::path& file) {
 // The bytes of the KTX2 image that a GLB's texture names as its KHR_texture_basisu source, or
 // empty when no texture names one.
 std::string basisuImageOf(const fs::path& glb) {
-  const std::string bytes = readText(glb);
-  uint32_t jsonLength = 0;
-  std::memcpy(&jsonLength, bytes.data() + 12, 4);
-  const nlohmann::json doc = nlohmann::json::parse(bytes.substr(20, jsonLength));
+  const auto [json, bin] = texfab::test::glbChunks(readText(glb));
+  const nlohmann::json doc = nlohmann::json::parse(json);
   for (const nlohmann::json& t : doc.value("textures", nlohmann::json::array()))
     if (const auto ext = t.value("extensions", nlohmann::json::object()); ext.contains("KHR_texture_basisu")) {
       const nlohmann::json& image = doc["images"][ext["KHR_texture_basisu"]["source"].get<size_t>()];
       EXPECT_EQ(image["mimeType"], "image/ktx2");
       const nlohmann::json& view = doc["bufferViews"][image["bufferView"].get<size_t>()];
-      return bytes.substr(20 + jsonLength + 8 + view.value("byteOffset", size_t(0)), view["byteLength"].get<size_t>());
+      return bin.substr(view.value("byteOffset", size_t(0)), view["byteLength"].get<size_t>());
     }
   return {};
 }
