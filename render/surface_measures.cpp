@@ -108,8 +108,9 @@ ScaleMeasure measureScale(const synthesis::SurfaceLevel& finest, const std::vect
 }
 
 SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& image,
-                                       const Image& exemplar, const AtlasFields& fields, int samples, const Context& ctx) {
-  constexpr int r = 3;
+                                       const Image& exemplar, const AtlasFields& fields,
+                                       const synthesis::FidelityOptions& options, const Context& ctx) {
+  const int r = options.radius, samples = options.samples;
   const int c = colorChannels(exemplar);
   if (colorChannels(image) != c) throw Error("surface fidelity: image and exemplar differ in colour channels");
   SurfaceFidelity out;
@@ -145,7 +146,7 @@ SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, co
     patches.insert(patches.end(), patch.begin(), patch.end());
     ++out.samples;
   }
-  if (out.samples) out.fidelity = synthesis::patchFidelity(patches, exemplar, r, ctx);
+  if (out.samples) out.fidelity = synthesis::patchFidelity(patches, exemplar, options, ctx);
   return out;
 }
 

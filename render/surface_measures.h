@@ -8,6 +8,7 @@
 #include "atlas/rasterize_atlas.h"
 #include "core/context.h"
 #include "core/image.h"
+#include "synthesis/quality_measures.h"
 #include "synthesis/synthesize_surface.h"
 
 #include <cstddef>
@@ -43,15 +44,17 @@ ScaleMeasure measureScale(const synthesis::SurfaceLevel& finest, const std::vect
                           const atlas::AtlasFields& fields, int exemplarWidth, int exemplarHeight,
                           double requestedPixelsPerUnit, double tolerance = 0.15);
 
-/// Neighborhood fidelity in exemplar space (synthesis/quality_measures.h): at up to `samples`
-/// chart texels spread over the atlas, the 7x7 exemplar-space neighborhood is resampled from the
-/// atlas image (bilinear, at p + J⁻¹(i, j)); neighborhoods that leave their chart are skipped.
+/// Neighborhood fidelity in exemplar space (synthesis/quality_measures.h): at up to
+/// options.samples chart texels spread over the atlas, the exemplar-space neighborhood of
+/// options.radius is resampled from the atlas image (bilinear, at p + J⁻¹(i, j)); neighborhoods
+/// that leave their chart are skipped.
 struct SurfaceFidelity {
   double fidelity = 0;
   size_t samples = 0;
 };
 SurfaceFidelity measureSurfaceFidelity(const synthesis::SurfaceLevel& finest, const Image& atlasImage,
-                                       const Image& exemplar, const atlas::AtlasFields& fields, int samples = 1024,
+                                       const Image& exemplar, const atlas::AtlasFields& fields,
+                                       const synthesis::FidelityOptions& options = {.samples = 1024},
                                        const Context& ctx = {});
 
 } // namespace texfab::render

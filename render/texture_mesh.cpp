@@ -222,6 +222,7 @@ void TextureJob::synthesize() {
     synthesis::SurfaceSynthesisResult s = ex_.graph ? synthesizeSurfaceGraph(*ex_.graph, domain_, o_.surface, stage.inner())
                                                     : synthesizeSurface(*ex_.analysis, domain_, o_.surface, ctx_);
     r_.coords = std::move(s.coords);
+    r_.colorOffsets = std::move(s.colorOffsets);
     r_.exemplarPixelsPerTexel = s.exemplarPixelsPerTexel;
     r_.synthesisLevels = s.levels;
     stage.finish(std::to_string(s.levels.size()) + " levels, " + figure(s.exemplarPixelsPerTexel) +
@@ -271,6 +272,9 @@ void TextureJob::resolveMaps() {
   };
   r_.baseColor = bake(colorChannels, [&](size_t s, float* out) {
     for (int ch = 0; ch < colorChannels; ++ch) out[ch] = lookup(colors, s, ch, magnified);
+    if (!r_.colorOffsets.empty())  // a graph's transfers (synthesis::graphColors' rule)
+      for (int ch = 0; ch < colorChannels; ++ch)
+        out[ch] = std::clamp(out[ch] + r_.colorOffsets[s][size_t(ch)], 0.0f, 1.0f);
   });
   if (ex_.normal)
     r_.normal = bake(3, [&](size_t s, float* out) {
@@ -297,7 +301,8 @@ void TextureJob::measure() {
   if (surface_ && !ex_.graph) {  // against one exemplar: not a graph's
     r_.measures.scale =
         measureScale(sites, r_.coords, r_.atlas.fields, ex_.analysis->width, ex_.analysis->height, r_.textureScale);
-    r_.measures.fidelity = measureSurfaceFidelity(sites, *r_.baseColor, exemplar_, r_.atlas.fields, 1024, ctx_);
+    r_.measures.fidelity =
+        measureSurfaceFidelity(sites, *r_.baseColor, exemplar_, r_.atlas.fields, {.samples = 1024}, ctx_);
     detail += ", scale within 15 % on " + figure(100 * r_.measures.scale->fractionWithin) + " % of the surface, fidelity " +
               figure(r_.measures.fidelity->fidelity);
   }

@@ -26,6 +26,7 @@
 #include "synthesis/synthesize_solid.h"
 #include "synthesis/synthesize_surface.h"
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -78,6 +79,8 @@ struct TextureMeshResult {
   /// neighbors are linked only when measures are asked for).
   synthesis::SurfaceLevel sites;
   std::vector<uint32_t> coords;             ///< surface mode: exemplar coordinate per site
+  /// With a graph's transfers: the RGB offset each site's colour is shown with (not the maps')
+  std::vector<std::array<float, 3>> colorOffsets;
   SolidSites solid;                         ///< solid mode: the solid texture at the sites
   double textureScale = 0;                  ///< exemplar pixels per model unit used
   double exemplarPixelsPerTexel = 0;

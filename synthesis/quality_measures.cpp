@@ -140,8 +140,9 @@ std::vector<float> sampledNeighborhoods(const Image& image, int r, int samples, 
 
 } // namespace
 
-double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx) {
-  return fidelityOf(patches, exemplar, radius, true, false, ctx);
+double patchFidelity(std::span<const float> patches, const Image& exemplar, const FidelityOptions& options,
+                     const Context& ctx) {
+  return fidelityOf(patches, exemplar, options.radius, options.toroidal, options.removeMean, ctx);
 }
 
 double neighborhoodFidelity(const Image& image, const Image& exemplar, const FidelityOptions& options, const Context& ctx) {

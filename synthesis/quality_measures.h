@@ -42,8 +42,10 @@ double neighborhoodCompleteness(const Image& image, const Image& exemplar, const
 
 /// Fidelity of neighborhoods gathered elsewhere (e.g. resampled from a surface texture in
 /// exemplar space): `patches` holds (2*radius+1)^2 neighborhoods of the exemplar's colour channels
-/// (3, or 1 for grey), row-major, channels interleaved, values in [0,1]. Same measure as above.
-double patchFidelity(std::span<const float> patches, const Image& exemplar, int radius, const Context& ctx = {});
+/// (3, or 1 for grey), row-major, channels interleaved, values in [0,1]. Same measure as above
+/// (options.samples unused).
+double patchFidelity(std::span<const float> patches, const Image& exemplar, const FidelityOptions& options = {},
+                     const Context& ctx = {});
 
 /// Histogram distance: the largest per-channel earth mover's distance between the value
 /// histograms (256 bins over [0,1]) of the image and the exemplar, in value units. 0 = identical.

@@ -20,6 +20,7 @@ namespace texfab::synthesis {
 namespace {
 
 using cpu::GraphAtlas;
+using cpu::GraphLevelState;
 using cpu::kRowGrain;
 using cpu::LevelGrid;
 using cpu::TexelTransfer;
@@ -62,10 +63,8 @@ void upsampleTransfers(const GraphAtlas& a, const TexelTransfer* parent, const L
     const int64_t qy = g.y0 + y, ny = qy + ((qy & 1) ? 2 : -2);
     for (int x = 0; x < g.width; ++x) {
       const int64_t qx = g.x0 + x, nx = qx + ((qx & 1) ? 2 : -2);
-      const Transfer &p = at(qx, qy), &h = at(nx, qy), &v = at(qx, ny), &d = at(nx, ny);
-      Transfer r;
-      for (size_t c = 0; c < 3; ++c) r[c] = int16_t((9 * p[c] + 3 * (h[c] + v[c]) + d[c] + 8) >> 4);
-      out[size_t(y) * g.width + x] = a.texelTransfer(r);
+      out[size_t(y) * g.width + x] =
+          a.texelTransfer(cpu::upsampledTransfer(at(qx, qy), at(nx, qy), at(qx, ny), at(nx, ny)));
     }
   }
 }
@@ -87,12 +86,6 @@ void jitter(const GraphAtlas& a, uint32_t* coords, const LevelGrid& g, uint32_t 
     }
 }
 
-// The coordinates and, with inconsistency correction, the transfers of one level (null without).
-struct LevelState {
-  uint32_t* coords;
-  TexelTransfer* transfers;
-};
-
 // One correction sub-pass (cpu::correctKernel's rules): each texel of the class takes the best of
 // { C_i(S[q+D]) - h D } (h of each candidate's level, wrapped in its tile) in a node S[q] may move
 // to (GraphAnalysis::moves), and S[q] itself where it may stay, or at the output level (nothing
@@ -100,8 +93,8 @@ struct LevelState {
 // to S[q], then to the smallest coordinate. With transfers, neighbourhoods compare as seen and a
 // choice carries its transfer (cpu::GraphTransferChoice).
 template <bool kTransfers>
-void correct(const GraphAtlas& a, LevelState in, LevelState out, const LevelGrid& g, bool outputLevel, int interleave,
-             int cx, int cy, int x0, int x1, int r0, int r1) {
+void correct(const GraphAtlas& a, GraphLevelState in, GraphLevelState out, const LevelGrid& g, bool outputLevel,
+             int interleave, int cx, int cy, int x0, int x1, int r0, int r1) {
   const auto w = size_t(g.width);
   const int firstX = x0 + int(cpu::floorMod(cx - (g.x0 + x0), interleave));
   for (int y = r0; y < r1; ++y) {
@@ -266,7 +259,7 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
       for (int cy = 0; cy < options.interleave; ++cy)
         for (int cx = 0; cx < options.interleave; ++cx) {
           ++inset;
-          const LevelState in{current.data(), currentR.data()}, out{scratch.data(), scratchR.data()};
+          const GraphLevelState in{current.data(), currentR.data()}, out{scratch.data(), scratchR.data()};
           parallelFor(inset, g.height - inset, ctx, [&](int r0, int r1) {
             const auto kernel = transfers ? correct<true> : correct<false>;
             kernel(atlas, in, out, g, t == finest, options.interleave, cx, cy, inset, g.width - inset, r0, r1);

@@ -78,6 +78,9 @@ struct SurfaceSynthesisResult {
   std::vector<uint32_t> coords;   ///< one subpixel exemplar coordinate (kSubpixelBits) per site of levels[0]
   std::vector<LevelStats> levels; ///< per synthesized atlas level, coarsest first (level = atlas level)
   double exemplarPixelsPerTexel = 0; ///< median sqrt|det J| at the finest level
+  /// Graph synthesis with transfers (synthesize_surface_graph.h): the RGB offset each site's colour
+  /// is shown with; empty otherwise.
+  std::vector<std::array<float, 3>> colorOffsets;
 };
 
 /// Median over a level's sites of sqrt|det J| (exemplar pixels per texel), ignoring singular or

@@ -13,6 +13,7 @@
 #include <bit>
 #include <cmath>
 #include <string>
+#include <type_traits>
 
 namespace texfab::synthesis {
 
@@ -21,7 +22,10 @@ namespace {
 using cpu::applyJ;
 using cpu::forSites;
 using cpu::GraphAtlas;
+using cpu::GraphLevelState;
 using cpu::Offset;
+using cpu::TexelTransfer;
+using cpu::Transfer;
 constexpr int kOne = cpu::kSubpixelOne;
 constexpr int kMaxSurfaceAtlasSide = 65536 / kOne;  // packCoord's 16 bits, in pixels
 
@@ -78,62 +82,99 @@ void jitter(const GraphAtlas& a, const LevelView& v, uint32_t* coords, uint32_t 
   }
 }
 
+// Thesis §5.3's upsampling of transfers: a child's R is bilinear from its four nearest parents,
+// its own and the parent's neighbours toward the child's side ((x, y) mod 2); a missing neighbour
+// (an open boundary) counts as the parent itself.
+void upsampleTransfers(const GraphAtlas& a, const LevelView& v, const SurfaceLevel& parentSites,
+                       const TexelTransfer* parent, TexelTransfer* out, size_t b, size_t e) {
+  for (size_t s = b; s < e; ++s) {
+    const int32_t p = v.sites.parent[s];
+    const int sx = (v.sites.x[s] & 1) ? 1 : -1, sy = (v.sites.y[s] & 1) ? 1 : -1;
+    const auto toward = [&](int dx, int dy) -> const Transfer& {
+      const int32_t n = parentSites.neighbors[size_t(p)][size_t(cpu::stepIndex(dx, dy))];
+      return parent[n >= 0 ? n : p].r;
+    };
+    out[s] = a.texelTransfer(cpu::upsampledTransfer(parent[p].r, toward(sx, 0), toward(0, sy), toward(sx, sy)));
+  }
+}
+
 // One correction sub-pass over the sites of class `cls` (cpu::correctSurfaceKernel's rules, each
 // step scaled to the stack level of the pointer it moves): the target's sample at diagonal Δ is
 // the mean appearance of S[n] + h(S[n]) Δ - 2^(t-k) J(p)δ over the two steps δ toward J⁻¹Δ;
-// candidates C_i(S[n]) - 2^(t-k_i) J(p)δ over the 8 neighbours and C_i(S[s]), in nodes S[s] may
-// move to (GraphAnalysis::moves); S[s] itself competes
-// where its tile is admissible to itself or at the output level (synthesize_graph.cpp's rule).
-void correct(const GraphAtlas& a, const LevelView& v, const uint32_t* in, uint32_t* out, bool outputLevel, int cls,
-             size_t b, size_t e) {
+// candidates C_i(S[n]) - 2^(t-k) J(p)δ over the 8 neighbours and C_i(S[s]), in nodes S[s] may
+// move to (GraphAnalysis::moves); S[s] itself competes where its tile is admissible to itself or
+// at the output level (synthesize_graph.cpp's rule). With transfers, each estimate is seen with its
+// neighbour's R, and a candidate from S[n]'s list carries R_n composed with its offset
+// (cpu::GraphTransferChoice), as in the plane.
+template <bool kTransfers>
+void correct(const GraphAtlas& a, const LevelView& v, GraphLevelState in, GraphLevelState out, bool outputLevel,
+             int cls, size_t b, size_t e) {
   const SurfaceLevel& level = v.sites;
+  using Value = std::conditional_t<kTransfers, int16_t, int8_t>;
   for (size_t s = b; s < e; ++s) {
-    out[s] = in[s];
+    out.coords[s] = in.coords[s];
+    if constexpr (kTransfers) out.transfers[s] = in.transfers[s];
     if (((level.x[s] & 1) | ((level.y[s] & 1) << 1)) != cls) continue;
     const std::array<int32_t, 8>& nb = level.neighbors[s];
-    const uint32_t current = in[s];
+    const uint32_t current = in.coords[s];
     const auto back = [&](int tile, int d) {  // -J(p) δ_d in the tile's pixels, subpixels
       const Offset o = applyJ(v.jacobian(s, tile), float(kSurfaceStepX[d]), float(kSurfaceStepY[d]));
       return Offset{-o.x, -o.y};
     };
+    // Channel c of the appearance at `at`, as site n shows it.
+    const auto estimate = [&](size_t n, uint32_t at, int c) {
+      const int8_t value = a.appearance[a.texel(at) * kAppearanceDims + size_t(c)];
+      if constexpr (kTransfers) return int16_t(value + in.transfers[n].shift[size_t(c)]);
+      else return value;
+    };
 
-    alignas(32) int8_t target[kNeighborhoodDims];
+    alignas(32) Value target[kNeighborhoodDims];
     for (int i = 0; i < kNeighborhoodSamples; ++i) {
-      const int8_t* estimates[2];
+      struct { size_t n; uint32_t at; } from[2];
       int count = 0;
       for (int d : cpu::stepsToward(level.jacobian[s], float(kDiagonalX[i]), float(kDiagonalY[i]))) {
         const int32_t n = nb[size_t(d)];
         if (n < 0) continue;
-        const uint32_t base = in[n];
+        const uint32_t base = in.coords[n];
         const int64_t h = int64_t(a.spacing(base)) * kOne;
         const Offset o = back(a.tile(base), d);
-        estimates[count++] = a.appearance + a.texel(a.move(base, h * kDiagonalX[i] + o.x, h * kDiagonalY[i] + o.y)) * kAppearanceDims;
+        from[count++] = {size_t(n), a.move(base, h * kDiagonalX[i] + o.x, h * kDiagonalY[i] + o.y)};
       }
       if (count == 0) {  // an open boundary on that side: from the site itself
         const int64_t h = int64_t(a.spacing(current)) * kOne;
-        estimates[count++] = a.appearance + a.texel(a.move(current, h * kDiagonalX[i], h * kDiagonalY[i])) * kAppearanceDims;
+        from[count++] = {s, a.move(current, h * kDiagonalX[i], h * kDiagonalY[i])};
       }
-      for (int c = 0; c < kAppearanceDims; ++c)
+      for (int c = 0; c < kAppearanceDims; ++c) {
+        const int e0 = estimate(from[0].n, from[0].at, c);
         target[i * kAppearanceDims + c] =
-            count == 1 ? estimates[0][c] : int8_t((int(estimates[0][c]) + int(estimates[1][c])) >> 1);
+            count == 1 ? Value(e0) : Value((e0 + estimate(from[1].n, from[1].at, c)) >> 1);
+      }
     }
 
-    cpu::GraphChoice choice(a, target, current, outputLevel);
+    auto choice = [&] {
+      if constexpr (kTransfers) return cpu::GraphTransferChoice(a, target, current, in.transfers[s], outputLevel);
+      else return cpu::GraphChoice(a, target, current, outputLevel);
+    }();
     for (int d = 0; d <= 8; ++d) {
       const int32_t n = d < 8 ? nb[size_t(d)] : int32_t(s);
       if (n < 0) continue;
-      const uint32_t base = in[n];
+      const uint32_t base = in.coords[n];
       // S[n]'s subpixel offset from its nearest pixel, kept.
       const int fracX = int((coordU(base) + kOne / 2) & (kOne - 1)) - kOne / 2;
       const int fracY = int((coordV(base) + kOne / 2) & (kOne - 1)) - kOne / 2;
       const uint32_t* cand = a.candidates + a.texel(base) * size_t(a.k);
+      [[maybe_unused]] const int16_t* offsets = kTransfers ? a.transfersOf(base) : nullptr;
+      if constexpr (kTransfers) choice.frame(in.transfers[n]);
       for (int i = 0; i < a.k; ++i) {
         const uint32_t c0 = a.fromPixel(cand[i]);
         const Offset o = d < 8 ? back(a.tile(c0), d) : Offset{0, 0};
-        choice.offer(a.move(c0, fracX + o.x, fracY + o.y));
+        const uint32_t moved = a.move(c0, fracX + o.x, fracY + o.y);
+        if constexpr (kTransfers) choice.offer(moved, offsets + 3 * i);
+        else choice.offer(moved);
       }
     }
-    out[s] = choice.best();
+    out.coords[s] = choice.best();
+    if constexpr (kTransfers) out.transfers[s] = a.texelTransfer(choice.transfer());
   }
 }
 
@@ -167,7 +208,9 @@ SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, con
   const std::vector<int64_t> amplitude256 = graphJitterAmplitudes256(analysis, options.jitter);
   const int subpasses = options.correct ? options.passes * 4 : 0;
 
+  const bool transfers = atlas.transfers != nullptr;
   std::vector<uint32_t> previous, current, scratch;
+  std::vector<TexelTransfer> previousR, currentR, scratchR;  // with transfers only
   for (int a = top; a >= 0; --a) {
     const auto start = std::chrono::steady_clock::now();
     const int t = output - a;
@@ -175,20 +218,37 @@ SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, con
     const LevelView view(domain.levels[size_t(a)], a, t, analysis);
     const auto sites = [&](auto&& kernel) { forSites(view.sites.size(), ctx, kernel); };
     current.assign(view.sites.size(), 0);
-    if (a == top) sites([&](size_t b, size_t e) { init(atlas, view, current.data(), b, e); });
-    else sites([&](size_t b, size_t e) { upsample(atlas, view, previous.data(), current.data(), b, e); });
+    if (transfers) currentR.assign(current.size(), TexelTransfer{});
+    if (a == top) {
+      sites([&](size_t b, size_t e) { init(atlas, view, current.data(), b, e); });
+    } else {
+      sites([&](size_t b, size_t e) {
+        upsample(atlas, view, previous.data(), current.data(), b, e);
+        if (transfers)
+          upsampleTransfers(atlas, view, domain.levels[size_t(a + 1)], previousR.data(), currentR.data(), b, e);
+      });
+    }
     sites([&](size_t b, size_t e) { jitter(atlas, view, current.data(), options.seed, amplitude256, b, e); });
     scratch.resize(current.size());
+    scratchR.resize(currentR.size());
     for (int k = 0; k < subpasses; ++k) {
-      sites([&](size_t b, size_t e) { correct(atlas, view, current.data(), scratch.data(), a == 0, k % 4, b, e); });
+      const GraphLevelState in{current.data(), currentR.data()}, out{scratch.data(), scratchR.data()};
+      sites([&](size_t b, size_t e) {
+        const auto kernel = transfers ? correct<true> : correct<false>;
+        kernel(atlas, view, in, out, a == 0, k % 4, b, e);
+      });
       current.swap(scratch);
+      currentR.swap(scratchR);
       stage.advance(k + 1, subpasses);
     }
     previous.swap(current);
+    previousR.swap(currentR);
     result.levels.push_back({a, int64_t(view.sites.size()), secondsSince(start)});
     stage.finish();
   }
   result.coords = std::move(previous);
+  for (const TexelTransfer& t : previousR)
+    result.colorOffsets.push_back({float(t.r[0]) / kTransferOne, float(t.r[1]) / kTransferOne, float(t.r[2]) / kTransferOne});
   return result;
 }
 

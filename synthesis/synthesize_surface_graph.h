@@ -19,6 +19,11 @@
 // to); for the root while t <= L that is J(p)δ, as in single-exemplar surface synthesis. At an
 // exemplar's finest level the factor stops at 2^depth (GraphAnalysis::depth): past it the steps
 // become subpixel, and a leaf is magnified smoothly (sampleSurfaceGraph is bilinear there).
+// With the analysis' transfers (thesis §5.3) every site carries a cumulative colour offset R, as in
+// the plane: bilinear from its four nearest parents on upsampling (the parent site and its surface
+// neighbours toward the child's side; a missing one counts as the parent), neighbourhood estimates
+// seen with the R of the neighbour they are predicted from, a candidate shown with its neighbour's
+// R composed with its offset.
 //
 // Determinism: every coordinate is a pure function of (analysis, domain, options); the thread count
 // changes nothing. Deviations: as synthesize_graph.h; CPU only (no Vulkan kernels yet); coordinates
@@ -42,8 +47,10 @@ int surfaceGraphOutputLevel(const GraphAnalysis& analysis, double pixelsPerTexel
 
 /// Synthesizes a subpixel atlas coordinate of `analysis` (kSubpixelBits) per site of
 /// domain.levels[0]; options as synthesizeSurface's, jitter per stack level as
-/// GraphSynthesisOptions::jitter. exemplarPixelsPerTexel: root pixels per texel. Reports
-/// "level t/T" stages.
+/// GraphSynthesisOptions::jitter. exemplarPixelsPerTexel: root pixels per texel; with the
+/// analysis' transfers, colorOffsets: the RGB offset each site's colour is shown with (added to
+/// sampleSurfaceGraph of analysis.colors, clamped; companion maps take none). Reports "level t/T"
+/// stages.
 SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, const SurfaceDomain& domain,
                                               const SurfaceSynthesisOptions& options, const Context& ctx = {});
 

@@ -39,6 +39,24 @@ struct TexelTransfer {
   std::array<int16_t, kAppearanceDims> shift{};
 };
 
+/// A level of graph synthesis: a coordinate per texel and, with inconsistency correction, its
+/// transfer (null without).
+struct GraphLevelState {
+  uint32_t* coords;
+  TexelTransfer* transfers;
+};
+
+/// R interpolated from four texels' transfers with weights 9, 3, 3, 1 / 16 (the nearest first):
+/// thesis §5.3's bilinear upsampling of a child from its four nearest parents. Integer, rounding
+/// half up.
+inline Transfer upsampledTransfer(const Transfer& nearest, const Transfer& alongX, const Transfer& alongY,
+                                  const Transfer& diagonal) {
+  Transfer r;
+  for (size_t c = 0; c < 3; ++c)
+    r[c] = int16_t((9 * nearest[c] + 3 * (alongX[c] + alongY[c]) + diagonal[c] + 8) >> 4);
+  return r;
+}
+
 struct GraphAtlas {
   int bits = 0;     ///< subpixel bits of a coordinate
   int shift = 0;    ///< log2 of a tile's side in coordinate units

@@ -57,15 +57,20 @@ inline Offset surfaceJitter(const SurfaceLevel& level, size_t s, uint32_t seed, 
           int((amplitude256 * kSubpixelOne * hy + (int64_t(1) << 22)) >> 23)};
 }
 
+/// The index into kSurfaceStepX/Y of the unit step (dx, dy), each in {-1, 0, 1}; -1 for (0, 0).
+inline int stepIndex(int dx, int dy) {
+  constexpr int kStepIndex[3][3] = {{5, 6, 7}, {4, -1, 0}, {3, 2, 1}};  // [dy + 1][dx + 1]
+  return kStepIndex[dy + 1][dx + 1];
+}
+
 /// The unit step (index into kSurfaceStepX/Y) closest in direction to (fx, fy): the rounding of
 /// errata 3 done on the circle (sectors of 45° around each step).
 inline int stepToward(float fx, float fy) {
-  constexpr int kStepIndex[3][3] = {{5, 6, 7}, {4, -1, 0}, {3, 2, 1}};  // [dy + 1][dx + 1]
   constexpr float kTan22_5 = 0.41421356f;
   const float ax = std::fabs(fx), ay = std::fabs(fy);
   const int dx = ax > kTan22_5 * ay ? (fx > 0 ? 1 : -1) : 0;
   const int dy = ay > kTan22_5 * ax ? (fy > 0 ? 1 : -1) : 0;
-  return kStepIndex[dy + 1][dx + 1];
+  return stepIndex(dx, dy);
 }
 
 /// The two unit steps through which a neighbourhood sample at offset (dx, dy) (exemplar units) is

@@ -147,17 +147,21 @@ def test_texture_mesh_from_a_graph_equals_the_command_line(tmp_path, cache):
     photos = SOURCE / "models" / "exemplars" / "photos"
     exemplar = lambda name: {"name": name, "image": str(photos / f"{name}.png"),
                              "maps": {"roughness": str(photos / f"{name}.png"), "normal": str(photos / f"{name}.png")}}
-    graph = tmp_path / "g.json"
-    graph.write_text(json.dumps({"exemplars": [exemplar("rock"), exemplar("stone")],
-                                 "edges": [{"from": "rock", "to": "stone", "scale": 16}]}))
+    graph, own = tmp_path / "g.json", tmp_path / "own.json"
+    content = {"exemplars": [exemplar("rock"), exemplar("stone")], "edges": [{"from": "rock", "to": "stone", "scale": 16}]}
+    graph.write_text(json.dumps(content))
+    own.write_text(json.dumps(content | {"colors": "own"}))
     cli("texture", ELEPHANT, "--graph", graph, "--resolution", "256", "-o", tmp_path / "cli.glb", cache_dir=cache)
     result = texfab.texture_mesh(ELEPHANT, graph=graph, resolution=256, cache_dir=cache)
     result.save(tmp_path / "py.glb")
     # Both carry the normal map's roughness MIP chain (KTX2 through KHR_texture_basisu), byte for byte.
     assert b"KHR_texture_basisu" in (tmp_path / "py.glb").read_bytes()
     assert same_bytes(tmp_path / "cli.glb", tmp_path / "py.glb")
-    # The roughness map is each exemplar's red channel: it follows the colours.
-    assert np.array_equal(result.metallic_roughness[..., 1], result.base_color[..., 0])
+    # The roughness map is each exemplar's red channel: it follows the coordinates, and the colours
+    # take the graph's transfers on top (maps take none); with "own" colours they are equal.
+    assert not np.array_equal(result.metallic_roughness[..., 1], result.base_color[..., 0])
+    plain = texfab.texture_mesh(ELEPHANT, graph=own, resolution=256, cache_dir=cache)
+    assert np.array_equal(plain.metallic_roughness[..., 1], plain.base_color[..., 0])
     with pytest.raises(texfab.Error, match="give an exemplar or a graph"):
         texfab.texture_mesh(ELEPHANT, BRICK, graph=graph)
     with pytest.raises(texfab.Error, match="no solid mode"):

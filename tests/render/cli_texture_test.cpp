@@ -251,6 +251,7 @@ TEST(CliTexture, ExemplarGraphOverTheSurface) {
   expectValidGltf(d / "out.glb");
   const nlohmann::json r = readJson(d / "r.json");
   EXPECT_EQ(r["graph"]["exemplars"], nlohmann::json({"rock", "stone"}));
+  EXPECT_EQ(r["graph"]["colors"], "coarse");
   EXPECT_LT(r["parameters"]["exemplar_pixels_per_texel"].get<double>(), 1.0) << "the default scale zooms into the root";
   ASSERT_EQ(0, texture(common() << "-o" << d / "again.glb" << "--threads 1").status);
   EXPECT_EQ(readText(d / "out.glb"), readText(d / "again.glb"));

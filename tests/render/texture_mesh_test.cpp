@@ -159,7 +159,7 @@ double rotatedFidelity(const Image& image, const Image& exemplar, int count) {
                                   fy * ((1 - fx) * image.at(x0, y0 + 1, c) + fx * image.at(x0 + 1, y0 + 1, c))));
       }
   }
-  return synthesis::patchFidelity(patches, exemplar, 3);
+  return synthesis::patchFidelity(patches, exemplar);
 }
 
 } // namespace

@@ -175,8 +175,10 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
     for (int y = 0; y < 20; ++y)
       for (int x = 0; x < 30; ++x)
         for (int c = 0; c < 3; ++c) ASSERT_EQ(part.at(x, y, c), full.at(x + 25, y + 17, c)) << "zoom " << zoom;
-    std::ifstream report(dir / "r.json");
-    EXPECT_EQ(nlohmann::json::parse(report)["graph"]["deepest_level"], 7 + 4);
+    std::ifstream in(dir / "r.json");
+    const nlohmann::json report = nlohmann::json::parse(in);
+    EXPECT_EQ(report["graph"]["deepest_level"], 7 + 4);
+    EXPECT_EQ(report["graph"]["colors"], "coarse");
   }
   // --tileable: a 256 tile wraps all 8 levels of the 128-pixel rock at zoom 1; a 96 tile the finest 5,
   // and says so (SynthesizeGraph.TileableOutputsRepeatAtTheirPeriod checks the repetition).
