@@ -14,6 +14,9 @@
 #include <climits>
 #include <cstddef>
 #include <cstdint>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace texfab::synthesis::cpu {
 
@@ -182,27 +185,44 @@ class GraphTransferChoice {
   const Transfer& transfer() const { return transfer_; }
 
  private:
-  int32_t distanceTo(uint32_t c, const int16_t* b) {
-    const int16_t* t = seen_;
-    if (b[0] | b[1] | b[2]) {  // the candidate's neighbourhood moved by A b: the target moved back
-      int16_t shift[kAppearanceDims];
-      a_.appearanceShift({b[0], b[1], b[2]}, shift);
-      for (int i = 0; i < kNeighborhoodDims; ++i) shifted_[i] = int16_t(seen_[i] - shift[i % kAppearanceDims]);
-      t = shifted_;
-    }
+  // Exact in 16-bit lanes: |seen_| <= 127 + 2 * kMaxAppearanceShift, and the candidate's shift and
+  // vector add at most kMaxAppearanceShift + 128, so each difference fits an int16 and the sum of
+  // 32 squares an int32 (kMaxAppearanceShift's bound); SSE2's multiply-add where there is one.
+  int32_t distanceTo(uint32_t c, const int16_t* b) const {
+    alignas(16) int16_t shift[kAppearanceDims] = {};  // the candidate moved by A b: the target moved back
+    if (b[0] | b[1] | b[2]) a_.appearanceShift({b[0], b[1], b[2]}, shift);
     const int8_t* n = a_.neighborhood + a_.texel(c) * kNeighborhoodDims;
+    static_assert(kAppearanceDims == 8 && kNeighborhoodSamples == 4);
+#if defined(__SSE2__)
+    const __m128i s = _mm_load_si128(reinterpret_cast<const __m128i*>(shift));
+    const __m128i n0 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(n));
+    const __m128i n1 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(n + 16));
+    const __m128i widened[4] = {  // int8 to int16: each byte doubled, then shifted down with its sign
+        _mm_srai_epi16(_mm_unpacklo_epi8(n0, n0), 8), _mm_srai_epi16(_mm_unpackhi_epi8(n0, n0), 8),
+        _mm_srai_epi16(_mm_unpacklo_epi8(n1, n1), 8), _mm_srai_epi16(_mm_unpackhi_epi8(n1, n1), 8)};
+    __m128i sum = _mm_setzero_si128();
+    for (int i = 0; i < kNeighborhoodSamples; ++i) {
+      const __m128i t = _mm_load_si128(reinterpret_cast<const __m128i*>(seen_ + i * kAppearanceDims));
+      const __m128i e = _mm_sub_epi16(_mm_sub_epi16(t, s), widened[i]);
+      sum = _mm_add_epi32(sum, _mm_madd_epi16(e, e));
+    }
+    sum = _mm_add_epi32(sum, _mm_shuffle_epi32(sum, _MM_SHUFFLE(1, 0, 3, 2)));
+    sum = _mm_add_epi32(sum, _mm_shuffle_epi32(sum, _MM_SHUFFLE(2, 3, 0, 1)));
+    return _mm_cvtsi128_si32(sum);
+#else
     int32_t sum = 0;
-    for (int i = 0; i < kNeighborhoodDims; ++i) {
-      const int32_t e = int32_t(t[i]) - int32_t(n[i]);
+    for (int j = 0; j < kNeighborhoodDims; ++j) {
+      const int32_t e = int32_t(seen_[j]) - shift[j % kAppearanceDims] - n[j];
       sum += e * e;
     }
     return sum;
+#endif
   }
   const GraphAtlas& a_;
   const int16_t* target_;
   uint32_t current_, best_;
   Transfer transfer_, frame_{};
-  int16_t seen_[kNeighborhoodDims], shifted_[kNeighborhoodDims];
+  alignas(16) int16_t seen_[kNeighborhoodDims];
   int32_t distance_;
 };
 
