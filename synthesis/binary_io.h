@@ -4,6 +4,7 @@
 // (solid analyses, solid tile sets). A reader that meets a short file or an unexpected length
 // clears `ok`, and the cache recomputes.
 
+#include <array>
 #include <cstdint>
 #include <istream>
 #include <ostream>
@@ -27,10 +28,12 @@ struct BinaryReader {
   void raw(void* d, size_t n) { ok = ok && bool(in.read(static_cast<char*>(d), std::streamsize(n))); }
   template <class T> void value(T& v) { raw(&v, sizeof v); }
   /// Reads a vector that must hold `expected` values.
-  template <class T> void vec(std::vector<T>& v, size_t expected) {
+  template <class T> void vec(std::vector<T>& v, size_t expected) { vec(v, {expected, expected}); }
+  /// Reads a vector that must hold one of two counts.
+  template <class T> void vec(std::vector<T>& v, std::array<size_t, 2> allowed) {
     uint64_t n = 0;
     value(n);
-    if (!ok || n != expected) {
+    if (!ok || (n != allowed[0] && n != allowed[1])) {
       ok = false;
       return;
     }

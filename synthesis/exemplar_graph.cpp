@@ -28,8 +28,10 @@ namespace {
 
 constexpr int kSearchNeighbors = 12;  // nearest sites examined per admissible level
 constexpr uint32_t kGraphCacheMagic = 0x47584654;  // "TFXG"
-constexpr uint32_t kGraphCacheVersion = 6;         // bump whenever the graph analysis changes
+constexpr uint32_t kGraphCacheVersion = 7;         // bump whenever the graph analysis changes
 
+// Atlas coordinate x (tiles of m pixels) moved by d, wrapped in its tile.
+int inTile(int x, int d, int m) { return x - x % m + ((x % m + d) % m + m) % m; }
 
 // RGB of any exemplar: grey (1 or 2 channels) replicated, alpha dropped.
 Image rgbOf(const Image& image) {
@@ -123,10 +125,9 @@ std::vector<int8_t> neighborhoodsOf(const GraphAnalysis& a) {
   std::vector<int8_t> out(size_t(aw) * size_t(a.atlasHeight()) * kNeighborhoodDims);
   for (int y = 0; y < a.atlasHeight(); ++y)
     for (int x = 0; x < aw; ++x) {
-      const int h = a.spacing(x / m), tx = x - x % m, ty = y - y % m;
+      const int h = a.spacing(x / m);
       for (int i = 0; i < kNeighborhoodSamples; ++i) {
-        const int sx = tx + ((x % m + kDiagonalX[i] * h) % m + m) % m;
-        const int sy = ty + ((y % m + kDiagonalY[i] * h) % m + m) % m;
+        const int sx = inTile(x, kDiagonalX[i] * h, m), sy = inTile(y, kDiagonalY[i] * h, m);
         std::memcpy(&out[(size_t(y) * aw + x) * kNeighborhoodDims + size_t(i) * kAppearanceDims],
                     &a.appearance[(size_t(sy) * aw + sx) * kAppearanceDims], kAppearanceDims);
       }
@@ -229,9 +230,7 @@ std::vector<uint32_t> candidatesOf(const ExemplarGraph& graph, const GraphAnalys
 // Empty when every offset is 0.
 std::vector<int16_t> transfersOf(const GraphAnalysis& a, const Context& ctx) {
   const int m = a.side, aw = a.atlasWidth();
-  const auto colour = [&](int ax, int ay, int dx, int dy) {  // wrapped in the tile of (ax, ay)
-    return a.colors.pixel(ax - ax % m + ((ax % m + dx) % m + m) % m, ay - ay % m + ((ay % m + dy) % m + m) % m);
-  };
+  const auto colour = [&](int ax, int ay, int dx, int dy) { return a.colors.pixel(inTile(ax, dx, m), inTile(ay, dy, m)); };
   std::vector<int16_t> transfers(a.candidates.size() * 3, 0);
   std::atomic<bool> any = false;
   parallelFor(0, a.atlasHeight(), ctx, [&](int y0, int y1) {
@@ -561,7 +560,6 @@ void writeGraphAnalysis(const GraphAnalysis& a, const std::filesystem::path& pat
     w.vec(a.appearance);
     w.vec(a.neighborhood);
     w.vec(a.candidates);
-    w.value(uint8_t(!a.transfers.empty()));
     w.vec(a.transfers);
     w.value(a.transferAppearance);
     w.vec(a.selfAdmissible);
@@ -594,9 +592,7 @@ std::optional<GraphAnalysis> readGraphAnalysis(const std::filesystem::path& path
   r.vec(a.appearance, texels * kAppearanceDims);
   r.vec(a.neighborhood, texels * kNeighborhoodDims);
   r.vec(a.candidates, texels * size_t(a.k));
-  uint8_t hasTransfers = 0;
-  r.value(hasTransfers);
-  r.vec(a.transfers, hasTransfers ? texels * size_t(a.k) * 3 : 0);
+  r.vec(a.transfers, {0, texels * size_t(a.k) * 3});  // empty without transfers
   r.value(a.transferAppearance);
   r.vec(a.selfAdmissible, texels);
   r.vec(a.moves, texels);
