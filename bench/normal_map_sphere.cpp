@@ -8,12 +8,14 @@
 // normals), with its levels as stored and through UASTC as KTX2 carries them. With a path it
 // also draws the picture of docs/normal-map-filtering.md (the stone: the truth at 1024 samples per
 // pixel, then MIP-mapped normals, Toksvig, the fitted lobes and the glTF route through UASTC at 4;
-// the near view's centre, the far views enlarged).
-//   build/bench/normal_map_sphere [docs/images/normal_map_filtering.png]
+// the near view's centre, the far views enlarged). --microfacet shades with glTF's microfacet BRDF
+// instead of Blinn-Phong (render::SpecularModel).
+//   build/bench/normal_map_sphere [--microfacet] [docs/images/normal_map_filtering.png]
 #include "core/image_io.h"
 #include "tests/render/test_normal_maps.h"
 
 #include <cstdio>
+#include <cstring>
 
 namespace {
 
@@ -25,7 +27,14 @@ constexpr std::array<int, 3> kTexelsPerPixel = {4, 16, 64};
 constexpr std::array<NormalMapFiltering, 3> kMethods = {NormalMapFiltering::Mip, NormalMapFiltering::Toksvig,
                                                         NormalMapFiltering::Lobes};
 
-void printTable() {
+// test::sphereView with the specular model.
+render::RenderOptions sphereView(int diameter, int samples, NormalMapFiltering filtering, render::SpecularModel specular) {
+  render::RenderOptions o = test::sphereView(diameter, samples, filtering);
+  o.specular = specular;
+  return o;
+}
+
+void printTable(render::SpecularModel specular) {
   std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | glTF route | "
               "glTF route, UASTC | MIP / lobes | MIP / route |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
@@ -36,12 +45,12 @@ void printTable() {
     for (int texelsPerPixel : kTexelsPerPixel) {
       const int diameter = test::sphereDiameter(kMapSize, kTilesAround, texelsPerPixel);
       const Image truth =
-          renderer.render(test::sphereView(diameter, test::truthSamples(texelsPerPixel), NormalMapFiltering::Mip));
+          renderer.render(sphereView(diameter, test::truthSamples(texelsPerPixel), NormalMapFiltering::Mip, specular));
       std::array<double, kMethods.size() + 2> error{};
       for (size_t i = 0; i < kMethods.size(); ++i)
-        error[i] = test::coveredRms(renderer.render(test::sphereView(diameter, 1, kMethods[i])), truth);
-      error[3] = test::coveredRms(route.render(test::sphereView(diameter, 1, NormalMapFiltering::Mip)), truth);
-      error[4] = test::coveredRms(routeUastc.render(test::sphereView(diameter, 1, NormalMapFiltering::Mip)), truth);
+        error[i] = test::coveredRms(renderer.render(sphereView(diameter, 1, kMethods[i], specular)), truth);
+      error[3] = test::coveredRms(route.render(sphereView(diameter, 1, NormalMapFiltering::Mip, specular)), truth);
+      error[4] = test::coveredRms(routeUastc.render(sphereView(diameter, 1, NormalMapFiltering::Mip, specular)), truth);
       std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.4f | %.4f | %.1fx | %.1fx |\n", m.name.c_str(), texelsPerPixel,
                   diameter, error[0], error[1], error[2], error[3], error[4], error[0] / error[2], error[0] / error[3]);
       std::fflush(stdout);
@@ -49,7 +58,7 @@ void printTable() {
   }
 }
 
-void drawPicture(const char* path) {
+void drawPicture(const char* path, render::SpecularModel specular) {
   const geometry::Mesh sphere = test::normalMappedSphere(test::testMaps(kMapSize)[0].map, kTilesAround);
   const geometry::Mesh routeSphere = test::withGltfRoute(sphere, true);
   const render::PreviewRenderer renderer(sphere), route(routeSphere);
@@ -58,9 +67,9 @@ void drawPicture(const char* path) {
   for (size_t row = 0; row < kTexelsPerPixel.size(); ++row) {
     const int diameter = test::sphereDiameter(kMapSize, kTilesAround, kTexelsPerPixel[row]);
     for (int column = 0; column < kColumns; ++column) {
-      const Image v = column == 0               ? renderer.render(test::sphereView(diameter, 1024, NormalMapFiltering::Mip))
-                      : column == kColumns - 1 ? route.render(test::sphereView(diameter, 4, NormalMapFiltering::Mip))
-                                               : renderer.render(test::sphereView(diameter, 4, kMethods[size_t(column - 1)]));
+      const Image v = column == 0               ? renderer.render(sphereView(diameter, 1024, NormalMapFiltering::Mip, specular))
+                      : column == kColumns - 1 ? route.render(sphereView(diameter, 4, NormalMapFiltering::Mip, specular))
+                                               : renderer.render(sphereView(diameter, 4, kMethods[size_t(column - 1)], specular));
       // Over white: the view's centre where it is larger than the tile, else the view enlarged
       // (nearest) to the tile.
       const bool crop = v.width >= kTile;
@@ -79,11 +88,17 @@ void drawPicture(const char* path) {
 } // namespace
 
 int main(int argc, char** argv) {
-  if (argc > 2) {
-    std::fprintf(stderr, "usage: normal_map_sphere [PICTURE.png]\n");
-    return 2;
+  render::SpecularModel specular = render::SpecularModel::BlinnPhong;
+  const char* picture = nullptr;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--microfacet") == 0) specular = render::SpecularModel::Microfacet;
+    else if (!picture && argv[i][0] != '-') picture = argv[i];
+    else {
+      std::fprintf(stderr, "usage: normal_map_sphere [--microfacet] [PICTURE.png]\n");
+      return 2;
+    }
   }
-  printTable();
-  if (argc == 2) drawPicture(argv[1]);
+  printTable(specular);
+  if (picture) drawPicture(picture, specular);
   return 0;
 }

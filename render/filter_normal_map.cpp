@@ -367,6 +367,11 @@ double shadeBlinnPhong(std::span<const VmfLobe> lobes, const Eigen::Vector3f& li
   return sum;
 }
 
+Eigen::Vector3f meanReflection(const Eigen::Vector3f& dir, const Eigen::Vector3f& axis, float sharpness, float length) {
+  const float ratio = sharpness > 1e-3f ? length / sharpness : 1.0f / 3.0f;
+  return dir - 2 * (ratio * dir + (1 - 3 * ratio) * axis.dot(dir) * axis);
+}
+
 double shadeToksvig(const Eigen::Vector3f& mean, const Eigen::Vector3f& light, const Eigen::Vector3f& half, double s) {
   const double f = std::min(1.0, double(mean.norm()));
   if (!(f > 0)) return 0;

@@ -104,6 +104,12 @@ T convolvedExponent(T sharpness, T exponent) {
   return sharpness * exponent / (sharpness + exponent);
 }
 
+/// The mean of direction `dir` reflected about the normals m of a vMF lobe (unit `axis`,
+/// sharpness κ, mean resultant length A = |E m|): dir - 2 E[m m^T] dir, where E[m m^T] =
+/// (A/κ) I + (1 - 3A/κ) axis axis^T (Mardia & Jupp 2000, §9.3.2; a uniform lobe as κ -> 0). What a
+/// linear environment shows through the lobe (Han et al. 2007, §7.6.3).
+Eigen::Vector3f meanReflection(const Eigen::Vector3f& dir, const Eigen::Vector3f& axis, float sharpness, float length);
+
 /// Toksvig's filtering from a texel's mean normal `mean` (|mean| ≤ 1): the exponent
 /// s' = |m| s / (|m| + s (1 - |m|)) at the normalized mean.
 double shadeToksvig(const Eigen::Vector3f& mean, const Eigen::Vector3f& light, const Eigen::Vector3f& half,

@@ -97,11 +97,14 @@ float widenedRoughness(double alpha2, double meanLength) {
   alpha2 = std::clamp(alpha2, 0.0, 1.0);
   meanLength = std::clamp(meanLength, 0.0, 1.0);
   if (alpha2 >= 1 || meanLength <= 0) return 1.0f;
-  // u = 1/s' = 1/s + 1/κ, with 1/s = α² / (2 - 2α²) and 1/κ = (1 - |r|²) / (3|r| - |r|³).
-  const double r = meanLength;
-  const double u = alpha2 / (2 - 2 * alpha2) + (1 - r * r) / (3 * r - r * r * r);
-  const double widened = 2 * u / (1 + 2 * u);  // α'²
-  return float(std::sqrt(std::sqrt(widened)));
+  const double r = meanLength;  // 1/κ = (1 - |r|²) / (3|r| - |r|³)
+  return float(std::sqrt(std::sqrt(widenedAlpha2(alpha2, (1 - r * r) / (3 * r - r * r * r)))));
+}
+
+double widenedAlpha2(double alpha2, double inverseSharpness) {
+  if (alpha2 >= 1) return 1;
+  const double u = alpha2 / (2 - 2 * alpha2) + inverseSharpness;  // 1/s' = 1/s + 1/κ
+  return 2 * u / (1 + 2 * u);
 }
 
 std::string filteredMipsUnavailable(const geometry::Material& m) {

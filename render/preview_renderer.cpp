@@ -5,11 +5,13 @@
 #include "core/hash.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
+#include "render/material_mips.h"
 
 #include <Eigen/Geometry>
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -288,6 +290,14 @@ const geometry::Material& fallbackMaterial() {
 
 const Vector3f kKeyColor(2.6f, 2.5f, 2.35f), kSkyColor(0.55f, 0.6f, 0.7f), kGroundColor(0.25f, 0.22f, 0.2f);
 
+// The environment's radiance toward direction d: the sky above, the ground below, blended linearly
+// in d's height. Linear in d, so over any distribution of directions its mean is its value at
+// their mean vector.
+Vector3f environment(const Vector3f& d, const Vector3f& up) {
+  const float k = 0.5f * (d.dot(up) + 1);
+  return k * kSkyColor + (1 - k) * kGroundColor;
+}
+
 } // namespace
 
 double renderMemoryBytes(const geometry::Mesh& mesh, const RenderOptions& options) {
@@ -433,14 +443,15 @@ PreviewRenderer::Surface PreviewRenderer::surfaceAt(const View& view, const geom
   return f;
 }
 
-// A key light (Lambert + normalized Blinn-Phong, shadowed) and a sky light with ambient occlusion
-// (cosine-weighted hemisphere rays, stratified over the pixel's AO rays).
+// A key light (Lambert + normalized Blinn-Phong, shadowed), a sky light with ambient occlusion
+// (cosine-weighted hemisphere rays, stratified over the pixel's AO rays) and its glossy reflection.
 Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const Vector3f& dir, int px, int py,
                                        int s) const {
   const RenderOptions& o = view.o;
   const Vector3f& n = f.n;
   const Vector3f albedo = f.base.head<3>().cwiseMax(0.0f);
   const float roughness = std::clamp(f.roughness, 0.05f, 1.0f);
+  const float alpha = roughness * roughness, shininess = std::max(2.0f / (alpha * alpha) - 2.0f, 1.0f);  // Blinn-Phong
   const float metallic = std::clamp(f.metallic, 0.0f, 1.0f);
   const Vector3f diffuse = (1 - metallic) * albedo;
   const Vector3f f0 = Vector3f::Constant(0.04f) * (1 - metallic) + metallic * albedo;
@@ -461,32 +472,39 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
     const bool lit = !o.shadows || !scene_.occluded({offset, view.light, 0.0f, 4.0f * view.radius + view.distance});
     if (lit) {
       const Vector3f h = (view.light - dir).normalized();
-      const float alpha = roughness * roughness;
-      const float shininess = std::max(2.0f / (alpha * alpha) - 2.0f, 1.0f);
-      // Normalized Blinn-Phong at the normal, or over the footprint's normal distribution: each lobe
-      // convolved with it (s' = κs / (κ + s), Han et al. 2007, Eq. 7.20) at its own cosine.
-      const auto blinnPhong = [](const Vector3f& normal, const Vector3f& half, float exponent) {
-        return (exponent + 8) / (8 * kPi) * std::pow(std::max(normal.dot(half), 0.0f), exponent);
-      };
-      float specular = 0;
-      if (lobes.empty()) {
-        specular = blinnPhong(n, h, shininess) * nl;
-      } else {
-        for (const WorldLobe& l : lobes) {
-          const float exponent = convolvedExponent(l.sharpness, shininess);
-          specular += l.weight * blinnPhong(l.axis, h, exponent) * std::max(0.0f, l.axis.dot(view.light));
+      // The highlight of one normal at its own cosine, its specular lobe convolved with a vMF lobe
+      // of sharpness κ (infinite: none; s' = κs / (κ + s), Han et al. 2007, Eq. 7.20, or in α,
+      // widenedAlpha2): at the normal, or over the footprint's normal distribution, lobe by lobe.
+      const auto highlight = [&](const Vector3f& normal, float sharpness) -> Vector3f {
+        const float cl = normal.dot(view.light);
+        if (cl <= 0) return Vector3f::Zero();
+        const float nh = std::max(normal.dot(h), 0.0f);
+        if (o.specular == SpecularModel::BlinnPhong) {
+          const float s = std::isinf(sharpness) ? shininess : convolvedExponent(sharpness, shininess);
+          return f0 * ((s + 8) / (8 * kPi) * std::pow(nh, s) * cl);
         }
-      }
-      color += kKeyColor.cwiseProduct(0.32f * diffuse * nl + 0.32f * specular * f0);
+        const float a2 = float(widenedAlpha2(double(alpha) * alpha, 1.0 / double(sharpness)));
+        const float nv = std::max(-normal.dot(dir), 1e-4f), vh = std::max(-h.dot(dir), 0.0f);
+        const float d = nh * nh * (a2 - 1) + 1;
+        const float visibility = 0.5f / (cl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(cl * cl * (1 - a2) + a2));
+        const Vector3f fresnel = f0 + (Vector3f::Ones() - f0) * std::pow(1 - vh, 5.0f);
+        return fresnel * (a2 / (kPi * d * d) * visibility * cl);
+      };
+      Vector3f specular = Vector3f::Zero();
+      if (lobes.empty()) specular = highlight(n, std::numeric_limits<float>::infinity());
+      for (const WorldLobe& l : lobes) specular += l.weight * highlight(l.axis, l.sharpness);
+      color += kKeyColor.cwiseProduct(0.32f * diffuse * nl + 0.32f * specular);
     }
   }
   // A weak fill light from the camera, never shadowed: faces in deep gaps (the cut faces of
   // exploded pieces, the inside of a crack) keep their colour where the key and the sky do not reach.
   color += 0.1f * diffuse * cosine(-dir);
   Vector3f ambient = Vector3f::Zero();
+  float open = 1;  // the share of the AO rays that find the hemisphere open
   if (o.aoSamples > 0) {
     Vector3f ta, tb;
     basis(n, ta, tb);
+    int closed = 0;
     for (int a = 0; a < o.aoSamples; ++a) {
       // Two shuffled 1-D strata (a rotation and a coprime stride are permutations), jittered
       // within the stratum.
@@ -499,19 +517,25 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
       const float rr = std::sqrt(r1), phi = 2 * kPi * r2;
       Vector3f d = rr * std::cos(phi) * ta + rr * std::sin(phi) * tb + std::sqrt(std::max(0.0f, 1 - r1)) * n;
       if (d.dot(f.ng) <= 0) d -= 2 * d.dot(f.ng) * f.ng;
-      if (!scene_.occluded({offset, d, 0.0f, 0.6f * view.radius})) {
-        const float k = 0.5f * (d.dot(view.modelUp) + 1);
-        ambient += k * kSkyColor + (1 - k) * kGroundColor;
-      }
+      if (!scene_.occluded({offset, d, 0.0f, 0.6f * view.radius})) ambient += environment(d, view.modelUp);
+      else closed += 1;
     }
     ambient /= float(o.aoSamples);
+    open = 1 - float(closed) / float(o.aoSamples);
   } else {
     Vector3f mean = lobes.empty() ? n : Vector3f::Zero();  // the mean normal
     for (const WorldLobe& l : lobes) mean += l.weight * l.length * l.axis;
-    const float k = 0.5f * (mean.dot(view.modelUp) + 1);
-    ambient = k * kSkyColor + (1 - k) * kGroundColor;
+    ambient = environment(mean, view.modelUp);
   }
-  color += ambient.cwiseProduct(diffuse + 0.25f * f0);
+  // The environment's reflection (Han et al. 2007, §7.6.3, for a linear environment): its value at
+  // the mean reflected direction, over the footprint's normal distribution where there is one,
+  // shortened by the glossy lobe's spread (Blinn-Phong's s about the half vector is about Phong's
+  // s/4 about the mirror direction, whose mean cosine is (s/4 + 1) / (s/4 + 2)), dimmed as the AO
+  // rays find the hemisphere closed.
+  Vector3f reflected = lobes.empty() ? Vector3f(dir - 2 * dir.dot(n) * n) : Vector3f::Zero();
+  for (const WorldLobe& l : lobes) reflected += l.weight * meanReflection(dir, l.axis, l.sharpness, l.length);
+  reflected *= (shininess + 4) / (shininess + 8);
+  color += ambient.cwiseProduct(diffuse) + open * environment(reflected, view.modelUp).cwiseProduct(f0);
   return color;
 }
 

@@ -31,6 +31,12 @@ enum class NormalMapFiltering {
   Lobes,   ///< the fitted distribution of normals, several vMF lobes (filter_normal_map.h)
 };
 
+/// The key light's specular reflection.
+enum class SpecularModel {
+  BlinnPhong,  ///< normalized Blinn-Phong of exponent 2/α² - 2 (α = roughness²), no Fresnel
+  Microfacet,  ///< glTF's metallic-roughness BRDF: GGX of α, Smith's height-correlated masking, Schlick's Fresnel
+};
+
 struct RenderOptions {
   int width = 800;        ///< pixels
   int height = 800;
@@ -51,6 +57,8 @@ struct RenderOptions {
   /// (geometry::Texture::mips) are sampled from it, as a viewer of the written file samples them;
   /// Mip then shows what such a viewer shows.
   NormalMapFiltering normalMapFiltering = NormalMapFiltering::Lobes;
+  /// Filtered normal maps widen either model's lobe by each vMF lobe (Han et al. 2007, Eq. 7.20).
+  SpecularModel specular = SpecularModel::BlinnPhong;
   /// Where fitted normal distributions are kept between runs (the analysis cache); none: fitted
   /// every time.
   synthesis::AnalysisCacheSettings normalMapCache;

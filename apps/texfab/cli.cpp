@@ -243,6 +243,11 @@ void Flags::camera(render::RenderOptions& o) {
   app_->add_flag_function(
       "--no-ndf-filtering", [&o](int64_t) { o.normalMapFiltering = NormalMapFiltering::Mip; },
       "The same as --normal-filtering mip");
+  using render::SpecularModel;
+  choice("--specular", o.specular,
+         Names<SpecularModel>{{"blinn-phong", SpecularModel::BlinnPhong}, {"microfacet", SpecularModel::Microfacet}},
+         "The key light's highlight in previews: blinn-phong (normalized, no Fresnel), or microfacet (glTF's "
+         "metallic-roughness BRDF: GGX, Smith masking, Schlick's Fresnel, as glTF viewers shade)");
 }
 
 void Flags::modelOutput(geometry::MeshWriteOptions& o) {

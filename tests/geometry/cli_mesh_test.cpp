@@ -96,6 +96,12 @@ TEST(CliMesh, RenderWritesViewsAndTurntables) {
   ASSERT_EQ(view.channels, 4);
   EXPECT_EQ(view.at(0, 0, 3), 0.0f);     // corner: background
   EXPECT_EQ(view.at(32, 24, 3), 1.0f);   // centre: the cube
+  // glTF's microfacet BRDF for the key light's highlight: another picture of the same view.
+  ASSERT_EQ(runCli("render -q " + quote(kMeshes / "marble_cube.glb") + " -o " + quote(dir / "microfacet.png") +
+                   " --size 64x48 --spp 4 --background transparent --specular microfacet")
+                .status,
+            0);
+  EXPECT_NE(readImage(dir / "microfacet.png").pixels, view.pixels);
   ASSERT_EQ(runCli("render -q " + quote(kMeshes / "knot1.off") + " -o " + quote(dir / "turn.png") +
                    " --size 32 --spp 1 --turntable 3 --background '#336699'")
                 .status,

@@ -148,6 +148,33 @@ TEST(FilterNormalMap, LobesAreADistribution) {
   EXPECT_FLOAT_EQ(top.sharpness(), kMaxVmfSharpness);
 }
 
+// meanReflection against the mean over a vMF lobe's normals (Wood 1994's inversion on a 500 x 400
+// grid of the unit square): a lobe straight up, views from overhead to grazing, sharpness from
+// nearly uniform to narrow.
+TEST(FilterNormalMap, MeanReflectionIsTheMeanOverTheLobesNormals) {
+  const Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();
+  for (float kappa : {0.5f, 4.0f, 40.0f, 400.0f}) {
+    const double length = 1 / std::tanh(double(kappa)) - 1 / double(kappa);  // A(κ)
+    for (float degrees : {0.0f, 40.0f, 80.0f}) {
+      const float angle = degrees * 3.14159265f / 180;
+      const Eigen::Vector3f dir(std::sin(angle), 0.0f, -std::cos(angle));  // toward the surface
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      constexpr int kU = 500, kV = 400, kSamples = kU * kV;
+      for (int i = 0; i < kSamples; ++i) {
+        const double u = (i / kV + 0.5) / kU, v = (i % kV + 0.5) / kV;
+        const double w = 1 + std::log(u + (1 - u) * std::exp(-2.0 * kappa)) / kappa;  // cos θ
+        const double r = std::sqrt(std::max(0.0, 1 - w * w)), phi = 2 * 3.14159265358979 * v;
+        const Eigen::Vector3f m(float(r * std::cos(phi)), float(r * std::sin(phi)), float(w));
+        sum += (dir - 2 * dir.dot(m) * m).cast<double>();
+      }
+      const Eigen::Vector3f expected = (sum / kSamples).cast<float>();
+      const Eigen::Vector3f got = meanReflection(dir, axis, kappa, float(length));
+      EXPECT_LT((got - expected).norm(), 0.01f) << "κ " << kappa << ", view " << degrees << "°: " << got.transpose()
+                                                << " against " << expected.transpose();
+    }
+  }
+}
+
 TEST(FilterNormalMap, SameLobesOnOneAndTwoThreads) {
   const Image map = testMaps(128)[2].map;
   const NdfMipChain a = filterNormalMap(map, {}, Context{.threads = 1});
