@@ -102,7 +102,7 @@ float widenedRoughness(double alpha2, double meanLength) {
 }
 
 double widenedAlpha2(double alpha2, double inverseSharpness) {
-  if (alpha2 >= 1) return 1;
+  if (alpha2 >= 1 || std::isinf(inverseSharpness)) return 1;  // a uniform lobe (κ = 0) widens to roughness 1
   const double u = alpha2 / (2 - 2 * alpha2) + inverseSharpness;  // 1/s' = 1/s + 1/κ
   return 2 * u / (1 + 2 * u);
 }

@@ -44,7 +44,7 @@ geometry::Mesh withFilteredMips(const geometry::Mesh& mesh, const Context& ctx =
 
 /// α'²: a specular lobe of α² (GGX's, or Blinn-Phong's of exponent s = 2/α² - 2) convolved with a
 /// vMF lobe of sharpness κ, given as 1/κ (0: a single normal): 2u / (1 + 2u) with u = 1/s + 1/κ
-/// (s' = κs / (κ + s), Han et al. 2007, Eq. 7.20). 1 for α² >= 1.
+/// (s' = κs / (κ + s), Han et al. 2007, Eq. 7.20). 1 for α² >= 1 or a uniform lobe (1/κ infinite).
 double widenedAlpha2(double alpha2, double inverseSharpness);
 
 /// The roughness whose specular lobe is the one of `roughness` convolved with a vMF lobe whose mean

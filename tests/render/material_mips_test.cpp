@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 using namespace texfab;
 using namespace texfab::render;
@@ -45,6 +46,9 @@ TEST(MaterialMips, WideningIsTheBrdfConvolvedWithTheLobe) {
   EXPECT_NEAR(widenedRoughness(std::pow(0.3, 4), 1.0), 0.3f, 1e-6f);  // one normal: no widening
   EXPECT_EQ(widenedRoughness(0.01, 0.0), 1.0f);                          // normals all round: rough
   EXPECT_EQ(widenedRoughness(1.0, 0.9), 1.0f);
+  // In α, from 1/κ, as the previews' microfacet BRDF widens each lobe: a uniform lobe gives α'² = 1.
+  EXPECT_NEAR(widenedAlpha2(std::pow(0.3, 4), 0.0), std::pow(0.3, 4), 1e-12);
+  EXPECT_EQ(widenedAlpha2(0.01, std::numeric_limits<double>::infinity()), 1.0);
 }
 
 // A flat normal map keeps its roughness at every level; levels halve rounding down to 1x1.
