@@ -12,6 +12,7 @@
 #include "synthesis/coord_map.h"
 #include "synthesis/refine_solid.h"
 #include "synthesis/synthesize_surface.h"
+#include "synthesis/synthesize_graph.h"
 #include "synthesis/synthesize_surface_graph.h"
 
 #include <algorithm>
@@ -272,9 +273,9 @@ void TextureJob::resolveMaps() {
   };
   r_.baseColor = bake(colorChannels, [&](size_t s, float* out) {
     for (int ch = 0; ch < colorChannels; ++ch) out[ch] = lookup(colors, s, ch, magnified);
-    if (!r_.colorOffsets.empty())  // a graph's transfers (synthesis::graphColors' rule)
+    if (!r_.colorOffsets.empty())  // a graph's transfers
       for (int ch = 0; ch < colorChannels; ++ch)
-        out[ch] = std::clamp(out[ch] + r_.colorOffsets[s][size_t(ch)], 0.0f, 1.0f);
+        out[ch] = synthesis::transferredColor(out[ch], r_.colorOffsets[s][size_t(ch)]);
   });
   if (ex_.normal)
     r_.normal = bake(3, [&](size_t s, float* out) {

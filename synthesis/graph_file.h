@@ -30,4 +30,7 @@ namespace texfab::synthesis {
 /// unknown or repeated name, a scale that is not a power of two above 1, an unreadable image.
 ExemplarGraph readExemplarGraph(const std::filesystem::path& path);
 
+/// The file's "colors" value that gives `graph`'s ExemplarGraph::coarseColors: "coarse" or "own".
+inline const char* graphColorsName(const ExemplarGraph& graph) { return graph.coarseColors ? "coarse" : "own"; }
+
 } // namespace texfab::synthesis

@@ -287,9 +287,10 @@ SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& win
   if (transfers) {
     result.colorOffsets = Image(window.width, window.height, 3, PixelFormat::Float);
     for (int y = 0; y < window.height; ++y)
-      for (int x = 0; x < window.width; ++x)
-        for (int c = 0; c < 3; ++c)
-          result.colorOffsets.at(x, y, c) = float(previousR[finalIndex(x, y)].r[size_t(c)]) / kTransferOne;
+      for (int x = 0; x < window.width; ++x) {
+        const std::array<float, 3> offset = cpu::colorOffset(previousR[finalIndex(x, y)].r);
+        std::copy(offset.begin(), offset.end(), result.colorOffsets.pixel(x, y));
+      }
   }
   return result;
 }
@@ -298,7 +299,7 @@ Image graphColors(const SynthesisResult& result, const GraphAnalysis& analysis, 
   Image colors = applyCoords(result.coords, analysis.colors, ctx);
   if (result.colorOffsets.empty()) return colors;
   for (size_t i = 0; i < colors.pixels.size(); ++i)
-    colors.pixels[i] = std::clamp(colors.pixels[i] + result.colorOffsets.pixels[i], 0.0f, 1.0f);
+    colors.pixels[i] = transferredColor(colors.pixels[i], result.colorOffsets.pixels[i]);
   return colors;
 }
 

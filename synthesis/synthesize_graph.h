@@ -30,6 +30,7 @@
 #include "synthesis/exemplar_graph.h"
 #include "synthesis/synthesize_2d.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -84,8 +85,12 @@ double synthesizeGraphMemoryBytes(const Window& window);
 SynthesisResult synthesizeGraph(const GraphAnalysis& analysis, const Window& window,
                                 const GraphSynthesisOptions& options, const Context& ctx = {});
 
-/// The colours of a graph synthesis: its coordinates' colours in the atlas plus its colour offsets,
-/// clamped to [0, 1]. Companion maps take the coordinates alone (applyCoords).
+/// A colour value as graph synthesis shows it: the atlas colour moved by its texel's offset,
+/// clamped to [0, 1] (graphColors; texture --graph on surfaces).
+inline float transferredColor(float colour, float offset) { return std::clamp(colour + offset, 0.0f, 1.0f); }
+
+/// The colours of a graph synthesis: its coordinates' colours in the atlas plus its colour offsets
+/// (transferredColor). Companion maps take the coordinates alone (applyCoords).
 Image graphColors(const SynthesisResult& result, const GraphAnalysis& analysis, const Context& ctx = {});
 
 } // namespace texfab::synthesis

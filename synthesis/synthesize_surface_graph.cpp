@@ -247,8 +247,7 @@ SurfaceSynthesisResult synthesizeSurfaceGraph(const GraphAnalysis& analysis, con
     stage.finish();
   }
   result.coords = std::move(previous);
-  for (const TexelTransfer& t : previousR)
-    result.colorOffsets.push_back({float(t.r[0]) / kTransferOne, float(t.r[1]) / kTransferOne, float(t.r[2]) / kTransferOne});
+  for (const TexelTransfer& t : previousR) result.colorOffsets.push_back(cpu::colorOffset(t.r));
   return result;
 }
 

@@ -176,7 +176,7 @@ void runGraphSynth(const SynthJob& job) {
 
   nlohmann::json& r = run.report();
   r["graph"] = {{"file", job.graph}, {"exemplars", graph.names}, {"edges", graph.edges.size()},
-                {"colors", graph.coarseColors ? "coarse" : "own"}, {"side", graph.side()},
+                {"colors", synthesis::graphColorsName(graph)}, {"side", graph.side()},
                 {"deepest_level", deepest}, {"analysis_cached", cached}};
   r["window"] = {{"x", job.window.x}, {"y", job.window.y}, {"width", job.window.width}, {"height", job.window.height}};
   r["parameters"] = {{"seed", options.seed}, {"zoom", job.zoom}, {"passes", options.passes},

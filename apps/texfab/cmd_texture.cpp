@@ -135,7 +135,7 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
     o.textureScale = o.textureScale > 0 ? o.textureScale : render::graphTextureScale(in.model.mesh, in.graph->side());
     a.graph = synthesis::analyzeGraph(*in.graph, {}, run.analysisCache(), run.ctx(), &cached);
     a.report = {{"file", job.graph}, {"exemplars", in.graph->names}, {"edges", in.graph->edges.size()},
-                {"colors", in.graph->coarseColors ? "coarse" : "own"}, {"side", in.graph->side()},
+                {"colors", synthesis::graphColorsName(*in.graph)}, {"side", in.graph->side()},
                 {"analysis_cached", cached}};
     return a;
   }

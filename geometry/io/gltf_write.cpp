@@ -136,7 +136,8 @@ Mesh preparedForGltf(const Mesh& input, const MeshWriteOptions& options) {
 }
 
 bool sameTexture(const Texture& a, const Texture& b) {
-  return a.image == b.image && a.mips == b.mips && a.encodedMips == b.encodedMips && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
+  return a.image == b.image && a.mips == b.mips && a.encodedMips == b.encodedMips && a.offset == b.offset &&
+         a.scale == b.scale && a.rotation == b.rotation;
 }
 
 bool sameMaterial(const Material& a, const Material& b) {

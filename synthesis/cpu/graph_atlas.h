@@ -24,6 +24,11 @@ namespace texfab::synthesis::cpu {
 /// 1/kTransferOne.
 using Transfer = std::array<int16_t, 3>;
 
+/// R as the RGB offset a texel's colour is shown with, in colour values.
+inline std::array<float, 3> colorOffset(const Transfer& r) {
+  return {float(r[0]) / kTransferOne, float(r[1]) / kTransferOne, float(r[2]) / kTransferOne};
+}
+
 /// R composed with a candidate's offset b (three values), saturating.
 inline Transfer compose(const Transfer& r, const int16_t* b) {
   Transfer out;
