@@ -35,24 +35,27 @@ render::RenderOptions sphereView(int diameter, int samples, NormalMapFiltering f
 }
 
 void printTable(render::SpecularModel specular) {
-  std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | glTF route | "
-              "glTF route, UASTC | MIP / lobes | MIP / route |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| material | texels per pixel | sphere, px | MIP-mapped | Toksvig | fitted lobes | glTF route, isotropic | "
+              "glTF route | glTF route, UASTC | MIP / lobes | MIP / route |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const test::TestMap& m : test::testMaps(kMapSize)) {
     const geometry::Mesh sphere = test::normalMappedSphere(m.map, kTilesAround);
+    const geometry::Mesh isotropicSphere = test::withGltfRoute(sphere, false, {.anisotropy = false});
     const geometry::Mesh routeSphere = test::withGltfRoute(sphere, false), uastcSphere = test::withGltfRoute(sphere, true);
-    const render::PreviewRenderer renderer(sphere), route(routeSphere), routeUastc(uastcSphere);
+    const render::PreviewRenderer renderer(sphere), isotropic(isotropicSphere), route(routeSphere), routeUastc(uastcSphere);
     for (int texelsPerPixel : kTexelsPerPixel) {
       const int diameter = test::sphereDiameter(kMapSize, kTilesAround, texelsPerPixel);
       const Image truth =
           renderer.render(sphereView(diameter, test::truthSamples(texelsPerPixel), NormalMapFiltering::Mip, specular));
-      std::array<double, kMethods.size() + 2> error{};
+      std::array<double, kMethods.size() + 3> error{};
       for (size_t i = 0; i < kMethods.size(); ++i)
         error[i] = test::coveredRms(renderer.render(sphereView(diameter, 1, kMethods[i], specular)), truth);
-      error[3] = test::coveredRms(route.render(sphereView(diameter, 1, NormalMapFiltering::Mip, specular)), truth);
-      error[4] = test::coveredRms(routeUastc.render(sphereView(diameter, 1, NormalMapFiltering::Mip, specular)), truth);
-      std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.4f | %.4f | %.1fx | %.1fx |\n", m.name.c_str(), texelsPerPixel,
-                  diameter, error[0], error[1], error[2], error[3], error[4], error[0] / error[2], error[0] / error[3]);
+      const render::PreviewRenderer* routes[] = {&isotropic, &route, &routeUastc};
+      for (size_t i = 0; i < 3; ++i)
+        error[3 + i] = test::coveredRms(routes[i]->render(sphereView(diameter, 1, NormalMapFiltering::Mip, specular)), truth);
+      std::printf("| %s | %d | %d | %.4f | %.4f | %.4f | %.4f | %.4f | %.4f | %.1fx | %.1fx |\n", m.name.c_str(),
+                  texelsPerPixel, diameter, error[0], error[1], error[2], error[3], error[4], error[5], error[0] / error[2],
+                  error[0] / error[5]);
       std::fflush(stdout);
     }
   }

@@ -67,6 +67,20 @@ struct Material {
   Texture baseColorTexture;
   Texture metallicRoughnessTexture; ///< G = roughness, B = metallic (glTF)
   Texture normalTexture;            ///< tangent-space normal map (+Y up, OpenGL convention)
+  /// KHR_materials_anisotropy: along a direction of the tangent plane the specular lobe widens
+  /// from α = roughness² to α_t = mix(α, 1, strength²); across it α stays.
+  struct Anisotropy {
+    float strength = 0.0f;  ///< multiplies the texture's B; 0: isotropic
+    float rotation = 0.0f;  ///< radians, counter-clockwise from the tangent, applied to the direction
+    Texture texture;        ///< RG: the direction in tangent space, [-1, 1] stored as [0, 1]; B: strength
+    explicit operator bool() const { return strength > 0; }
+  } anisotropy;
+
+  /// Every texture slot (some may be empty): base colour, metallic-roughness, normal, anisotropy.
+  std::array<Texture*, 4> textures() { return {&baseColorTexture, &metallicRoughnessTexture, &normalTexture, &anisotropy.texture}; }
+  std::array<const Texture*, 4> textures() const {
+    return {&baseColorTexture, &metallicRoughnessTexture, &normalTexture, &anisotropy.texture};
+  }
 };
 
 struct Mesh {

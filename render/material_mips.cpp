@@ -18,10 +18,11 @@ namespace {
 // Sums over a texel's footprint in level 0.
 struct Footprint {
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // unit normals as a viewer bends them (normalScale)
+  Eigen::Vector3f slopes = Eigen::Vector3f::Zero();  // their tangent-plane moments: x², xy, y²
   float alpha2 = 0, metallic = 0, occlusion = 0, count = 0;
 
   void add(const Footprint& o) {
-    normal += o.normal;
+    normal += o.normal, slopes += o.slopes;
     alpha2 += o.alpha2, metallic += o.metallic, occlusion += o.occlusion, count += o.count;
   }
 };
@@ -46,6 +47,7 @@ Level baseLevel(const geometry::Material& m, const Context& ctx) {
         const Eigen::Vector3f stored = decodeNormal(normals, x, y);
         const Eigen::Vector3f seen(m.normalScale * stored.x(), m.normalScale * stored.y(), stored.z());
         f.normal = seen.squaredNorm() > 0 ? Eigen::Vector3f(seen.normalized()) : Eigen::Vector3f::UnitZ();
+        f.slopes = {f.normal.x() * f.normal.x(), f.normal.x() * f.normal.y(), f.normal.y() * f.normal.y()};
         const float roughness = std::clamp(m.roughnessFactor * (mr ? channel(*mr, x, y, 1) : 1.0f), 0.0f, 1.0f);
         f.alpha2 = roughness * roughness * roughness * roughness;
         f.metallic = std::clamp(m.metallicFactor * (mr ? channel(*mr, x, y, 2) : 1.0f), 0.0f, 1.0f);
@@ -78,17 +80,96 @@ Level nextLevel(const Level& fine, const Context& ctx) {
   return coarse;
 }
 
-// The level's metallic-roughness texture: R (occlusion) and B (metallic) averaged, G widened.
-Image levelImage(const Level& level) {
+// The spread of a footprint's normals in the tangent plane: the eigenvalues of the covariance of
+// their x and y components, and the unit axis of the larger.
+struct Spread {
+  double major = 0, minor = 0;
+  Eigen::Vector2d axis{1, 0};
+};
+
+Spread spreadOf(const Footprint& f) {
+  const Eigen::Vector2d mean = f.normal.head<2>().cast<double>() / f.count;
+  const double xx = double(f.slopes.x()) / f.count - mean.x() * mean.x();
+  const double xy = double(f.slopes.y()) / f.count - mean.x() * mean.y();
+  const double yy = double(f.slopes.z()) / f.count - mean.y() * mean.y();
+  // Square roots only (no hypot): the same bits on every CPU.
+  const double half = 0.5 * (xx + yy), gap = std::sqrt(0.25 * (xx - yy) * (xx - yy) + xy * xy);
+  Spread s{half + gap, std::max(half - gap, 0.0), {}};
+  s.axis = xy != 0 ? Eigen::Vector2d(xy, s.major - xx).normalized() : xx >= yy ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1);
+  return s;
+}
+
+// The lobe fitted to a footprint's normals, as glTF can carry it: the roughness across the
+// direction in which the normals spread most and, with anisotropy, the widening along it.
+struct FittedLobe {
+  float roughness = 1;
+  Eigen::Vector2f direction{1, 0};  // tangent space, unit
+  float strength = 0;               // KHR_materials_anisotropy's: α_t = mix(α, 1, strength²)
+};
+
+// The vMF lobe's 1/κ from the mean length |r| (isotropic) is split between the two principal axes
+// of the normals' spread in proportion to its eigenvalues (a tight lobe's 1/κ is its variance per
+// axis), and each axis widens α² as widenedAlpha2 does. An axis has two signs; the one toward
+// `reference` is kept, since viewers filter directions linearly and opposite ones would cancel.
+FittedLobe fitLobe(const Footprint& f, bool anisotropic, const Eigen::Vector2d& reference) {
+  const double alpha2 = std::clamp(double(f.alpha2) / f.count, 0.0, 1.0);
+  const double r = std::clamp(double(f.normal.norm()) / f.count, 0.0, 1.0);
+  FittedLobe lobe;
+  lobe.direction = reference.cast<float>();
+  const Spread spread = anisotropic ? spreadOf(f) : Spread{};
+  if (!(spread.major > 0) || alpha2 >= 1 || r <= 0) {
+    lobe.roughness = widenedRoughness(alpha2, r);
+    return lobe;
+  }
+  const double inverseSharpness = (1 - r * r) / (3 * r - r * r * r), half = 0.5 * (spread.major + spread.minor);
+  const double alphaMinor = std::sqrt(widenedAlpha2(alpha2, inverseSharpness * spread.minor / half));
+  const double alphaMajor = std::sqrt(widenedAlpha2(alpha2, inverseSharpness * spread.major / half));
+  lobe.roughness = float(std::sqrt(alphaMinor));
+  lobe.direction = (spread.axis.dot(reference) < 0 ? Eigen::Vector2d(-spread.axis) : spread.axis).cast<float>();
+  lobe.strength = alphaMinor < 1 ? float(std::sqrt(std::max(alphaMajor - alphaMinor, 0.0) / (1 - alphaMinor))) : 0.0f;
+  return lobe;
+}
+
+// The level's metallic-roughness texture (R, occlusion, and B, metallic, averaged; G widened) and,
+// when `anisotropy` is not null, its anisotropy texture (directions signed toward `reference`;
+// strength 0 unless `anisotropic`).
+Image levelImage(const Level& level, bool anisotropic, const Eigen::Vector2d& reference, Image* anisotropy) {
   Image mr(level.width, level.height, 3);
+  if (anisotropy) *anisotropy = Image(level.width, level.height, 3);
   for (int y = 0; y < level.height; ++y)
     for (int x = 0; x < level.width; ++x) {
       const Footprint& f = level.at(x, y);
+      const FittedLobe lobe = fitLobe(f, anisotropic, reference);
       mr.at(x, y, 0) = f.occlusion / f.count;
-      mr.at(x, y, 1) = widenedRoughness(double(f.alpha2) / f.count, double(f.normal.norm()) / f.count);
+      mr.at(x, y, 1) = lobe.roughness;
       mr.at(x, y, 2) = f.metallic / f.count;
+      if (!anisotropy) continue;
+      anisotropy->at(x, y, 0) = 0.5f * (lobe.direction.x() + 1);
+      anisotropy->at(x, y, 1) = 0.5f * (lobe.direction.y() + 1);
+      anisotropy->at(x, y, 2) = lobe.strength;
     }
   return mr;
+}
+
+// The sign of every direction: the principal axis of the whole map's normals, so that the
+// directions a viewer filters together agree, whichever way the material's grain runs (the
+// diagonal when they spread evenly).
+Eigen::Vector2d referenceAxis(const Level& base) {
+  Footprint all;
+  for (const Footprint& f : base.texels) all.add(f);
+  const Spread spread = spreadOf(all);
+  return spread.major > spread.minor ? spread.axis : Eigen::Vector2d(std::sqrt(0.5), std::sqrt(0.5));
+}
+
+// How much the normals under a level's texels spread one way: Σ(λ₁ - λ₂) / Σ(λ₁ + λ₂) over its
+// texels' principal spreads (0 where nothing spreads).
+double anisotropyOf(const Level& level) {
+  double one = 0, all = 0;
+  for (const Footprint& f : level.texels) {
+    const Spread s = spreadOf(f);
+    one += s.major - s.minor, all += s.major + s.minor;
+  }
+  return all > 0 ? one / all : 0.0;
 }
 
 } // namespace
@@ -123,36 +204,56 @@ std::string filteredMipsUnavailable(const geometry::Material& m) {
   return "";
 }
 
-geometry::Material withFilteredMips(const geometry::Material& material, const Context& ctx) {
+geometry::Material withFilteredMips(const geometry::Material& material, const FilteredMipsOptions& options,
+                                    const Context& ctx) {
   if (const std::string why = filteredMipsUnavailable(material); !why.empty())
     throw Error("normal-map filtering for glTF: " + why);
   Stage stage(ctx, "roughness MIPs");
   auto chain = std::make_shared<std::vector<Image>>();
-  for (Level level = baseLevel(material, ctx);; level = nextLevel(level, ctx)) {
-    chain->push_back(levelImage(level));
+  auto anisotropy = std::make_shared<std::vector<Image>>();
+  // A material with anisotropy of its own keeps it; level 0 (one normal per texel) has none.
+  const bool fitAnisotropy = options.anisotropy && !material.anisotropy;
+  bool anyAnisotropic = false;
+  Level level = baseLevel(material, ctx);
+  const Eigen::Vector2d reference = referenceAxis(level);
+  for (bool first = true;; level = nextLevel(level, ctx), first = false) {
+    const bool anisotropic = fitAnisotropy && !first && anisotropyOf(level) >= options.minAnisotropy;
+    anyAnisotropic |= anisotropic;
+    Image directions;
+    chain->push_back(levelImage(level, anisotropic, reference, fitAnisotropy ? &directions : nullptr));
+    if (fitAnisotropy) anisotropy->push_back(std::move(directions));
     if (level.width == 1 && level.height == 1) break;
   }
   geometry::Material out = material;
+  const geometry::Texture& normals = material.normalTexture;
+  const auto mappedAsNormals = [&](geometry::Texture& t, const char* name) {
+    t.offset = normals.offset, t.scale = normals.scale, t.rotation = normals.rotation;
+    t.name = name;
+  };
   geometry::Texture& mr = out.metallicRoughnessTexture;
-  if (!mr) {
-    mr.offset = material.normalTexture.offset, mr.scale = material.normalTexture.scale;
-    mr.rotation = material.normalTexture.rotation;
-    mr.name = "metallic_roughness.png";
-  }
+  if (!mr) mappedAsNormals(mr, "metallic_roughness.png");
   mr.image = std::make_shared<const Image>(chain->front());
   mr.encoded.reset();
   mr.mips = std::move(chain);
   out.metallicFactor = 1.0f, out.roughnessFactor = 1.0f;
+  if (anyAnisotropic) {
+    out.anisotropy = {};
+    mappedAsNormals(out.anisotropy.texture, "anisotropy.png");
+    out.anisotropy.strength = 1.0f;
+    out.anisotropy.texture.image = std::make_shared<const Image>(anisotropy->front());
+    out.anisotropy.texture.mips = std::move(anisotropy);
+  }
   stage.finish();
   return out;
 }
 
-geometry::Mesh withFilteredMips(const geometry::Mesh& mesh, const Context& ctx, std::vector<std::string>* notes) {
+geometry::Mesh withFilteredMips(const geometry::Mesh& mesh, const FilteredMipsOptions& options, const Context& ctx,
+                                std::vector<std::string>* notes) {
   geometry::Mesh out = mesh;
   for (geometry::Material& m : out.materials) {
     if (!m.normalTexture) continue;
     if (const std::string why = filteredMipsUnavailable(m); why.empty())
-      m = withFilteredMips(m, ctx);
+      m = withFilteredMips(m, options, ctx);
     else if (notes)
       notes->push_back("material '" + m.name + "': the normal map's MIP levels are left to viewers (" + why + ")");
   }

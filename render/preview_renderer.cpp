@@ -15,8 +15,10 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <span>
+#include <tuple>
 
 namespace texfab::render {
 
@@ -100,8 +102,8 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
     geometry::computeSmoothNormals(shape);
     normals_ = std::move(shape.normals);
   }
-  bool normalMapped = false;
-  for (const geometry::Material& m : mesh.materials) normalMapped |= bool(m.normalTexture);
+  bool normalMapped = false;  // or anisotropic: either needs tangents
+  for (const geometry::Material& m : mesh.materials) normalMapped |= m.normalTexture || m.anisotropy;
   if (mesh.hasTangents()) {
     tangents_ = mesh.tangents;
   } else if (normalMapped && mesh.hasUvs()) {
@@ -123,7 +125,8 @@ PreviewRenderer::PreviewRenderer(const geometry::Mesh& mesh) : mesh_(mesh), scen
   };
   for (const geometry::Material& m : mesh.materials)
     maps_.push_back({pyramid(m.baseColorTexture, true), pyramid(m.metallicRoughnessTexture, false),
-                     pyramid(m.normalTexture, false), {}});
+                     pyramid(m.normalTexture, false), m.anisotropy ? pyramid(m.anisotropy.texture, false) : MipPyramid{},
+                     {}});
   if (mesh.hasUvs()) {
     uvDensity_.resize(mesh.triangleCount());
     for (size_t t = 0; t < mesh.triangleCount(); ++t) {
@@ -269,6 +272,10 @@ struct PreviewRenderer::Surface {
   const geometry::Material* material = nullptr;
   Vector4f base;     ///< base colour (linear) and alpha, textures applied
   float metallic = 0, roughness = 0;
+  /// KHR_materials_anisotropy: the lobe widens along `tangent` (unit, across n) to
+  /// α_t = mix(α, 1, anisotropy²); 0: isotropic.
+  float anisotropy = 0;
+  Vector3f tangent = Vector3f::Zero();
   /// Where a normal map is minified: the normal distribution under the sample's footprint, as
   /// lobes in world space (those of the two nearest NDF levels, weighted), for the highlight.
   std::array<WorldLobe, kMaxFootprintLobes> lobes;
@@ -307,7 +314,7 @@ double renderMemoryBytes(const geometry::Mesh& mesh, const RenderOptions& option
                  kPerTriangle * double(mesh.triangleCount());
   std::set<const Image*> seen;
   for (const geometry::Material& m : mesh.materials)
-    for (const geometry::Texture* t : {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture}) {
+    for (const geometry::Texture* t : m.textures()) {
       if (!*t || !seen.insert(t->image.get()).second) continue;
       const double texels = double(t->image->width) * t->image->height;
       bytes += kPyramid * texels * 4 * sizeof(float);
@@ -373,6 +380,25 @@ void PreviewRenderer::addSample(const View& view, int px, int py, int s, Vector3
   coverage += opacity;
 }
 
+namespace {
+
+// KHR_materials_anisotropy at a point of tangent frame (tangent, bitangent, shading normal n), given
+// its texture's texel (when it has one): the direction in which the lobe widens (the texel's RG, a
+// tangent-space direction, turned by the rotation, taken across n) and the strength (its B times
+// the material's). Strength 0: isotropic.
+std::pair<Vector3f, float> anisotropyAt(const geometry::Material::Anisotropy& a, const std::optional<Vector4f>& texel,
+                                        const std::array<Vector3f, 3>& frame) {
+  const Vector2f d = texel ? Vector2f(2 * texel->x() - 1, 2 * texel->y() - 1) : Vector2f(1, 0);
+  const float strength = std::min(a.strength * (texel ? texel->z() : 1.0f), 1.0f);
+  const float c = std::cos(a.rotation), s = std::sin(a.rotation);
+  Vector3f along = (c * d.x() - s * d.y()) * frame[0] + (s * d.x() + c * d.y()) * frame[1];
+  along -= frame[2] * frame[2].dot(along);
+  if (along.squaredNorm() < 1e-12f || !(strength > 0)) return {Vector3f::Zero(), 0.0f};
+  return {along.normalized(), strength};
+}
+
+} // namespace
+
 // The hit's normals (double-sided: facing the viewer) and material, with its textures sampled at
 // the mip level of the sample's footprint (a pinhole camera's ray differential, widened by the
 // grazing angle) and the normal map applied.
@@ -414,28 +440,35 @@ PreviewRenderer::Surface PreviewRenderer::surfaceAt(const View& view, const geom
       f.roughness *= mr.y();
       f.metallic *= mr.z();
     }
-    if (!maps.normal.empty() && !tangents_.empty()) {
+    if ((!maps.normal.empty() || material.anisotropy) && !tangents_.empty()) {
       const Vector4f tc = w * tangents_[3 * t] + u * tangents_[3 * t + 1] + v * tangents_[3 * t + 2];
       Vector3f tangent = tc.head<3>() - n * n.dot(tc.head<3>());
       if (tangent.squaredNorm() > 1e-12f) {
         tangent.normalize();
         const Vector3f bitangent = (tangents_[3 * t].w() < 0 ? -1.0f : 1.0f) * n.cross(tangent);
-        const Vector4f m = lookup(maps.normal, material.normalTexture);
-        const Vector3f local(material.normalScale * (2 * m.x() - 1), material.normalScale * (2 * m.y() - 1), 2 * m.z() - 1);
-        const Vector3f mapped = local.x() * tangent + local.y() * bitangent + local.z() * n;
-        const float lod = lodOf(maps.normal.levels[0], material.normalTexture);
-        const NormalMapFiltering filtering = view.o.normalMapFiltering;
-        if (lod > 0 && filtering == NormalMapFiltering::Lobes && maps.normalDistribution) {
-          addLobes(f.lobes, f.lobeCount, *maps.normalDistribution, material.normalTexture.apply(uv), lod,
-                   material.normalScale, {tangent, bitangent, n}, mapped);
-        } else if (lod > 0 && filtering == NormalMapFiltering::Toksvig && mapped.squaredNorm() > 1e-12f) {
-          // The mean normal's length |m| = κ / (κ + 1) for Toksvig's exponent |m|s / (|m| + s(1 - |m|)).
-          const float length = std::min(Vector3f(2 * m.x() - 1, 2 * m.y() - 1, 2 * m.z() - 1).norm(), 1.0f);
-          const float sharpness = std::min(length / std::max(1 - length, 1e-6f), kMaxVmfSharpness);
-          f.lobes[0] = {mapped.normalized(), sharpness, 1.0f, length};
-          f.lobeCount = 1;
+        if (!maps.normal.empty()) {
+          const Vector4f m = lookup(maps.normal, material.normalTexture);
+          const Vector3f local(material.normalScale * (2 * m.x() - 1), material.normalScale * (2 * m.y() - 1), 2 * m.z() - 1);
+          const Vector3f mapped = local.x() * tangent + local.y() * bitangent + local.z() * n;
+          const float lod = lodOf(maps.normal.levels[0], material.normalTexture);
+          const NormalMapFiltering filtering = view.o.normalMapFiltering;
+          if (lod > 0 && filtering == NormalMapFiltering::Lobes && maps.normalDistribution) {
+            addLobes(f.lobes, f.lobeCount, *maps.normalDistribution, material.normalTexture.apply(uv), lod,
+                     material.normalScale, {tangent, bitangent, n}, mapped);
+          } else if (lod > 0 && filtering == NormalMapFiltering::Toksvig && mapped.squaredNorm() > 1e-12f) {
+            // The mean normal's length |m| = κ / (κ + 1) for Toksvig's exponent |m|s / (|m| + s(1 - |m|)).
+            const float length = std::min(Vector3f(2 * m.x() - 1, 2 * m.y() - 1, 2 * m.z() - 1).norm(), 1.0f);
+            const float sharpness = std::min(length / std::max(1 - length, 1e-6f), kMaxVmfSharpness);
+            f.lobes[0] = {mapped.normalized(), sharpness, 1.0f, length};
+            f.lobeCount = 1;
+          }
+          if (mapped.squaredNorm() > 1e-12f) n = mapped.normalized();
         }
-        if (mapped.squaredNorm() > 1e-12f) n = mapped.normalized();
+        if (material.anisotropy) {
+          const auto texel = maps.anisotropy.empty() ? std::nullopt
+                                                      : std::optional(lookup(maps.anisotropy, material.anisotropy.texture));
+          std::tie(f.tangent, f.anisotropy) = anisotropyAt(material.anisotropy, texel, {tangent, bitangent, n});
+        }
       }
     }
   }
@@ -452,6 +485,7 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
   const Vector3f albedo = f.base.head<3>().cwiseMax(0.0f);
   const float roughness = std::clamp(f.roughness, 0.05f, 1.0f);
   const float alpha = roughness * roughness, shininess = std::max(2.0f / (alpha * alpha) - 2.0f, 1.0f);  // Blinn-Phong
+  const float alphaT = alpha + (1 - alpha) * f.anisotropy * f.anisotropy;  // along f.tangent
   const float metallic = std::clamp(f.metallic, 0.0f, 1.0f);
   const Vector3f diffuse = (1 - metallic) * albedo;
   const Vector3f f0 = Vector3f::Constant(0.04f) * (1 - metallic) + metallic * albedo;
@@ -475,20 +509,41 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
       // The highlight of one normal at its own cosine, its specular lobe convolved with a vMF lobe
       // of sharpness κ (infinite: none; s' = κs / (κ + s), Han et al. 2007, Eq. 7.20, or in α,
       // widenedAlpha2): at the normal, or over the footprint's normal distribution, lobe by lobe.
+      // With anisotropy, along t (f.tangent taken across the normal) α_t, across it α: Ashikhmin and
+      // Shirley's exponents for Blinn-Phong, KHR_materials_anisotropy's GGX and visibility.
       const auto highlight = [&](const Vector3f& normal, float sharpness) -> Vector3f {
         const float cl = normal.dot(view.light);
         if (cl <= 0) return Vector3f::Zero();
         const float nh = std::max(normal.dot(h), 0.0f);
+        Vector3f t = f.tangent - normal * normal.dot(f.tangent);
+        const bool anisotropic = alphaT > alpha && t.squaredNorm() > 1e-12f;
+        if (anisotropic) t.normalize();
+        const Vector3f b = normal.cross(t);
         if (o.specular == SpecularModel::BlinnPhong) {
-          const float s = std::isinf(sharpness) ? shininess : convolvedExponent(sharpness, shininess);
-          return f0 * ((s + 8) / (8 * kPi) * std::pow(nh, s) * cl);
+          const auto widened = [&](float a) {
+            const float s0 = std::max(2.0f / (a * a) - 2.0f, 1.0f);
+            return std::isinf(sharpness) ? s0 : convolvedExponent(sharpness, s0);
+          };
+          const float s = widened(alpha);
+          if (!anisotropic) return f0 * ((s + 8) / (8 * kPi) * std::pow(nh, s) * cl);
+          const float st = widened(alphaT), ht = h.dot(t), hb = h.dot(b);
+          const float exponent = (st * ht * ht + s * hb * hb) / std::max(1 - nh * nh, 1e-12f);
+          return f0 * (std::sqrt((st + 8) * (s + 8)) / (8 * kPi) * std::pow(nh, exponent) * cl);
         }
         const float a2 = float(widenedAlpha2(double(alpha) * alpha, 1.0 / double(sharpness)));
         const float nv = std::max(-normal.dot(dir), 1e-4f), vh = std::max(-h.dot(dir), 0.0f);
-        const float d = nh * nh * (a2 - 1) + 1;
-        const float visibility = 0.5f / (cl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(cl * cl * (1 - a2) + a2));
         const Vector3f fresnel = f0 + (Vector3f::Ones() - f0) * std::pow(1 - vh, 5.0f);
-        return fresnel * (a2 / (kPi * d * d) * visibility * cl);
+        if (!anisotropic) {
+          const float d = nh * nh * (a2 - 1) + 1;
+          const float visibility = 0.5f / (cl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(cl * cl * (1 - a2) + a2));
+          return fresnel * (a2 / (kPi * d * d) * visibility * cl);
+        }
+        const float ab = std::sqrt(a2), at = std::sqrt(float(widenedAlpha2(double(alphaT) * alphaT, 1.0 / double(sharpness))));
+        const float ht = h.dot(t) / at, hb = h.dot(b) / ab, d = ht * ht + hb * hb + nh * nh;
+        const float vt = -dir.dot(t), vb = -dir.dot(b), lt = view.light.dot(t), lb = view.light.dot(b);
+        const float visibility = 0.5f / (cl * std::sqrt(at * at * vt * vt + ab * ab * vb * vb + nv * nv) +
+                                         nv * std::sqrt(at * at * lt * lt + ab * ab * lb * lb + cl * cl));
+        return fresnel * (1 / (kPi * at * ab * d * d) * visibility * cl);
       };
       Vector3f specular = Vector3f::Zero();
       if (lobes.empty()) specular = highlight(n, std::numeric_limits<float>::infinity());
@@ -534,7 +589,10 @@ Vector3f PreviewRenderer::lightSurface(const View& view, const Surface& f, const
   // rays find the hemisphere closed.
   Vector3f reflected = lobes.empty() ? Vector3f(dir - 2 * dir.dot(n) * n) : Vector3f::Zero();
   for (const WorldLobe& l : lobes) reflected += l.weight * meanReflection(dir, l.axis, l.sharpness, l.length);
-  reflected *= (shininess + 4) / (shininess + 8);
+  // An anisotropic lobe shortens it as the isotropic lobe of its mean α² would.
+  const float meanShininess =
+      alphaT > alpha ? std::max(4.0f / (alpha * alpha + alphaT * alphaT) - 2.0f, 1.0f) : shininess;
+  reflected *= (meanShininess + 4) / (meanShininess + 8);
   color += ambient.cwiseProduct(diffuse) + open * environment(reflected, view.modelUp).cwiseProduct(f0);
   return color;
 }

@@ -92,7 +92,7 @@ private:
                                int s) const;
 
   struct MaterialMaps {
-    MipPyramid baseColor, metallicRoughness, normal;
+    MipPyramid baseColor, metallicRoughness, normal, anisotropy;
     std::shared_ptr<const NdfMipChain> normalDistribution;  ///< of `normal`, once a render asks
   };
   void filterNormalMaps(const RenderOptions& o, const Context& ctx) const;

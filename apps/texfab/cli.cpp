@@ -238,8 +238,8 @@ void Flags::camera(render::RenderOptions& o) {
          "about 3-5 s more for a 1024^2 normal map on a glossy or metallic material); toksvig, from one lobe "
          "widened by the MIP-mapped normal's shortening (Toksvig 2005: no fit, less exact); mip, from the "
          "MIP-mapped normals (bumps then look flat and shiny). A .glb/.gltf that texture writes with a normal map "
-         "also carries, unless mip, a roughness MIP chain widened by the normals' spread (KTX2, KHR_texture_basisu, "
-         "for viewers that read it; the PNG stays the fallback)");
+         "also carries, unless mip, roughness and anisotropy MIP chains widened by the normals' spread (KTX2, "
+         "KHR_texture_basisu and KHR_materials_anisotropy, for viewers that read them; the PNGs stay the fallback)");
   app_->add_flag_function(
       "--no-ndf-filtering", [&o](int64_t) { o.normalMapFiltering = NormalMapFiltering::Mip; },
       "The same as --normal-filtering mip");

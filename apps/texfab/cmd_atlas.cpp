@@ -114,9 +114,11 @@ geometry::Mesh withAtlasUvs(const geometry::Mesh& mesh, const atlas::Atlas& a, c
   for (size_t c = 0; c < out.uvs.size(); ++c) out.uvs[c] = a.normalizedUv(a.texelUvs[c]);
   out.tangents.clear();
   bool dropped = false;
-  for (geometry::Material& m : out.materials)
-    for (geometry::Texture* t : {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture})
+  for (geometry::Material& m : out.materials) {
+    for (geometry::Texture* t : m.textures())
       if (*t) *t = geometry::Texture{}, dropped = true;
+    m.anisotropy = {};  // its direction is in the old UVs' tangent frame
+  }
   if (dropped) ctx.warn("the input's textures were dropped: they belong to its old UVs");
   return out;
 }

@@ -98,6 +98,10 @@ void runInfo(const InfoArgs& args) {
                          {"base_color_texture", describeTexture(m.baseColorTexture)},
                          {"metallic_roughness_texture", describeTexture(m.metallicRoughnessTexture)},
                          {"normal_texture", describeTexture(m.normalTexture)}});
+    if (m.anisotropy)
+      materials.back()["anisotropy"] = {{"strength", m.anisotropy.strength},
+                                        {"rotation", m.anisotropy.rotation},
+                                        {"texture", describeTexture(m.anisotropy.texture)}};
   }
   j["materials"] = materials;
   if (args.json) {
@@ -134,6 +138,11 @@ void runInfo(const InfoArgs& args) {
     texture("base color", m.baseColorTexture);
     texture("metallic-roughness", m.metallicRoughnessTexture);
     texture("normal", m.normalTexture);
+    if (m.anisotropy) {
+      std::printf("        %-18s strength %.3g, rotation %.3g rad (KHR_materials_anisotropy)\n", "anisotropy",
+                  double(m.anisotropy.strength), double(m.anisotropy.rotation));
+      texture("anisotropy map", m.anisotropy.texture);
+    }
   }
 }
 

@@ -31,6 +31,7 @@ struct TextureJob {
   render::TextureMeshOptions options;
   geometry::MeshWriteOptions write;
   render::RenderOptions previewOptions;
+  render::FilteredMipsOptions fileMips;  ///< the glTF route of normal-map filtering
   UpChoice up;
   WrapChoice wrap = WrapChoice::Auto;
   SolidMethodChoice method;
@@ -156,13 +157,13 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
 }
 
 // The mesh as written: for a glTF output with normal-map filtering on, each normal-mapped material
-// carries a roughness MIP chain widened by its normals' spread (render/material_mips.h).
+// carries roughness and anisotropy MIP chains widened by its normals' spread (render/material_mips.h).
 geometry::Mesh forFile(const geometry::Mesh& mesh, const TextureJob& job, const Run& run, const Context& ctx) {
   if (job.previewOptions.normalMapFiltering == render::NormalMapFiltering::Mip ||
       !geometry::meshFormatIsGltf(geometry::meshFormatOf(job.output)))
     return mesh;
   std::vector<std::string> notes;
-  geometry::Mesh out = render::withFilteredMips(mesh, ctx, &notes);
+  geometry::Mesh out = render::withFilteredMips(mesh, job.fileMips, ctx, &notes);
   for (const std::string& note : notes) run.note(note);
   return out;
 }
@@ -296,6 +297,11 @@ Command addTextureCommand(CLI::App& root) {
   f.text("--preview", job->preview, "Also render the textured model to this image");
   f.size("--preview-size", job->previewOptions.width, job->previewOptions.height, "Preview size", {1, 16384});
   f.camera(job->previewOptions);
+  f.app()->add_flag_function(
+      "--no-anisotropy", [job](int64_t) { job->fileMips.anisotropy = false; },
+      "Where a normal map's normals spread one way (grooves), widen a .glb/.gltf's roughness chain for one "
+      "isotropic lobe per texel instead of writing KHR_materials_anisotropy beside it (for viewers that read "
+      "KHR_texture_basisu but not anisotropy, which would see only the narrower widening)");
   f.up(job->up);
   f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Backend | Common::Quiet);
   return {f.app(), [job] { runTexture(*job); }};

@@ -340,6 +340,19 @@ Material GltfReader::material(size_t index) {
       out.metallicRoughnessTexture = texture(member(*pj, "metallicRoughnessTexture"));
     }
     out.normalTexture = texture(member(*mj, "normalTexture"));
+    if (const json* ext = member(*mj, "extensions"))
+      if (const json* a = member(*ext, "KHR_materials_anisotropy"); a && a->is_object()) {
+        const auto number = [&](const char* key) {
+          const json* v = member(*a, key);
+          return v && v->is_number() ? v->get<float>() : 0.0f;
+        };
+        out.anisotropy.strength = number("anisotropyStrength");
+        out.anisotropy.rotation = number("anisotropyRotation");
+        if (!std::isfinite(out.anisotropy.strength) || !std::isfinite(out.anisotropy.rotation))
+          throw Error(name_ + ": material " + std::to_string(index) + " has a non-finite KHR_materials_anisotropy value");
+        out.anisotropy.strength = std::clamp(out.anisotropy.strength, 0.0f, 1.0f);  // the schema's range
+        out.anisotropy.texture = texture(member(*a, "anisotropyTexture"));
+      }
   }
   return out;
 }

@@ -117,14 +117,14 @@ std::string uriOf(const std::string& name) {
 
 namespace {
 
-// The mesh as written: normals present and unit, tangents with w = ±1 where a normal map needs them
-// (as the validator checks).
+// The mesh as written: normals present and unit, tangents with w = ±1 where a normal map or
+// anisotropy needs them (as the validator checks).
 Mesh preparedForGltf(const Mesh& input, const MeshWriteOptions& options) {
   Mesh mesh = input;
   if (!mesh.hasNormals()) computeSmoothNormals(mesh);
-  bool anyNormalMap = false;
-  for (const Material& m : mesh.materials) anyNormalMap |= bool(m.normalTexture);
-  if (mesh.hasUvs() && !mesh.hasTangents() && anyNormalMap && options.computeMissingTangents) computeTangents(mesh);
+  bool needsTangents = false;
+  for (const Material& m : mesh.materials) needsTangents |= m.normalTexture || m.anisotropy;
+  if (mesh.hasUvs() && !mesh.hasTangents() && needsTangents && options.computeMissingTangents) computeTangents(mesh);
   if (!mesh.hasUvs()) mesh.tangents.clear();
   for (auto& n : mesh.normals) n = n.squaredNorm() > 0 ? Eigen::Vector3f(n.normalized()) : Eigen::Vector3f(0, 0, 1);
   for (auto& t : mesh.tangents) {
@@ -144,7 +144,9 @@ bool sameMaterial(const Material& a, const Material& b) {
   return a.name == b.name && a.baseColorFactor == b.baseColorFactor && a.metallicFactor == b.metallicFactor &&
          a.roughnessFactor == b.roughnessFactor && a.normalScale == b.normalScale && a.doubleSided == b.doubleSided &&
          a.blend == b.blend && sameTexture(a.baseColorTexture, b.baseColorTexture) &&
-         sameTexture(a.metallicRoughnessTexture, b.metallicRoughnessTexture) && sameTexture(a.normalTexture, b.normalTexture);
+         sameTexture(a.metallicRoughnessTexture, b.metallicRoughnessTexture) && sameTexture(a.normalTexture, b.normalTexture) &&
+         a.anisotropy.strength == b.anisotropy.strength && a.anisotropy.rotation == b.anisotropy.rotation &&
+         sameTexture(a.anisotropy.texture, b.anisotropy.texture);
 }
 
 // A glTF document being built: its meshes, and the materials, textures and images they share.
@@ -174,7 +176,7 @@ private:
   const MeshWriteOptions& options_;
   std::vector<std::pair<fs::path, fs::path>>& sideFiles_;
   GltfBuilder b_;
-  bool usesTransform_ = false, usesWebp_ = false, usesBasisu_ = false;
+  bool usesTransform_ = false, usesWebp_ = false, usesBasisu_ = false, usesAnisotropy_ = false;
   json materials_ = json::array(), textures_ = json::array(), images_ = json::array();
   json meshes_ = json::array(), nodes_ = json::array();
   struct StoredImage {
@@ -281,6 +283,13 @@ int GltfDocument::material(const Material& m, bool textured, bool firstMesh) {
     material["normalTexture"] = textureInfo(m.normalTexture, false);
     if (m.normalScale != 1.0f) material["normalTexture"]["scale"] = m.normalScale;
   }
+  if (textured && m.anisotropy) {  // its directions are relative to tangents, which need UVs
+    json anisotropy = {{"anisotropyStrength", m.anisotropy.strength}};
+    if (m.anisotropy.rotation != 0) anisotropy["anisotropyRotation"] = m.anisotropy.rotation;
+    if (m.anisotropy.texture) anisotropy["anisotropyTexture"] = textureInfo(m.anisotropy.texture, false);
+    material["extensions"]["KHR_materials_anisotropy"] = anisotropy;
+    usesAnisotropy_ = true;
+  }
   if (m.doubleSided) material["doubleSided"] = true;
   if (m.blend) material["alphaMode"] = "BLEND";
   materials_.push_back(material);
@@ -375,6 +384,7 @@ void GltfDocument::write() {
   }
   if (usesTransform_) extensionsUsed.push_back("KHR_texture_transform");
   if (usesBasisu_) extensionsUsed.push_back("KHR_texture_basisu");
+  if (usesAnisotropy_) extensionsUsed.push_back("KHR_materials_anisotropy");
   if (usesWebp_) {
     extensionsUsed.push_back("EXT_texture_webp");
     if (!doc.contains("extensionsRequired")) doc["extensionsRequired"] = json::array();

@@ -260,7 +260,8 @@ void bindJobs(py::module_& m) {
     py::gil_scoped_release release;
     geometry::writeMesh(geometry::meshFormatIsGltf(geometry::meshFormatOf(p)) ? render::withFilteredMips(mesh) : mesh, p, o);
   }, "Writes the textured mesh (.glb .gltf .obj .3mf) as `texfab texture` does (a normal-mapped glTF also "
-     "carries a roughness MIP chain widened by the normals' spread, as KTX2)");
+     "carries a roughness MIP chain widened by the normals' spread, as KTX2, and where they spread one way an "
+     "anisotropy chain, KHR_materials_anisotropy)");
 
   const render::TextureMeshOptions to;
   const synthesis::SolidSynthesisOptions so;

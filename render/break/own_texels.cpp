@@ -19,7 +19,7 @@ struct TexelBox {
 
 std::vector<geometry::Texture*> texturesOf(geometry::Material& m) {
   std::vector<geometry::Texture*> out;
-  for (geometry::Texture* t : {&m.baseColorTexture, &m.metallicRoughnessTexture, &m.normalTexture})
+  for (geometry::Texture* t : m.textures())
     if (*t) out.push_back(t);
   return out;
 }

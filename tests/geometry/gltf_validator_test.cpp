@@ -2,7 +2,8 @@
 // Every glTF/GLB texfab writes must pass the Khronos glTF validator with zero errors and zero
 // warnings: binary and text (buffers and images beside the file, or embedded), Draco, textures
 // as PNG, JPEG or WebP (EXT_texture_webp), and a texture's own MIP chain as KTX2
-// (KHR_texture_basisu, which the validator does not support: validate_gltf.js says what it skips). The validator is the npm package gltf-validator, installed by scripts/install-deps.sh
+// (KHR_texture_basisu, which the validator does not support: validate_gltf.js says what it skips),
+// and KHR_materials_anisotropy. The validator is the npm package gltf-validator, installed by scripts/install-deps.sh
 // into .tools/ (or found through $TEXFAB_GLTF_VALIDATOR = a node_modules folder).
 #include "geometry/io/mesh_io.h"
 #include "tests/geometry/test_meshes.h"
@@ -21,6 +22,13 @@ Mesh normalMappedMesh() {
   auto mips = std::make_shared<std::vector<Image>>();
   for (int side : {4, 2, 1}) mips->push_back(*texfab::test::gradientImage(side, side));
   m.materials[0].metallicRoughnessTexture.mips = std::move(mips);
+  // KHR_materials_anisotropy, its texture with a chain of its own too.
+  m.materials[0].anisotropy.strength = 0.8f;
+  m.materials[0].anisotropy.rotation = 0.25f;
+  m.materials[0].anisotropy.texture.image = texfab::test::gradientImage(8, 8);
+  auto directions = std::make_shared<std::vector<Image>>();
+  for (int side : {8, 4, 2, 1}) directions->push_back(*texfab::test::gradientImage(side, side));
+  m.materials[0].anisotropy.texture.mips = std::move(directions);
   m.materials[0].baseColorTexture.rotation = 0.5f;
   m.materials[1].baseColorFactor.w() = 0.5f;
   m.materials[1].blend = true;

@@ -222,6 +222,34 @@ TEST(MeshIo, GltfKeepsATexturesOwnMipChain) {
   }
 }
 
+// KHR_materials_anisotropy is read back as written (strength, rotation, its texture and that
+// texture's own chain), and a material without it has none.
+TEST(MeshIo, GltfCarriesAnisotropy) {
+  TempDir dir("texfab-anisotropy");
+  Mesh cube = texturedCube();
+  Material::Anisotropy& a = cube.materials[0].anisotropy;
+  a.strength = 0.75f;
+  a.rotation = -1.25f;
+  a.texture.image = texfab::test::gradientImage(8, 8);
+  auto mips = std::make_shared<std::vector<Image>>();
+  for (int side : {8, 4, 2, 1}) mips->push_back(*texfab::test::gradientImage(side, side));
+  a.texture.mips = mips;
+  for (const char* name : {"cube.glb", "cube.gltf"}) {
+    writeMesh(cube, dir / name);
+    const Mesh back = readMesh(dir / name);
+    const Material::Anisotropy& b = back.materials.at(0).anisotropy;
+    EXPECT_EQ(b.strength, 0.75f) << name;
+    EXPECT_EQ(b.rotation, -1.25f) << name;
+    ASSERT_TRUE(b.texture) << name;
+    ASSERT_EQ(b.texture.image->pixels.size(), a.texture.image->pixels.size()) << name;
+    for (size_t i = 0; i < a.texture.image->pixels.size(); ++i)
+      ASSERT_NEAR(b.texture.image->pixels[i], a.texture.image->pixels[i], 1e-6f) << name;  // 8-bit values
+    ASSERT_TRUE(b.texture.encodedMips) << name;
+    EXPECT_FALSE(back.materials.at(1).anisotropy) << name;
+    EXPECT_TRUE(back.hasTangents()) << name;  // the extension's direction is in tangent space
+  }
+}
+
 TEST(MeshIo, GltfNodeTransformsAreApplied) {
   TempDir dir("texfab-node");
   // One triangle in a base64 buffer, instanced by two nodes: one translated, one mirrored.

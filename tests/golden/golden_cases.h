@@ -72,7 +72,11 @@ inline constexpr Stage kFracture[] = {
 inline constexpr Stage kNdfMipChain[] = {{"normal map", "03b3e7c5302dd5d4"},
                                          {"lobes", "2efa9dab245331e8"},
                                          {"roughness MIPs", "6f586acca2e2a63f"},
-                                         {"ktx2", "8c73c145e1c7555b"}};
+                                         {"ktx2", "8c73c145e1c7555b"},
+                                         {"brushed normal map", "8c9e1118e0490c67"},
+                                         {"brushed roughness MIPs", "34a735f83075dc69"},
+                                         {"anisotropy MIPs", "3ab0d8257d84cd76"},
+                                         {"anisotropy ktx2", "f7a7dcadb8ddac60"}};
 inline constexpr Stage kSliceLayers[] = {{"layers", "dbd4250112e4a0bc"}, {"manifest", "c60d509d95f159fa"}};
 
 /// FNV-1a over bytes, continued from `h`.
@@ -416,7 +420,8 @@ inline Stages sliceLayers(Backend backend = Backend::Cpu) {
 /// The normal map of the bundled brick's luminance as a height field, and its NDF fitted per texel
 /// and MIP level (render/filter_normal_map.h, default options): every lobe of every level; the glTF
 /// route's roughness MIP chain for a glossy metal with that map (render/material_mips.h) and its
-/// KTX2 file.
+/// KTX2 file; for the brushed metal of the previews' tests, the route's roughness and anisotropy
+/// chains.
 inline Stages ndfMipChain() {
   const Image brick = readImage(bundled("exemplars/brick.png"));
   const Image map = test::normalMap(brick.width, 8, [&](int x, int y) {
@@ -428,15 +433,27 @@ inline Stages ndfMipChain() {
   geometry::Material metal;
   metal.roughnessFactor = 0.3f;
   metal.normalTexture.image = std::make_shared<const Image>(map);
-  const geometry::Material filtered = render::withFilteredMips(metal, Context{.threads = 2});
+  const geometry::Material filtered = render::withFilteredMips(metal, {}, Context{.threads = 2});
+  const auto chainHash = [](const std::vector<Image>& chain) {
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (const Image& level : chain) h = hashOf(level.pixels, h);
+    return h;
+  };
   const std::vector<Image>& roughness = *filtered.metallicRoughnessTexture.mips;
-  uint64_t levels = 0xcbf29ce484222325ull;
-  for (const Image& level : roughness) levels = hashOf(level.pixels, levels);
+  // The brushed metal's grooves, whose normals spread one way: an anisotropy chain too.
+  metal.normalTexture.image = std::make_shared<const Image>(test::testMaps(128)[1].map);
+  const geometry::Material brushed = render::withFilteredMips(metal, {}, Context{.threads = 2});
+  if (!brushed.anisotropy) return Stages().add("anisotropic", 0);
+  const std::vector<Image>& anisotropy = *brushed.anisotropy.texture.mips;
   return Stages()
       .add("normal map", hashOf(map.pixels))
       .add("lobes", lobes)
-      .add("roughness MIPs", levels)
-      .add("ktx2", hashOf(encodeKtx2Uastc(roughness)));
+      .add("roughness MIPs", chainHash(roughness))
+      .add("ktx2", hashOf(encodeKtx2Uastc(roughness)))
+      .add("brushed normal map", hashOf(metal.normalTexture.image->pixels))
+      .add("brushed roughness MIPs", chainHash(*brushed.metallicRoughnessTexture.mips))
+      .add("anisotropy MIPs", chainHash(anisotropy))
+      .add("anisotropy ktx2", hashOf(encodeKtx2Uastc(anisotropy)));
 }
 
 #endif

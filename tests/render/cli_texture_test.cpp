@@ -156,6 +156,13 @@ TEST(CliTexture, SolidModeAndCompanionMapsOnTheBundledModel) {
   ASSERT_EQ(info.status, 0) << info.err;
   EXPECT_EQ(nlohmann::json::parse(info.out)["materials"][0]["metallic_roughness_texture"]["mip_chain"]["bytes"].get<size_t>(),
             ktx2.size());
+  // This map's normals tilt along x only: the lobe widens one way (KHR_materials_anisotropy, its
+  // texture with a chain of its own); --no-anisotropy writes one isotropic lobe per texel.
+  EXPECT_TRUE(withMaps.materials.at(0).anisotropy);
+  EXPECT_TRUE(withMaps.materials.at(0).anisotropy.texture.encodedMips);
+  ASSERT_EQ(0, texture(withMapsTo(d / "isotropic.glb") << "--no-anisotropy").status);
+  expectValidGltf(d / "isotropic.glb");
+  EXPECT_FALSE(texfab::geometry::readMesh(d / "isotropic.glb").materials.at(0).anisotropy);
   ASSERT_EQ(0, texture(withMapsTo(d / "plain.glb") << "--no-ndf-filtering").status);
   EXPECT_TRUE(basisuImageOf(d / "plain.glb").empty());
   ASSERT_EQ(0, texture(withMapsTo(d / "maps.obj")).status);

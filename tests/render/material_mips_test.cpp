@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 using namespace texfab;
 using namespace texfab::render;
@@ -75,20 +76,74 @@ TEST(MaterialMips, FlatNormalsKeepTheirRoughness) {
   EXPECT_FALSE(m.normalTexture.mips);
 }
 
-// Bumps make a material rougher the further it is seen: level 0 keeps the roughness, each level
-// is at least as rough on average as the one below, and a bumpy map's coarse levels much rougher.
-// The chain is the same bytes on any thread count.
+// Bumps make a material rougher the further it is seen (one isotropic lobe per texel): level 0
+// keeps the roughness, each level is at least as rough on average as the one below, and a bumpy
+// map's coarse levels much rougher. Both routes' chains are the same bytes on any thread count; of
+// the three materials only the brushed metal's grooves get an anisotropy chain.
 TEST(MaterialMips, BumpsWidenRoughnessWithDistance) {
   for (const test::TestMap& t : test::testMaps(64)) {
-    const geometry::Material m = withFilteredMips(glossy(t.map), Context{.threads = 2});
+    const geometry::Material m = withFilteredMips(glossy(t.map), {.anisotropy = false}, Context{.threads = 2});
     const std::vector<Image>& chain = *m.metallicRoughnessTexture.mips;
     ASSERT_EQ(chain.size(), 7u);
+    EXPECT_FALSE(m.anisotropy);
     EXPECT_NEAR(meanChannel(chain[0], 1), 0.3, 1e-6) << t.name;
     for (size_t l = 1; l < chain.size(); ++l) EXPECT_GE(meanChannel(chain[l], 1), meanChannel(chain[l - 1], 1) - 1e-6) << t.name;
     EXPECT_GT(meanChannel(chain.back(), 1), 0.4) << t.name;
     EXPECT_NEAR(meanChannel(chain.back(), 2), 0.5, 1e-6) << t.name;
-    const geometry::Material serial = withFilteredMips(glossy(t.map), Context{.threads = 1});
-    for (size_t l = 0; l < chain.size(); ++l) EXPECT_EQ(chain[l].pixels, (*serial.metallicRoughnessTexture.mips)[l].pixels);
+    for (bool anisotropy : {false, true}) {
+      const geometry::Material two = withFilteredMips(glossy(t.map), {anisotropy}, Context{.threads = 2});
+      const geometry::Material one = withFilteredMips(glossy(t.map), {anisotropy}, Context{.threads = 1});
+      ASSERT_EQ(bool(two.anisotropy), bool(one.anisotropy)) << t.name;
+      EXPECT_EQ(bool(two.anisotropy), anisotropy && t.name == "brushed metal") << t.name;  // docs/normal-map-filtering.md
+      for (size_t l = 0; l < chain.size(); ++l) {
+        EXPECT_EQ((*two.metallicRoughnessTexture.mips)[l].pixels, (*one.metallicRoughnessTexture.mips)[l].pixels);
+        if (two.anisotropy) {
+          EXPECT_EQ((*two.anisotropy.texture.mips)[l].pixels, (*one.anisotropy.texture.mips)[l].pixels);
+        }
+      }
+    }
+  }
+}
+
+// Grooves whose normals tilt one way widen the lobe along that way only (KHR_materials_anisotropy):
+// the roughness chain keeps the material's roughness (nothing spreads across), the anisotropy chain
+// points along the tilt, every texel with the same sign, with a strength that grows with distance;
+// level 0 is isotropic. Seen through the extension, α_t is the one isotropic lobe's widening of that spread.
+TEST(MaterialMips, GroovesWidenTheLobeAlongTheirTilt) {
+  for (const double angle : {0.0, std::numbers::pi / 2, std::numbers::pi / 4, 3 * std::numbers::pi / 4}) {
+    const Eigen::Vector2d along(std::cos(angle), std::sin(angle));
+    Image grooves(32, 32, 3);
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        const double tilt = 0.4 * std::sin(2 * std::numbers::pi * (along.x() * x + along.y() * y) / 8);
+        const Eigen::Vector3d n(std::sin(tilt) * along.x(), std::sin(tilt) * along.y(), std::cos(tilt));
+        for (int c = 0; c < 3; ++c) grooves.at(x, y, c) = float(0.5 * n[c] + 0.5);
+      }
+    const geometry::Material m = withFilteredMips(glossy(grooves));
+    ASSERT_TRUE(m.anisotropy);
+    EXPECT_EQ(m.anisotropy.strength, 1.0f);
+    const std::vector<Image>& roughness = *m.metallicRoughnessTexture.mips;
+    const std::vector<Image>& anisotropy = *m.anisotropy.texture.mips;
+    ASSERT_EQ(anisotropy.size(), roughness.size());
+    EXPECT_NEAR(meanChannel(anisotropy[0], 2), 0.0, 1e-6);
+    const Image& top = anisotropy.back();
+    const Eigen::Vector2d sign(2 * top.at(0, 0, 0) - 1, 2 * top.at(0, 0, 1) - 1);
+    const Eigen::Vector2d expected = sign.dot(along) < 0 ? Eigen::Vector2d(-along) : along;
+    for (size_t l = 2; l < anisotropy.size(); ++l) {
+      const Image& a = anisotropy[l];
+      EXPECT_NEAR(meanChannel(roughness[l], 1), 0.3, 0.02) << angle << " level " << l;
+      EXPECT_NEAR(2 * meanChannel(a, 0) - 1, expected.x(), 0.02) << angle << " level " << l;
+      EXPECT_NEAR(2 * meanChannel(a, 1) - 1, expected.y(), 0.02) << angle << " level " << l;
+      EXPECT_GT(meanChannel(a, 2), l < 3 ? 0.3 : 0.5) << angle << " level " << l;  // from a whole period on
+      EXPECT_GE(meanChannel(a, 2), meanChannel(anisotropy[l - 1], 2) - 1e-6) << angle << " level " << l;
+    }
+    // Along the tilt, the widening of every normal's spread: more than the isotropic lobe's, which
+    // shares it with the direction across.
+    const geometry::Material isotropic = withFilteredMips(glossy(grooves), {.anisotropy = false});
+    const float alpha = 0.09f, strength = anisotropy.back().at(0, 0, 2);
+    const float alphaT = alpha + (1 - alpha) * strength * strength;
+    const float alphaIsotropic = std::pow(isotropic.metallicRoughnessTexture.mips->back().at(0, 0, 1), 2.0f);
+    EXPECT_GT(alphaT, alphaIsotropic) << angle;
   }
 }
 

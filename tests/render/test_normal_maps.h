@@ -151,15 +151,20 @@ inline Image throughUastc(const Image& image) {
   return out;
 }
 
-// The mesh as a viewer of texfab's glTF sees it with KHR_texture_basisu: each material with the
-// roughness MIP chain of render/material_mips.h, its levels through UASTC when `uastc`.
-inline geometry::Mesh withGltfRoute(geometry::Mesh mesh, bool uastc) {
-  for (geometry::Material& m : mesh.materials) {
-    m = render::withFilteredMips(m);
-    if (!uastc) continue;
+// The mesh as a viewer of texfab's glTF sees it with KHR_texture_basisu (and, where `options` ask
+// for it, KHR_materials_anisotropy): each material with the MIP chains of render/material_mips.h,
+// their levels through UASTC when `uastc`.
+inline geometry::Mesh withGltfRoute(geometry::Mesh mesh, bool uastc, const render::FilteredMipsOptions& options = {}) {
+  const auto throughUastcAll = [](geometry::Texture& t) {
     auto levels = std::make_shared<std::vector<Image>>();
-    for (const Image& level : *m.metallicRoughnessTexture.mips) levels->push_back(throughUastc(level));
-    m.metallicRoughnessTexture.mips = std::move(levels);
+    for (const Image& level : *t.mips) levels->push_back(throughUastc(level));
+    t.mips = std::move(levels);
+  };
+  for (geometry::Material& m : mesh.materials) {
+    m = render::withFilteredMips(m, options);
+    if (!uastc) continue;
+    throughUastcAll(m.metallicRoughnessTexture);
+    if (m.anisotropy) throughUastcAll(m.anisotropy.texture);
   }
   return mesh;
 }
