@@ -132,12 +132,25 @@ std::vector<std::vector<uint8_t>> writtenFiles(const std::string& name, const st
   return files;
 }
 
-// The textured cube (two materials, one textured; UVs, normals, face tags) as a file of `extension`
-// written with `options`: its bytes.
-std::vector<uint8_t> meshSeed(const std::string& extension, const geometry::MeshWriteOptions& options = {}) {
-  return writtenFiles("fuzz" + extension, [&](const fs::path& path) {
-    geometry::writeMesh(test::texturedCube(), path, options);
-  })[0];
+// `mesh` (by default the textured cube: two materials, one textured; UVs, normals, face tags) as a
+// file of `extension` written with `options`: its bytes.
+std::vector<uint8_t> meshSeed(const std::string& extension, const geometry::MeshWriteOptions& options = {},
+                              const geometry::Mesh& mesh = test::texturedCube()) {
+  return writtenFiles("fuzz" + extension, [&](const fs::path& path) { geometry::writeMesh(mesh, path, options); })[0];
+}
+
+// The textured cube with KHR_materials_anisotropy: a strength, a rotation and a texture with a KTX2
+// chain of its own (KHR_texture_basisu).
+geometry::Mesh anisotropicCube() {
+  geometry::Mesh cube = test::texturedCube();
+  geometry::Material::Anisotropy& a = cube.materials[0].anisotropy;
+  a.strength = 0.5f;
+  a.rotation = 0.75f;
+  a.texture.image = test::gradientImage(8, 8);
+  auto mips = std::make_shared<std::vector<Image>>();
+  for (int side : {8, 4, 2, 1}) mips->push_back(*test::gradientImage(side, side));
+  a.texture.mips = std::move(mips);
+  return cube;
 }
 
 // Targets that read several formats take the format's index as their input's first byte.
@@ -225,6 +238,7 @@ void seedGlb(const fs::path& folder) {
   draco.draco = true;
   writeSeed(folder, "cube.glb", meshSeed(".glb"));
   writeSeed(folder, "cube_draco.glb", meshSeed(".glb", draco));
+  writeSeed(folder, "cube_anisotropy.glb", meshSeed(".glb", {}, anisotropicCube()));
 }
 
 void seed3mf(const fs::path& folder) { writeSeed(folder, "cube.3mf", meshSeed(".3mf")); }
