@@ -8,12 +8,13 @@
 // normals), with its levels as stored and through UASTC as KTX2 carries them. With a path it
 // also draws the picture of docs/normal-map-filtering.md (the stone: the truth at 1024 samples per
 // pixel, then MIP-mapped normals, Toksvig, the fitted lobes and the glTF route through UASTC at 4;
-// the near view's centre, the far views enlarged). --microfacet shades with glTF's microfacet BRDF
-// instead of Blinn-Phong (render::SpecularModel).
-//   build/bench/normal_map_sphere [--microfacet] [docs/images/normal_map_filtering.png]
+// the near view's centre, the far views enlarged; --material draws another of the three).
+// --microfacet shades with glTF's microfacet BRDF instead of Blinn-Phong (render::SpecularModel).
+//   build/bench/normal_map_sphere [--microfacet] [--material NAME] [docs/images/normal_map_filtering.png]
 #include "core/image_io.h"
 #include "tests/render/test_normal_maps.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 
@@ -61,8 +62,8 @@ void printTable(render::SpecularModel specular) {
   }
 }
 
-void drawPicture(const char* path, render::SpecularModel specular) {
-  const geometry::Mesh sphere = test::normalMappedSphere(test::testMaps(kMapSize)[0].map, kTilesAround);
+void drawPicture(const char* path, const test::TestMap& material, render::SpecularModel specular) {
+  const geometry::Mesh sphere = test::normalMappedSphere(material.map, kTilesAround);
   const geometry::Mesh routeSphere = test::withGltfRoute(sphere, true);
   const render::PreviewRenderer renderer(sphere), route(routeSphere);
   constexpr int kTile = 160, kColumns = 2 + int(kMethods.size());
@@ -93,15 +94,27 @@ void drawPicture(const char* path, render::SpecularModel specular) {
 int main(int argc, char** argv) {
   render::SpecularModel specular = render::SpecularModel::BlinnPhong;
   const char* picture = nullptr;
+  const std::vector<test::TestMap> materials = test::testMaps(kMapSize);
+  const test::TestMap* material = &materials[0];
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--microfacet") == 0) specular = render::SpecularModel::Microfacet;
-    else if (!picture && argv[i][0] != '-') picture = argv[i];
-    else {
-      std::fprintf(stderr, "usage: normal_map_sphere [--microfacet] [PICTURE.png]\n");
-      return 2;
+    if (std::strcmp(argv[i], "--microfacet") == 0) {
+      specular = render::SpecularModel::Microfacet;
+      continue;
     }
+    if (std::strcmp(argv[i], "--material") == 0 && i + 1 < argc) {
+      const auto it = std::find_if(materials.begin(), materials.end(), [&](const test::TestMap& m) { return m.name == argv[i + 1]; });
+      if (it != materials.end()) {
+        material = &*it, ++i;
+        continue;
+      }
+    } else if (!picture && argv[i][0] != '-') {
+      picture = argv[i];
+      continue;
+    }
+    std::fprintf(stderr, "usage: normal_map_sphere [--microfacet] [--material stone|'brushed metal'|fabric] [PICTURE.png]\n");
+    return 2;
   }
   printTable(specular);
-  if (picture) drawPicture(picture, specular);
+  if (picture) drawPicture(picture, *material, specular);
   return 0;
 }
