@@ -269,6 +269,96 @@ void GraphAnalysisOptions::validate() const {
   if (minEntryLevel < 0 || minEntryLevel > 9) throw Error("graph entry level must be 0 to 9");
 }
 
+namespace {
+
+// `image` magnified `factor` times per side, each pixel a plane through its value with the
+// central differences' slopes (wrapping: graph exemplars are toroidal): smooth, and every
+// factor x factor block averages to the pixel it came from, so that a texel of the magnified
+// exemplar's level that spans a pixel as given shows that pixel's value.
+Image magnified(const Image& image, int factor) {
+  Image out(image.width * factor, image.height * factor, image.channels);
+  out.format = PixelFormat::Float;  // values between the 8-bit levels
+  const auto at = [&](int x, int y, int c) {
+    return image.at((x + image.width) % image.width, (y + image.height) % image.height, c);
+  };
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c = 0; c < image.channels; ++c) {
+        const float value = at(x, y, c), dx = 0.5f * (at(x + 1, y, c) - at(x - 1, y, c)),
+                    dy = 0.5f * (at(x, y + 1, c) - at(x, y - 1, c));
+        for (int j = 0; j < factor; ++j)
+          for (int i = 0; i < factor; ++i) {
+            // The sub-pixel's centre, -1/2 .. 1/2 across the pixel.
+            const float sx = float(2 * i + 1 - factor) / float(2 * factor), sy = float(2 * j + 1 - factor) / float(2 * factor);
+            out.at(x * factor + i, y * factor + j, c) = value + sx * dx + sy * dy;
+          }
+      }
+  return out;
+}
+
+// A magnified normal map's normals made unit again (stored as (n + 1) / 2).
+void renormalize(Image& normals) {
+  if (normals.channels < 3) return;
+  for (int y = 0; y < normals.height; ++y)
+    for (int x = 0; x < normals.width; ++x) {
+      float* p = normals.pixel(x, y);
+      const float nx = 2 * p[0] - 1, ny = 2 * p[1] - 1, nz = 2 * p[2] - 1;
+      const float length = std::sqrt(nx * nx + ny * ny + nz * nz);
+      if (length > 0) p[0] = 0.5f * (nx / length + 1), p[1] = 0.5f * (ny / length + 1), p[2] = 0.5f * (nz / length + 1);
+    }
+}
+
+// An exemplar validate() accepts the shape of; the others are left for it to name.
+bool squarePowerOfTwo(const Image& e) {
+  return e.width == e.height && std::has_single_bit(unsigned(e.width)) && e.width >= kMinGraphExemplarSide &&
+         e.width <= kMaxGraphExemplarSide;
+}
+
+} // namespace
+
+ExemplarGraph withOneSide(ExemplarGraph graph) {
+  int side = 0;
+  for (const Image& e : graph.exemplars)
+    if (squarePowerOfTwo(e)) side = std::max(side, e.width);
+  std::vector<int> octaves(graph.exemplars.size(), 0);  // each exemplar's magnification
+  for (size_t i = 0; i < graph.exemplars.size(); ++i) {
+    Image& e = graph.exemplars[i];
+    if (!squarePowerOfTwo(e) || e.width == side) continue;
+    const int factor = side / e.width;
+    octaves[i] = std::countr_zero(unsigned(factor));
+    for (GraphMap& map : graph.maps)
+      if (i < map.perNode.size() && map.perNode[i].width == e.width && map.perNode[i].height == e.height) {
+        map.perNode[i] = magnified(map.perNode[i], factor);
+        if (map.name == "normal") renormalize(map.perNode[i]);
+      }
+    for (GraphEdge& edge : graph.edges)
+      if (edge.from == int(i) && edge.region.size() == size_t(e.width) * size_t(e.width)) {
+        std::vector<uint8_t> region(size_t(side) * size_t(side));
+        for (int y = 0; y < side; ++y)
+          for (int x = 0; x < side; ++x) region[size_t(y) * size_t(side) + size_t(x)] = edge.covers(x / factor, y / factor, e.width);
+        edge.region = std::move(region);
+      }
+    e = magnified(e, factor);
+  }
+  for (GraphEdge& edge : graph.edges) {
+    if (edge.from < 0 || edge.to < 0 || size_t(edge.from) >= octaves.size() || size_t(edge.to) >= octaves.size()) continue;
+    const int given = edge.octaves;
+    edge.octaves += octaves[size_t(edge.to)] - octaves[size_t(edge.from)];
+    if (given >= 1 && edge.octaves < 1) {  // m_to / scale > m_from / 2
+      const int from = side >> octaves[size_t(edge.from)], to = side >> octaves[size_t(edge.to)];
+      const auto sized = [&](int node, int m) {
+        return "'" + graph.names[size_t(node)] + "' (" + std::to_string(m) + "x" + std::to_string(m) + ")";
+      };
+      throw Error("edge " + sized(edge.from, from) + " -> " + sized(edge.to, to) + ": at scale " +
+                  std::to_string(int64_t(1) << given) + " the second spans " + std::to_string(to >> given) +
+                  " pixels of the first; exemplars of different sizes can be joined only where the finer spans at "
+                  "most half of the coarser (here a scale of at least " + std::to_string(2 * to / from) + ")");
+    }
+  }
+  if (!octaves.empty()) graph.rootMagnification = 1 << octaves[0];
+  return graph;
+}
+
 void ExemplarGraph::validate() const {
   if (exemplars.empty()) throw Error("exemplar graph: no exemplars");
   if (names.size() != exemplars.size()) throw Error("exemplar graph: one name per exemplar");

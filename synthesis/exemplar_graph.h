@@ -29,7 +29,7 @@
 //     source inside the region, at every stack level; a finest-level texel that no edge covers
 //     stays, as a leaf's does;
 //   * exemplars are toroidal (coordinates wrap in their tile), square, all of one power-of-two
-//     side m, as the thesis assumes for exposition;
+//     side m, as the thesis assumes for exposition (withOneSide magnifies smaller ones to it);
 //   * inconsistency correction (§5.3) with the thesis' constant RGB offsets b, fitted per candidate
 //     as the mean 5x5 difference; k-nearest candidates are chosen without them, as in the thesis.
 
@@ -91,6 +91,10 @@ struct ExemplarGraph {
   /// one it details (a colour offset per candidate in another exemplar, carried per texel). False:
   /// every exemplar shows its own colours.
   bool coarseColors = true;
+  /// How many pixels of exemplars[0] one pixel of the root as the user gave it spans (a power of
+  /// two): more than 1 where withOneSide magnified the root. Zooms and texture scales given in root
+  /// pixels are multiplied by it.
+  int rootMagnification = 1;
 
   /// The map named `name`, or null.
   const GraphMap* map(const std::string& name) const;
@@ -107,6 +111,18 @@ struct ExemplarGraph {
   /// the exemplars' levels; -1 when a cycle makes the texture infinitely deep.
   int deepestLevel() const;
 };
+
+/// `graph` with exemplars of different sizes magnified to the largest side M, so that a graph may
+/// mix sizes (the thesis assumes one size for exposition): exemplar i, m_i pixels wide, is
+/// magnified M / m_i times (each pixel a plane with its central differences' slopes, wrapping, so
+/// that every block averages to its pixel; its companion maps too, normals renormalized; the
+/// regions of its edges by nearest pixel), and every edge's octaves change by the log2 of the
+/// ratio of its ends' magnifications, so that every pixel keeps its size; rootMagnification records
+/// the root's. Magnification adds no detail: a magnified exemplar's finest levels are smooth, as a
+/// leaf's are beyond its pixels. Exemplars that are not square with a power-of-two side in
+/// [kMinGraphExemplarSide, kMaxGraphExemplarSide] are left for validate() to name. Throws texfab::Error, naming the edge, where an edge would no longer
+/// lead to a finer scale.
+ExemplarGraph withOneSide(ExemplarGraph graph);
 
 struct GraphAnalysisOptions {
   int candidatesPerLevel = 2;  ///< best matches kept from each admissible level; 1..4

@@ -47,7 +47,7 @@ std::vector<uint8_t> regionOf(const json& value, int side, const std::filesystem
     const Image mask = readImage(folder / value.get<std::string>());
     if (mask.width != side || mask.height != side)
       throw Error(where + ": region mask is " + std::to_string(mask.width) + "x" + std::to_string(mask.height) +
-                  ", the exemplars " + std::to_string(side) + "x" + std::to_string(side));
+                  ", its exemplar " + std::to_string(side) + "x" + std::to_string(side));
     for (int y = 0; y < side; ++y)
       for (int x = 0; x < side; ++x) region[size_t(y) * side + x] = mask.at(x, y, 0) >= 0.5f;
     return region;
@@ -163,9 +163,10 @@ ExemplarGraph readExemplarGraph(const std::filesystem::path& path) {
   for (const std::string& image : images) graph.exemplars.push_back(readImage(folder / image));  // absolute: as is
   graph.maps = readMaps(mapFiles, graph.names, folder, file);
   for (const auto& [edge, region] : regions)
-    graph.edges[edge].region = regionOf(region, graph.exemplars.front().width, folder,
+    graph.edges[edge].region = regionOf(region, graph.exemplars[size_t(graph.edges[edge].from)].width, folder,
                                         file + ": edge " + std::to_string(edge + 1));
   try {
+    graph = withOneSide(std::move(graph));
     graph.validate();
   } catch (const Error& e) {
     throw Error(file + ": " + e.what());

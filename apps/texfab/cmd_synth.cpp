@@ -14,6 +14,7 @@
 #include "synthesis/synthesize_graph.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -139,6 +140,8 @@ void runGraphSynth(const SynthJob& job) {
 
   Stage load(run.ctx(), "load");
   const ExemplarGraph graph = readExemplarGraph(job.graph);
+  const int rootOctaves = std::countr_zero(unsigned(graph.rootMagnification));
+  options.zoomOctaves -= rootOctaves;  // --zoom counts pixels of the root as given
   for (Companion& c : companions) {
     const GraphMap* map = graph.map(c.input);
     if (!map) throw UsageError("--apply " + c.input + ": " + job.graph + " gives no '" + c.input + "' map");
@@ -162,7 +165,7 @@ void runGraphSynth(const SynthJob& job) {
   const int deepest = graph.deepestLevel();
   if (deepest >= 0 && level > deepest)
     run.ctx().warn("zoom " + figure(job.zoom) + " is finer than the graph's finest exemplar (zoom " +
-                   figure(std::ldexp(1.0, deepest - analysis.finestLevel())) + "): its pixels are magnified");
+                   figure(std::ldexp(1.0, deepest - analysis.finestLevel() + rootOctaves)) + "): its pixels are magnified");
 
   Stage synth(run.ctx(), "synthesis");
   const SynthesisResult result = synthesizeGraph(analysis, job.window, options, synth.inner());
@@ -177,6 +180,7 @@ void runGraphSynth(const SynthJob& job) {
   nlohmann::json& r = run.report();
   r["graph"] = {{"file", job.graph}, {"exemplars", graph.names}, {"edges", graph.edges.size()},
                 {"colors", synthesis::graphColorsName(graph)}, {"side", graph.side()},
+                {"root_magnification", graph.rootMagnification},
                 {"deepest_level", deepest}, {"analysis_cached", cached}};
   r["window"] = {{"x", job.window.x}, {"y", job.window.y}, {"width", job.window.width}, {"height", job.window.height}};
   r["parameters"] = {{"seed", options.seed}, {"zoom", job.zoom}, {"passes", options.passes},

@@ -124,6 +124,9 @@ struct Analyses {
   std::optional<synthesis::SolidAnalysis> solid;
   std::optional<synthesis::GraphAnalysis> graph;
   int downsampling = 1;  ///< 1: synthesized from the exemplar as given
+  /// Pixels of the exemplar (or the graph's root) as given per pixel synthesized from: the
+  /// downsampling, or 1 / the graph's rootMagnification.
+  double pixelsAsGiven = 1;
   nlohmann::json report; ///< the report's "exemplar" (or "graph") part
 };
 
@@ -131,19 +134,24 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
   render::TextureMeshOptions& o = job.options;
   Analyses a;
   bool cached = false;
-  if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
   if (in.graph) {
-    o.textureScale = o.textureScale > 0 ? o.textureScale : render::graphTextureScale(in.model.mesh, in.graph->side());
+    // Scales count pixels of the root as given; the graph's own root may be magnified.
+    if (job.featureSize > 0) o.textureScale = in.graph->side() / job.featureSize;  // the root spans the feature size
+    else if (o.textureScale > 0) o.textureScale *= in.graph->rootMagnification;
+    else o.textureScale = render::graphTextureScale(in.model.mesh, in.graph->side());
     a.graph = synthesis::analyzeGraph(*in.graph, {}, run.analysisCache(), run.ctx(), &cached);
     a.report = {{"file", job.graph}, {"exemplars", in.graph->names}, {"edges", in.graph->edges.size()},
                 {"colors", synthesis::graphColorsName(*in.graph)}, {"side", in.graph->side()},
-                {"analysis_cached", cached}};
+                {"root_magnification", in.graph->rootMagnification}, {"analysis_cached", cached}};
+    a.pixelsAsGiven = 1.0 / in.graph->rootMagnification;
     return a;
   }
+  if (job.featureSize > 0) o.textureScale = std::max(in.exemplar.width, in.exemplar.height) / job.featureSize;
   a.report = imageJson(job.exemplar, in.exemplar);  // as given
   const WrapChoice wrap = wrapAsGiven(job.wrap, in.exemplar, run);
   o.textureScale = render::textureScaleFor(in.model.mesh, o);
   a.downsampling = downsampleForAnalysis(o, in, run);
+  a.pixelsAsGiven = a.downsampling;
   if (o.mode == render::TextureMode::Surface) {
     synthesis::AnalysisOptions options;
     options.wrap = chooseWrap(wrap, in.exemplar, run);
@@ -232,15 +240,15 @@ void runTexture(TextureJob& job) {
   r["model"] = modelJson(job.model, in.model.mesh);
   r["model"]["preparation"] = toJson(result.preparation);
   r[analyses.graph ? "graph" : "exemplar"] = analyses.report;
-  const int downsampling = analyses.downsampling;
+  const double asGiven = analyses.pixelsAsGiven;
   r["parameters"] = {{"mode", o.mode == render::TextureMode::Solid ? "solid" : "surface"}, {"seed", o.surface.seed},
                      {"solid_method", synthesis::toString(o.solid.method)}, {"contrast_gain", o.solid.contrastGain},
                      {"refine_passes", o.solid.refinePasses},
                      {"exemplar_wrap", toString(analyses.surface ? analyses.surface->wrap
                                                 : analyses.solid ? analyses.solid->wrap
                                                                  : synthesis::ExemplarWrap::Tile)},
-                     {"texture_scale", result.textureScale * downsampling},
-                     {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel * downsampling}};
+                     {"texture_scale", result.textureScale * asGiven},
+                     {"exemplar_pixels_per_texel", result.exemplarPixelsPerTexel * asGiven}};
   r["atlas"] = toJson(result.atlas);
   r["measures"] = toJson(result.measures, result.textureScale);
   if (o.mode == render::TextureMode::Solid)

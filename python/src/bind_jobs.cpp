@@ -82,13 +82,14 @@ struct GraphInputs {
   }
 };
 
-TextureOutput textureOutput(render::TextureMeshResult&& r, int downsampling) {
+// `pixelsAsGiven`: pixels of the exemplar (or graph root) as given per pixel synthesized from.
+TextureOutput textureOutput(render::TextureMeshResult&& r, double pixelsAsGiven) {
   return {py::cast(std::move(r.mesh)),
           imageArray(r.baseColor),
           optionalImageArray(r.normal),
           optionalImageArray(r.metallicRoughness),
           optionalImageArray(r.height),
-          r.textureScale * downsampling,
+          r.textureScale * pixelsAsGiven,
           r.atlas.report.charts,
           r.preparation.repairs,
           r.warnings};
@@ -97,7 +98,9 @@ TextureOutput textureOutput(render::TextureMeshResult&& r, int downsampling) {
 TextureOutput textureMeshFromGraph(const py::object& meshLike, const py::object& graphFile, double featureSize,
                                    render::TextureMeshOptions o, Call& call) {
   const GraphInputs in(graphFile);
+  // Scales count pixels of the root as given; the graph's own root may be magnified.
   if (featureSize > 0) o.textureScale = in.graph.side() / featureSize;  // the root spans featureSize
+  else o.textureScale *= in.graph.rootMagnification;
   checkMemory(render::textureMeshMemoryBytes(o) +
                   synthesis::graphAnalysisMemoryBytes(int(in.graph.exemplars.size()), in.graph.side()),
               "a " + std::to_string(o.atlas.pack.width) + "x" + std::to_string(o.atlas.pack.height) +
@@ -108,7 +111,7 @@ TextureOutput textureMeshFromGraph(const py::object& meshLike, const py::object&
     const synthesis::GraphAnalysis analysis = synthesis::analyzeGraph(in.graph, {}, call.analysisCache(), call.ctx());
     return render::textureMesh(model, in.view(analysis), o, call.ctx());
   });
-  return textureOutput(std::move(r), 1);
+  return textureOutput(std::move(r), 1.0 / in.graph.rootMagnification);
 }
 
 TextureOutput textureMesh(const py::object& meshLike, const py::object& exemplarLike, const std::string& mode,

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of `texfab synth` and `texfab stats`, through the real binary.
+#include "core/crop.h"
 #include "core/image_io.h"
 #include "synthesis/backend.h"
 #include "synthesis/coord_map.h"
@@ -9,6 +10,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -231,6 +234,75 @@ TEST(CliSynth, ExemplarGraphsAtAnyZoom) {
     EXPECT_NE(o.err.find(mention), std::string::npos) << o.err;
     EXPECT_FALSE(std::filesystem::exists(out));
   }
+}
+
+// Exemplars of different sizes: the smaller are magnified to the largest side and every edge's
+// scale follows, so that each pixel keeps its size (synthesis::withOneSide). A 64² rock root detailed
+// by the 128² stone at scale 16 reads as a 128² root magnified twice, an edge of scale 8 and its
+// region (in the rock's own pixels) magnified; --zoom counts the rock's pixels as given, so that the
+// output is the one of the graph given at one size, at half the zoom. The other way round, a 64² stone under the 128² rock, the edge's scale doubles. A finer exemplar that
+// spans more than half of the coarser one is refused with the scale it needs.
+TEST(CliSynth, ExemplarGraphsMixSizes) {
+  TempDir dir;
+  const std::string photos = std::string(TEXFAB_SOURCE_DIR) + "/models/exemplars/photos/";
+  const Image rock = readImage(photos + "rock.png"), stone = readImage(photos + "stone.png");
+  writeImage(crop(rock, 0, 0, 64, 64), dir / "rock64.png");  // 8-bit values: read back as they are
+  writeImage(crop(stone, 0, 0, 64, 64), dir / "stone64.png");
+  auto graphFile = [&](const std::string& name, const std::string& root, const std::string& detail, const std::string& edge) {
+    std::ofstream(dir / name) << R"({"exemplars": [{"name": "rock", "image": ")" << root << R"("},
+      {"name": "stone", "image": ")" << detail << R"("}], "edges": [{"from": "rock", "to": "stone", )" << edge << "}]}";
+    return (dir / name).string();
+  };
+  const std::string mixed = graphFile("mixed.json", "rock64.png", photos + "stone.png", R"("scale": 16, "region": [0, 0, 32, 64])");
+  const synthesis::ExemplarGraph g = synthesis::readExemplarGraph(mixed);
+  EXPECT_EQ(g.side(), 128);
+  EXPECT_EQ(g.exemplars[1].pixels, stone.pixels);  // the largest as given
+  EXPECT_EQ(g.rootMagnification, 2);
+  ASSERT_EQ(g.edges.size(), 1u);
+  EXPECT_EQ(g.edges[0].octaves, 3);
+  EXPECT_TRUE(g.edges[0].covers(63, 127, 128));
+  EXPECT_FALSE(g.edges[0].covers(64, 0, 128));
+  const synthesis::ExemplarGraph under =
+      synthesis::readExemplarGraph(graphFile("under.json", photos + "rock.png", "stone64.png", R"("scale": 16)"));
+  EXPECT_EQ(under.side(), 128);
+  EXPECT_EQ(under.rootMagnification, 1);
+  EXPECT_EQ(under.edges[0].octaves, 5);
+
+  // The same texture described at one size: the rock as withOneSide magnified it (a float EXR, so
+  // that it reads back bit for bit) and the edge's scale halved, seen at half the zoom, since a
+  // pixel of the rock as given is two of it.
+  Image magnifiedRock = g.exemplars[0];
+  magnifiedRock.format = PixelFormat::Float;
+  writeImage(magnifiedRock, dir / "rock128.exr");
+  ASSERT_EQ(readImage(dir / "rock128.exr").pixels, magnifiedRock.pixels);
+  const std::string one = graphFile("one.json", "rock128.exr", photos + "stone.png", R"("scale": 8, "region": [0, 0, 64, 128])");
+  for (const auto& [zoom, oneZoom] : {std::pair{"1", "0.5"}, std::pair{"16", "8"}}) {
+    const Outcome o = texfab("synth --graph " + mixed + " --zoom " + zoom + " --size 64 -q -o " + (dir / "a.png").string() +
+                             " --report " + (dir / "r.json").string() + cacheArg(dir));
+    ASSERT_EQ(o.status, 0) << o.err;
+    ASSERT_EQ(texfab("synth --graph " + one + " --zoom " + oneZoom + " --size 64 -q -o " + (dir / "b.png").string() +
+                     cacheArg(dir)).status, 0);
+    EXPECT_EQ(readImage(dir / "a.png").pixels, readImage(dir / "b.png").pixels) << "zoom " << zoom;
+    std::ifstream in(dir / "r.json");
+    EXPECT_EQ(nlohmann::json::parse(in)["graph"]["root_magnification"], 2);
+  }
+  // Each block of the magnified rock averages to its pixel as given.
+  const Image rock64 = crop(rock, 0, 0, 64, 64);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float block = 0.25f * (magnifiedRock.at(2 * x, 2 * y, c) + magnifiedRock.at(2 * x + 1, 2 * y, c) +
+                                     magnifiedRock.at(2 * x, 2 * y + 1, c) + magnifiedRock.at(2 * x + 1, 2 * y + 1, c));
+        ASSERT_NEAR(block, rock64.at(x, y, c), 1e-6f);
+      }
+
+  const Outcome refused = texfab("synth --graph " + graphFile("wide.json", "rock64.png", photos + "stone.png", R"("scale": 2)") +
+                                 " --size 32 -q -o " + (dir / "wide.png").string());
+  EXPECT_NE(refused.status, 0);
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  EXPECT_NE(refused.err.find("the second spans 64 pixels of the first"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("a scale of at least 4"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "wide.png"));
 }
 
 // synth --graph --apply: a graph's companion maps follow the colours. With each exemplar's own image
