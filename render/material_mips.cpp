@@ -217,13 +217,21 @@ geometry::Material withFilteredMips(const geometry::Material& material, const Fi
   Level level = baseLevel(material, ctx);
   const Eigen::Vector2d reference = referenceAxis(level);
   for (bool first = true;; level = nextLevel(level, ctx), first = false) {
+    // An isotropic level's anisotropy texture is constant: made below, only if another level needs one.
     const bool anisotropic = fitAnisotropy && !first && anisotropyOf(level) >= options.minAnisotropy;
     anyAnisotropic |= anisotropic;
-    Image directions;
-    chain->push_back(levelImage(level, anisotropic, reference, fitAnisotropy ? &directions : nullptr));
-    if (fitAnisotropy) anisotropy->push_back(std::move(directions));
+    Image directions(level.width, level.height, 0);
+    chain->push_back(levelImage(level, anisotropic, reference, anisotropic ? &directions : nullptr));
+    anisotropy->push_back(std::move(directions));
     if (level.width == 1 && level.height == 1) break;
   }
+  for (Image& directions : *anisotropy)
+    if (anyAnisotropic && directions.channels == 0) {
+      directions = Image(directions.width, directions.height, 3);
+      for (int y = 0; y < directions.height; ++y)
+        for (int x = 0; x < directions.width; ++x)
+          directions.at(x, y, 0) = 0.5f * (float(reference.x()) + 1), directions.at(x, y, 1) = 0.5f * (float(reference.y()) + 1);
+    }
   geometry::Material out = material;
   const geometry::Texture& normals = material.normalTexture;
   const auto mappedAsNormals = [&](geometry::Texture& t, const char* name) {
