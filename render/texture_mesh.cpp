@@ -91,6 +91,10 @@ double autoTextureScale(const geometry::Mesh& mesh) {
   return kAutoScaleAtlasSide * std::sqrt(kAutoScaleCoverage / area);
 }
 
+double graphScaleAsGiven(const synthesis::ExemplarGraph& graph, double textureScale, double featureSize) {
+  return featureSize > 0 ? graph.side() / featureSize : textureScale * graph.rootMagnification;
+}
+
 double graphTextureScale(const geometry::Mesh& mesh, int rootSide) {
   const double diagonal = geometry::boundingBox(mesh).diagonal();
   if (!(diagonal > 0) || !std::isfinite(diagonal)) throw Error("the model has no extent to scale a texture to");

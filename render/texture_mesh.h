@@ -115,6 +115,11 @@ double autoTextureScale(const geometry::Mesh& mesh);
 /// exemplars that detail it appear where texels are finer.
 double graphTextureScale(const geometry::Mesh& mesh, int rootSide);
 
+/// A texture scale given for `graph` in a user's units, as pixels of exemplars[0] per model unit:
+/// `textureScale` counts pixels of the root as given (times ExemplarGraph::rootMagnification);
+/// `featureSize` > 0, the model units the root spans, replaces it. 0 stays 0 (graphTextureScale).
+double graphScaleAsGiven(const synthesis::ExemplarGraph& graph, double textureScale, double featureSize);
+
 /// options.textureScale, or where it is 0 graphTextureScale (with `graph`) or autoTextureScale.
 double textureScaleFor(const geometry::Mesh& mesh, const TextureMeshOptions& options,
                        const synthesis::GraphAnalysis* graph = nullptr);

@@ -135,10 +135,8 @@ Analyses analyze(TextureJob& job, Inputs& in, Run& run) {
   Analyses a;
   bool cached = false;
   if (in.graph) {
-    // Scales count pixels of the root as given; the graph's own root may be magnified.
-    if (job.featureSize > 0) o.textureScale = in.graph->side() / job.featureSize;  // the root spans the feature size
-    else if (o.textureScale > 0) o.textureScale *= in.graph->rootMagnification;
-    else o.textureScale = render::graphTextureScale(in.model.mesh, in.graph->side());
+    o.textureScale = render::graphScaleAsGiven(*in.graph, o.textureScale, job.featureSize);
+    if (o.textureScale == 0) o.textureScale = render::graphTextureScale(in.model.mesh, in.graph->side());
     a.graph = synthesis::analyzeGraph(*in.graph, {}, run.analysisCache(), run.ctx(), &cached);
     a.report = {{"file", job.graph}, {"exemplars", in.graph->names}, {"edges", in.graph->edges.size()},
                 {"colors", synthesis::graphColorsName(*in.graph)}, {"side", in.graph->side()},

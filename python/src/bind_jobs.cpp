@@ -98,9 +98,7 @@ TextureOutput textureOutput(render::TextureMeshResult&& r, double pixelsAsGiven)
 TextureOutput textureMeshFromGraph(const py::object& meshLike, const py::object& graphFile, double featureSize,
                                    render::TextureMeshOptions o, Call& call) {
   const GraphInputs in(graphFile);
-  // Scales count pixels of the root as given; the graph's own root may be magnified.
-  if (featureSize > 0) o.textureScale = in.graph.side() / featureSize;  // the root spans featureSize
-  else o.textureScale *= in.graph.rootMagnification;
+  o.textureScale = render::graphScaleAsGiven(in.graph, o.textureScale, featureSize);
   checkMemory(render::textureMeshMemoryBytes(o) +
                   synthesis::graphAnalysisMemoryBytes(int(in.graph.exemplars.size()), in.graph.side()),
               "a " + std::to_string(o.atlas.pack.width) + "x" + std::to_string(o.atlas.pack.height) +
