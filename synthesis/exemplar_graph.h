@@ -120,8 +120,8 @@ struct ExemplarGraph {
 /// ratio of its ends' magnifications, so that every pixel keeps its size; rootMagnification records
 /// the root's. Magnification adds no detail: a magnified exemplar's finest levels are smooth, as a
 /// leaf's are beyond its pixels. Exemplars that are not square with a power-of-two side in
-/// [kMinGraphExemplarSide, kMaxGraphExemplarSide] are left for validate() to name. Throws texfab::Error, naming the edge, where an edge would no longer
-/// lead to a finer scale.
+/// [kMinGraphExemplarSide, kMaxGraphExemplarSide] are left for validate() to name. Throws
+/// texfab::Error, naming the edge, where an edge would no longer lead to a finer scale.
 ExemplarGraph withOneSide(ExemplarGraph graph);
 
 struct GraphAnalysisOptions {
