@@ -3,12 +3,19 @@
 // tile set (solid_tiles.h). For each exemplar (cropped to SIDE^2, default 128), prints per method
 // the slices' 7x7 fidelity and completeness relative to the 2-D synthesis of the same exemplar,
 // each measured as a ratio to a shuffled-pixel image's, contrast, histogram distance over the 2-D
-// synthesis', the shifted-self correlation at the tile period, and timings: the tile set's
+// synthesis', the shifted-self correlation at the tile period, the seam ratio and peak step
+// (StepProfile; the largest over the axis-aligned slices), and timings: the tile set's
 // precomputation, a 256^2 cut and a 128^3 box (2 threads, best of REPEAT).
 //   build/bench/solid_methods /usr/share/gimp/2.0/patterns/Stone/terra.pat ...
+// An argument truth:KIND (procedural_solids.h: clouds, marble, spots, granite, wood, sand) takes a
+// 128^2 slice of that procedural solid as the exemplar and adds a row for the solid's own slices:
+// what a perfect solid synthesis from that exemplar could show.
 // Environment: SIDE, N (plane side, 256), TILE, VARIANTS, COPIES, ITER, FITER, HIST (SolidTileOptions), LAZY=0
 // (tiles only), TILES=0 (lazy only), TRIPLANAR=k (colours weighted by the plane's normal, an
-// experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT.
+// experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT, QUICK=1 (the tile
+// set's seam ratio and peak step only).
+#include "procedural_solids.h"
+
 #include "core/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
@@ -125,8 +132,62 @@ Image image(const std::vector<Triple>& triples, const Image& ex, int n, const st
   return out;
 }
 
+Image truthExemplar(const bench::ProceduralSolid& solid, int side) {
+  side = std::min(side, bench::ProceduralSolid::kPeriod);
+  Image out(side, side, 3);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const auto c = solid.color(x, y, 0);
+      for (int k = 0; k < 3; ++k) out.at(x, y, k) = c[size_t(k)];
+    }
+  return out;
+}
+
+Image truthSlice(const bench::ProceduralSolid& solid, const std::vector<Voxel>& voxels, int n) {
+  Image out(n, n, 3);
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    const auto c = solid.color(voxels[i][0], voxels[i][1], voxels[i][2]);
+    for (size_t k = 0; k < 3; ++k) out.pixels[i * 3 + k] = c[k];
+  }
+  return out;
+}
+
 struct Measures {
-  double fidelity = 0, completeness = 0, contrast = 0, histogram = 0, lattice = 0;
+  double fidelity = 0, completeness = 0, contrast = 0, histogram = 0, lattice = 0, seam = 0, peak = 0;
+};
+
+// The colour steps between voxels at offsets k and k + 1 within the lattice's period, summed and
+// counted per k, on an axis-aligned plane whose in-plane voxel coordinates are 1000 + i and 2000 + j
+// (axisPlane).
+struct StepProfile {
+  std::vector<double> sum, count;
+
+  StepProfile(const Image& im, int period) : sum(size_t(period), 0.0), count(size_t(period), 0.0) {
+    auto step = [&](int x0, int y0, int x1, int y1, int64_t coordinate) {
+      double d = 0;
+      for (int c = 0; c < im.channels; ++c) d += std::fabs(im.at(x1, y1, c) - im.at(x0, y0, c));
+      sum[size_t(coordinate % period)] += d;
+      count[size_t(coordinate % period)] += 1;
+    };
+    for (int y = 0; y < im.height; ++y)
+      for (int x = 0; x + 1 < im.width; ++x) step(x, y, x + 1, y, 1000 + x);
+    for (int y = 0; y + 1 < im.height; ++y)
+      for (int x = 0; x < im.width; ++x) step(x, y, x, y + 1, 2000 + y);
+  }
+  // The mean step across the face planes (into a face and out of it) over the mean step elsewhere.
+  double seamRatio() const {
+    const size_t last = sum.size() - 1;
+    double inside = 0, insideCount = 0;
+    for (size_t k = 1; k < last; ++k) inside += sum[k], insideCount += count[k];
+    return (sum[0] + sum[last]) / (count[0] + count[last]) / (inside / insideCount);
+  }
+  // The largest mean step at any offset over the median offset's: a step off the face planes too.
+  double peak() const {
+    std::vector<double> mean(sum.size());
+    for (size_t k = 0; k < sum.size(); ++k) mean[k] = sum[k] / count[k];
+    std::sort(mean.begin(), mean.end());
+    return mean.back() / mean[mean.size() / 2];
+  }
 };
 
 } // namespace
@@ -149,14 +210,40 @@ int main(int argc, char** argv) {
   const char* save = std::getenv("SAVE");
   const FidelityOptions fo{};
 
-  std::printf("%-14s %-6s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "exemplar", "method", "fid/2d", "comp/2d", "contrast",
-              "hist/2d", "lattice", "faceLat", "precomp_s", "cut256_ms", "box128_ms");
   for (int i = 1; i < argc; ++i) {
-    const std::string name = std::filesystem::path(argv[i]).stem().string();
-    const Image ex = crop(readImage(argv[i]), side);
+    const std::string arg = argv[i];
+    if (arg.rfind("truth:", 0) == 0 && !bench::ProceduralSolid(arg.substr(6)).valid()) {
+      std::fprintf(stderr, "solid_methods: unknown procedural solid '%s'\n", arg.c_str());
+      return 2;
+    }
+  }
+  std::printf("%-14s %-6s %8s %8s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "exemplar", "method", "fid/2d", "comp/2d", "contrast",
+              "hist/2d", "lattice", "seam", "peak", "faceLat", "precomp_s", "cut256_ms", "box128_ms");
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bench::ProceduralSolid truth(arg.rfind("truth:", 0) == 0 ? arg.substr(6) : std::string());
+    const std::string name = truth.valid() ? arg : std::filesystem::path(arg).stem().string();
+    const Image ex = truth.valid() ? truthExemplar(truth, side) : crop(readImage(arg), side);
     SolidAnalysisOptions ao;
     ao.wrap = detectExemplarWrap(ex);
     const SolidAnalysis a = analyzeSolid(ex, ex, ex, ao, ctx);
+    const std::vector<Plane> planes{axisPlane(2, 45, n), axisPlane(0, 77, n), axisPlane(1, 301, n),
+                                    obliquePlane(n)};
+    if (env("QUICK", 0) != 0) {  // the tile set's seam ratio only
+      const SolidTileSet tiles = buildSolidTiles(a, to, ctx);
+      double seam = 0, peak = 0;
+      for (size_t k = 0; k < 3; ++k) {
+        std::vector<Triple> out(planes[k].voxels.size());
+        evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
+        const StepProfile profile(image(out, ex, n, planes[k].normal), to.tileSide);
+        seam = std::max(seam, profile.seamRatio());
+        peak = std::max(peak, profile.peak());
+      }
+      std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", seam, peak,
+                  tiles.seconds);
+      std::fflush(stdout);
+      continue;
+    }
     AnalysisOptions o2;
     o2.wrap = ao.wrap;
     const ExemplarAnalysis a2 = analyzeExemplar(ex, o2, ctx);
@@ -168,15 +255,12 @@ int main(int argc, char** argv) {
     std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.4f\n", name.c_str(), "2d", baseFid, baseComp, base.contrast,
                 base.histogramDistance);
 
-    const std::vector<Plane> planes{axisPlane(2, 45, n), axisPlane(0, 77, n), axisPlane(1, 301, n),
-                                    obliquePlane(n)};
-    auto measure = [&](const std::function<std::vector<Triple>(const Plane&)>& slice, const std::string& method,
-                       int period) {
+    auto measureImages = [&](const std::function<Image(const Plane&)>& view, const std::string& method, int period) {
       Measures m;
       for (const Plane& p : planes) {
-        const Image im = image(slice(p), ex, n, p.normal);
+        const Image im = view(p);
         if (save) {
-          std::string file = name;
+          std::string file = name.substr(name.find(':') + 1);
           file += "-" + method + "-" + p.name + ".png";
           writeImage(im, std::filesystem::path(save) / file);
         }
@@ -186,16 +270,27 @@ int main(int argc, char** argv) {
         m.histogram += histogramDistance(im, ex) / base.histogramDistance / double(planes.size());
         for (int k = period; k < n / 2; k += period)
           m.lattice = std::max(m.lattice, shiftedSelfCorrelation(im, k, k));
+        if (p.name == "oblique") continue;
+        const StepProfile profile(im, period);
+        m.seam = std::max(m.seam, profile.seamRatio());
+        m.peak = std::max(m.peak, profile.peak());
       }
       return m;
     };
+    auto measure = [&](const std::function<std::vector<Triple>(const Plane&)>& slice, const std::string& method,
+                       int period) {
+      return measureImages([&](const Plane& p) { return image(slice(p), ex, n, p.normal); }, method, period);
+    };
     auto row = [&](const char* method, const Measures& m, double face, double pre, double cut, double box) {
-      std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %9.2f %9.3f %9.2f\n", name.c_str(), method,
-                  m.fidelity, m.completeness, m.contrast, m.histogram, m.lattice, face, pre, cut * 1e3, box * 1e3);
+      std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %9.2f %9.3f %9.2f\n", name.c_str(),
+                  method, m.fidelity, m.completeness, m.contrast, m.histogram, m.lattice, m.seam, m.peak, face, pre, cut * 1e3, box * 1e3);
       std::fflush(stdout);
     };
 
     const int period = to.tileSide;
+    if (truth.valid())
+      row("truth", measureImages([&](const Plane& p) { return truthSlice(truth, p.voxels, n); }, "truth", period), 0,
+          0, 0, 0);
     const Plane cut = axisPlane(2, 40, n);
     const VoxelBox box{0, 0, 0, 128, 128, 128};
     if (lazy) {
