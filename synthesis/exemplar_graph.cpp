@@ -359,6 +359,8 @@ ExemplarGraph withOneSide(ExemplarGraph graph) {
   return graph;
 }
 
+int ExemplarGraph::rootOctaves() const { return std::countr_zero(unsigned(rootMagnification)); }
+
 void ExemplarGraph::validate() const {
   if (exemplars.empty()) throw Error("exemplar graph: no exemplars");
   if (names.size() != exemplars.size()) throw Error("exemplar graph: one name per exemplar");

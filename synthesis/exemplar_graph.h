@@ -95,6 +95,8 @@ struct ExemplarGraph {
   /// two): more than 1 where withOneSide magnified the root. Zooms and texture scales given in root
   /// pixels are multiplied by it.
   int rootMagnification = 1;
+  /// log2(rootMagnification): octaves to take from a zoom given in root pixels as given.
+  int rootOctaves() const;
 
   /// The map named `name`, or null.
   const GraphMap* map(const std::string& name) const;

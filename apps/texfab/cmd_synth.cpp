@@ -14,7 +14,6 @@
 #include "synthesis/synthesize_graph.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -140,7 +139,7 @@ void runGraphSynth(const SynthJob& job) {
 
   Stage load(run.ctx(), "load");
   const ExemplarGraph graph = readExemplarGraph(job.graph);
-  const int rootOctaves = std::countr_zero(unsigned(graph.rootMagnification));
+  const int rootOctaves = graph.rootOctaves();
   options.zoomOctaves -= rootOctaves;  // --zoom counts pixels of the root as given
   for (Companion& c : companions) {
     const GraphMap* map = graph.map(c.input);

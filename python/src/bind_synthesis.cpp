@@ -14,7 +14,6 @@
 
 #include <pybind11/stl.h>
 
-#include <bit>
 #include <cmath>
 #include <map>
 
@@ -130,7 +129,7 @@ SynthesisOutput synthesizeGraph(const py::handle& graphFile, const py::object& s
   options.interleave = interleave;
   if (tileable) options.periodX = w.width, options.periodY = w.height;
   const ExemplarGraph graph = readExemplarGraph(toPath(graphFile));
-  options.zoomOctaves -= std::countr_zero(unsigned(graph.rootMagnification));  // zoom counts pixels of the root as given
+  options.zoomOctaves -= graph.rootOctaves();  // zoom counts pixels of the root as given
   checkMemory(graphAnalysisMemoryBytes(int(graph.exemplars.size()), graph.side()) + synthesizeGraphMemoryBytes(w),
               "a " + std::to_string(w.width) + "x" + std::to_string(w.height) + " output from a graph of " +
                   std::to_string(graph.exemplars.size()) + " exemplars");
