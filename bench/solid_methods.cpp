@@ -7,15 +7,14 @@
 // (StepProfile; the largest over the axis-aligned slices), and timings: the tile set's
 // precomputation, a 256^2 cut and a 128^3 box (2 threads, best of REPEAT).
 //   build/bench/solid_methods /usr/share/gimp/2.0/patterns/Stone/terra.pat ...
-// An argument truth:KIND (procedural_solids.h: clouds, marble, spots, granite, wood, sand) takes a
-// 128^2 slice of that procedural solid as the exemplar and adds a row for the solid's own slices:
-// what a perfect solid synthesis from that exemplar could show.
+// An argument truth:KIND (tests/synthesis/procedural_solids.h: clouds, marble, spots, granite,
+// wood, sand) takes a 128^2 slice of that procedural solid as the exemplar and adds a row for the
+// solid's own slices: what a perfect solid synthesis from that exemplar could show.
 // Environment: SIDE, N (plane side, 256), TILE, VARIANTS, COPIES, ITER, FITER, HIST (SolidTileOptions), LAZY=0
 // (tiles only), TILES=0 (lazy only), TRIPLANAR=k (colours weighted by the plane's normal, an
 // experiment), SAVE=dir (writes each method's slices as PNG), THREADS, REPEAT, QUICK=1 (the tile
-// set's seam ratio and peak step only).
-#include "procedural_solids.h"
-
+// set's seam ratio and peak step only; with PROFILE=1 also the mean step and the mean colour at
+// every offset within the period, in 8-bit units, and the exemplar's).
 #include "core/image_io.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/exemplar_analysis.h"
@@ -23,6 +22,7 @@
 #include "synthesis/solid_analysis.h"
 #include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_solid.h"
+#include "tests/synthesis/procedural_solids.h"
 
 #include <algorithm>
 #include <array>
@@ -140,18 +140,7 @@ std::optional<std::string> truthKind(const std::string& arg) {
   return arg.substr(6);
 }
 
-Image truthExemplar(const bench::ProceduralSolid& solid, int side) {
-  side = std::min(side, bench::ProceduralSolid::kPeriod);
-  Image out(side, side, 3);
-  for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x) {
-      const auto c = solid.color(x, y, 0);
-      for (int k = 0; k < 3; ++k) out.at(x, y, k) = c[size_t(k)];
-    }
-  return out;
-}
-
-Image truthSlice(const bench::ProceduralSolid& solid, const std::vector<Voxel>& voxels, int n) {
+Image truthSlice(const test::ProceduralSolid& solid, const std::vector<Voxel>& voxels, int n) {
   Image out(n, n, 3);
   for (size_t i = 0; i < voxels.size(); ++i) {
     const auto c = solid.color(voxels[i][0], voxels[i][1], voxels[i][2]);
@@ -165,12 +154,13 @@ struct Measures {
 };
 
 // The colour steps between voxels at offsets k and k + 1 within the lattice's period, summed and
-// counted per k, on an axis-aligned plane whose in-plane voxel coordinates are 1000 + i and 2000 + j
-// (axisPlane).
+// counted per k, and the colours at offset k, on an axis-aligned plane whose in-plane voxel
+// coordinates are 1000 + i and 2000 + j (axisPlane).
 struct StepProfile {
-  std::vector<double> sum, count;
+  std::vector<double> sum, count, colors;
 
-  StepProfile(const Image& im, int period) : sum(size_t(period), 0.0), count(size_t(period), 0.0) {
+  StepProfile(const Image& im, int period)
+      : sum(size_t(period), 0.0), count(size_t(period), 0.0), colors(size_t(period), 0.0) {
     auto step = [&](int x0, int y0, int x1, int y1, int64_t coordinate) {
       double d = 0;
       for (int c = 0; c < im.channels; ++c) d += std::fabs(im.at(x1, y1, c) - im.at(x0, y0, c));
@@ -181,7 +171,13 @@ struct StepProfile {
       for (int x = 0; x + 1 < im.width; ++x) step(x, y, x + 1, y, 1000 + x);
     for (int y = 0; y + 1 < im.height; ++y)
       for (int x = 0; x < im.width; ++x) step(x, y, x, y + 1, 2000 + y);
+    for (int y = 0; y < im.height; ++y)
+      for (int x = 0; x < im.width; ++x)
+        for (int c = 0; c < im.channels; ++c)
+          colors[size_t((1000 + x) % period)] += im.at(x, y, c) / double(im.height * im.channels);
   }
+  /// The mean colour at offset k along the plane's first axis, in 8-bit units.
+  double meanColor(size_t k, int width) const { return 255.0 * colors[k] * double(colors.size()) / double(width); }
   // The mean step across the face planes (into a face and out of it) over the mean step elsewhere.
   double seamRatio() const {
     const size_t last = sum.size() - 1;
@@ -189,6 +185,8 @@ struct StepProfile {
     for (size_t k = 1; k < last; ++k) inside += sum[k], insideCount += count[k];
     return (sum[0] + sum[last]) / (count[0] + count[last]) / (inside / insideCount);
   }
+  /// The mean step from offset k to k + 1, in 8-bit units.
+  double meanStep(size_t k) const { return 255.0 * sum[k] / count[k]; }
   // The largest mean step at any offset over the median offset's: a step off the face planes too.
   double peak() const {
     std::vector<double> mean(sum.size());
@@ -217,10 +215,14 @@ int main(int argc, char** argv) {
   const bool lazy = env("LAZY", 1) != 0, tilesToo = env("TILES", 1) != 0;
   const char* save = std::getenv("SAVE");
   const FidelityOptions fo{};
+  auto saveImage = [&](const Image& im, const std::string& name, const std::string& method, const Plane& p) {
+    if (save)
+      writeImage(im, std::filesystem::path(save) / (name.substr(name.find(':') + 1) + "-" + method + "-" + p.name + ".png"));
+  };
 
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (truthKind(arg) && !bench::ProceduralSolid(*truthKind(arg)).valid()) {
+    if (truthKind(arg) && !test::ProceduralSolid(*truthKind(arg)).valid()) {
       std::fprintf(stderr, "solid_methods: unknown procedural solid '%s'\n", arg.c_str());
       return 2;
     }
@@ -229,9 +231,9 @@ int main(int argc, char** argv) {
               "hist/2d", "lattice", "seam", "peak", "faceLat", "precomp_s", "cut256_ms", "box128_ms");
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    const bench::ProceduralSolid truth(truthKind(arg).value_or(""));
+    const test::ProceduralSolid truth(truthKind(arg).value_or(""));
     const std::string name = truth.valid() ? arg : std::filesystem::path(arg).stem().string();
-    const Image ex = truth.valid() ? truthExemplar(truth, side) : crop(readImage(arg), side);
+    const Image ex = truth.valid() ? truth.exemplar(side) : crop(readImage(arg), side);
     SolidAnalysisOptions ao;
     ao.wrap = detectExemplarWrap(ex);
     const SolidAnalysis a = analyzeSolid(ex, ex, ex, ao, ctx);
@@ -243,9 +245,22 @@ int main(int argc, char** argv) {
       for (size_t k = 0; k < 3; ++k) {
         std::vector<Triple> out(planes[k].voxels.size());
         evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
-        const StepProfile profile(image(out, ex, n, planes[k].normal), to.tileSide);
+        const Image im = image(out, ex, n, planes[k].normal);
+        saveImage(im, name, "tiles", planes[k]);
+        const StepProfile profile(im, to.tileSide);
         seam = std::max(seam, profile.seamRatio());
         peak = std::max(peak, profile.peak());
+        if (env("PROFILE", 0) != 0) {
+          std::printf("plane %zu step by offset:", k);
+          for (size_t i = 0; i < profile.sum.size(); ++i) std::printf(" %.1f", profile.meanStep(i));
+          std::printf("\nplane %zu mean colour by offset:", k);
+          for (size_t i = 0; i < profile.colors.size(); ++i) std::printf(" %.0f", profile.meanColor(i, im.width));
+          std::printf("\n");
+        }
+      }
+      if (env("PROFILE", 0) != 0) {
+        const StepProfile own(ex, 1);
+        std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0, ex.width));
       }
       std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", seam, peak,
                   tiles.seconds);
@@ -267,11 +282,7 @@ int main(int argc, char** argv) {
       Measures m;
       for (const Plane& p : planes) {
         const Image im = view(p);
-        if (save) {
-          std::string file = name.substr(name.find(':') + 1);
-          file += "-" + method + "-" + p.name + ".png";
-          writeImage(im, std::filesystem::path(save) / file);
-        }
+        saveImage(im, name, method, p);
         m.fidelity += neighborhoodFidelity(im, ex, fo, ctx) / shufFid / baseFid / double(planes.size());
         m.completeness += neighborhoodCompleteness(im, ex, fo, ctx) / shufComp / baseComp / double(planes.size());
         m.contrast += contrastRatio(im, ex) / double(planes.size());

@@ -67,7 +67,7 @@ size_t SolidTileLayout::element(int x, int y, int z, uint32_t code) const {
 namespace {
 
 constexpr uint32_t kTilesMagic = 0x53544654;  // "TFTS"
-constexpr uint32_t kTilesVersion = 2;
+constexpr uint32_t kTilesVersion = 3;
 constexpr uint32_t kOptimizationSeed = 0x2545f491u;
 constexpr uint32_t kArrangementPurpose = 0x41525247u;
 constexpr uint32_t kPlacementPurpose = 0x504c4345u;
@@ -125,15 +125,16 @@ struct ExemplarLevel {
     }
     return rgb + (size_t(v) * size_t(w) + size_t(u)) * 3;
   }
-  // A child coordinate at the next finer level (spacing `child`): as cpu::upsampleKernel.
+  // A child coordinate at the next finer level (spacing `child`), bit 0 or 1 as
+  // cpu::upsampleKernel; bit -1: one step before the parent.
   uint32_t upsample(uint32_t c, int bitU, int bitV, int child) const {
     if (wraps)
-      return packCoord(uint32_t((coordU(c) + uint32_t(child * bitU)) % uint32_t(w)),
-                       uint32_t((coordV(c) + uint32_t(child * bitV)) % uint32_t(h)));
+      return packCoord(uint32_t(cpu::floorMod(int64_t(coordU(c)) + child * bitU, w)),
+                       uint32_t(cpu::floorMod(int64_t(coordV(c)) + child * bitV, h)));
     auto axis = [&](int64_t x, int bit, int lo, int hi) {
       int64_t b = std::min<int64_t>(x, hi - child);
       if (b < lo) b = lo;
-      return uint32_t(std::min<int64_t>(b + int64_t(child) * bit, hi));
+      return uint32_t(std::clamp<int64_t>(b + int64_t(child) * bit, lo, hi));
     };
     return packCoord(axis(coordU(c), bitU, valid.x0, valid.x1), axis(coordV(c), bitV, valid.y0, valid.y1));
   }
@@ -444,7 +445,12 @@ LevelState initialState(const SolidAnalysis& a, const SolidTileLayout& layout) {
 
 // The next finer level: each element takes its parent's triple moved by its sub-voxel offset
 // (coordinate inheritance, as lazy synthesis upsamples), read through one arrangement that both
-// levels share.
+// levels share. At the finest level, a tile's last voxel along an axis takes the next cell's face
+// one step back instead, as its first two take their own face, so that the face continues into
+// both of its sides: from its own parent, the step the optimization leaves where a tile meets the
+// next face, passed on from level to level, stays on the face planes as a seam. (At coarser
+// levels too, the face's content would reach several voxels into every tile that shares it: a
+// stronger lattice.)
 LevelState upsample(const SolidAnalysis& a, const LevelState& parent, int childLevel, int copies, const Context& ctx) {
   const SolidLevel& level = a.levels[size_t(childLevel)];
   const auto ex = exemplarLevels(a, level);
@@ -454,14 +460,22 @@ LevelState upsample(const SolidAnalysis& a, const LevelState& parent, int childL
   child.triples.resize(child.layout.elements);
   child.colors.resize(child.layout.elements);
   std::vector<uint8_t> set(child.layout.elements, 0);
+  const int n = child.layout.side;
+  const bool finest = childLevel + 1 == int(a.levels.size());
   for (int z = 0; z < down.side; ++z)
     for (int y = 0; y < down.side; ++y)
       for (int x = 0; x < down.side; ++x) {
         const uint32_t el = down.element[down.index(x, y, z)];
         if (set[el]) continue;
         set[el] = 1;
-        const Triple& p = parent.triples[up.element[up.index(x / 2, y / 2, z / 2)]];
-        const int bits[3] = {x & 1, y & 1, z & 1};
+        const int at[3] = {x, y, z};
+        int from[3], bits[3];
+        for (int d = 0; d < 3; ++d) {
+          const bool last = finest && (at[d] & (n - 1)) == n - 1;
+          from[d] = last ? (at[d] + 1) / 2 % up.side : at[d] / 2;
+          bits[d] = last ? -1 : at[d] & 1;
+        }
+        const Triple& p = parent.triples[up.element[up.index(from[0], from[1], from[2])]];
         for (int e = 0; e < 3; ++e)
           child.triples[el][size_t(e)] =
               ex[size_t(e)].upsample(p[size_t(e)], bits[axisU(e)], bits[axisV(e)], level.spacing);

@@ -30,7 +30,9 @@
 // in which every tile appears, drawn anew at each iteration so that tiles meet many neighbours.
 // Coarse to fine over the solid analysis' levels (its Gaussian stack, k-coherence candidates and
 // PCA-projected 5x5 neighborhoods, solid_analysis.h), tiles n / 2^k voxels at level k above the
-// finest, from the coarsest level whose tiles are 8 voxels wide. The result is a coordinate triple
+// finest, from the coarsest level whose tiles are 8 voxels wide; each level starts from its parent's
+// coordinates, and at the finest a tile's last voxel along an axis from the next cell's face, so
+// that a face continues into both of its sides (a seam otherwise). The result is a coordinate triple
 // per voxel, so colours and companion maps are the mean of the three exemplars' values
 // (solidColors), as for lazy synthesis.
 //

@@ -5,6 +5,7 @@
 // and bad input.
 #include "core/error.h"
 #include "core/hash.h"
+#include "procedural_solids.h"
 #include "solid_test_support.h"
 #include "synthesis/coord_map.h"
 #include "synthesis/quality_measures.h"
@@ -178,11 +179,10 @@ Image tileSlice(const SolidTileSet& t, const Image& ex, int64_t k, int n) {
   return colors(triples, ex, n);
 }
 
-TEST(SolidTiles, NoSeamAcrossTileFaces) {
-  // Mean colour difference between voxels on either side of a face plane, over the same inside
-  // a tile: faces are shared, so a face should look like any other plane.
-  const SolidTileSet& t = tiles64();
-  const Image ex = marble(64, 8, 8);
+// The mean colour difference between voxels on either side of a face plane over the same inside a
+// tile, along x on a z-slice of 8 x 8 tiles: faces are shared, so a face should look like any other
+// plane.
+double seamRatio(const SolidTileSet& t, const Image& ex) {
   const int n = t.layout.side, side = 8 * n;
   const Image im = tileSlice(t, ex, 37, side);
   double across = 0, inside = 0;
@@ -195,9 +195,27 @@ TEST(SolidTiles, NoSeamAcrossTileFaces) {
       if ((x + 101) % n == 0 || (x + 100) % n == 0) across += d, ++nAcross;
       else inside += d, ++nInside;
     }
-  const double ratio = (across / double(nAcross)) / (inside / double(nInside));
+  return (across / double(nAcross)) / (inside / double(nInside));
+}
+
+TEST(SolidTiles, NoSeamAcrossTileFaces) {
+  const double ratio = seamRatio(tiles64(), marble(64, 8, 8));
   RecordProperty("seam_ratio", std::to_string(ratio));
   EXPECT_LT(ratio, 1.1) << "seam ratio " << ratio;  // the target
+}
+
+TEST(SolidTiles, SeamAcrossTileFacesOfASmoothExemplarIsBounded) {
+  // Clouds whose features are as wide as a tile, where a seam shows most. Upsampling a tile's last
+  // voxels from its own interior gave 1.75 here, a visible grid; from the next face, 1.15. What
+  // is left is a rougher band along the faces (docs/measurements.md#seams-at-the-tiles-faces): the
+  // bound holds that gain, not yet the 1.1.
+  const Image ex = test::ProceduralSolid("clouds").exemplar(64);
+  const SolidAnalysis a = analyzeSolid(ex, ex, ex, {}, Context{.threads = 2});
+  SolidTileOptions o;
+  o.tileSide = 16;
+  const double ratio = seamRatio(buildSolidTiles(a, o, Context{.threads = 2}), ex);
+  RecordProperty("seam_ratio", std::to_string(ratio));
+  EXPECT_LT(ratio, 1.25) << "seam ratio " << ratio;
 }
 
 TEST(SolidTiles, SlicesMatchTheExemplarAtLeastAsWellAsLazySynthesis) {

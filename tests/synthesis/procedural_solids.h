@@ -6,6 +6,8 @@
 // solid method can reach.
 #pragma once
 
+#include "core/image.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -13,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace texfab::bench {
+namespace texfab::test {
 
 class ProceduralSolid {
 public:
@@ -29,6 +31,18 @@ public:
     return false;
   }
   const std::string& kind() const { return kind_; }
+
+  /// The exemplar: the side x side corner of the slice z = 0 (side <= kPeriod).
+  Image exemplar(int side = kPeriod) const {
+    side = std::min(side, kPeriod);
+    Image out(side, side, 3);
+    for (int y = 0; y < side; ++y)
+      for (int x = 0; x < side; ++x) {
+        const auto c = color(x, y, 0);
+        for (int k = 0; k < 3; ++k) out.at(x, y, k) = c[size_t(k)];
+      }
+    return out;
+  }
 
   std::array<float, 3> color(int64_t x, int64_t y, int64_t z) const {
     const std::array<double, 3> p{double(wrap(x)) + 0.5, double(wrap(y)) + 0.5, double(wrap(z)) + 0.5};
@@ -169,4 +183,4 @@ private:
   std::string kind_;
 };
 
-} // namespace texfab::bench
+} // namespace texfab::test
