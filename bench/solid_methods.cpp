@@ -157,10 +157,11 @@ struct Measures {
 // counted per k, and the colours at offset k, on an axis-aligned plane whose in-plane voxel
 // coordinates are 1000 + i and 2000 + j (axisPlane).
 struct StepProfile {
-  std::vector<double> sum, count, colors;
+  std::vector<double> sum, count, colorSum, colorCount;
 
   StepProfile(const Image& im, int period)
-      : sum(size_t(period), 0.0), count(size_t(period), 0.0), colors(size_t(period), 0.0) {
+      : sum(size_t(period), 0.0), count(size_t(period), 0.0), colorSum(size_t(period), 0.0),
+        colorCount(size_t(period), 0.0) {
     auto step = [&](int x0, int y0, int x1, int y1, int64_t coordinate) {
       double d = 0;
       for (int c = 0; c < im.channels; ++c) d += std::fabs(im.at(x1, y1, c) - im.at(x0, y0, c));
@@ -173,11 +174,13 @@ struct StepProfile {
       for (int x = 0; x < im.width; ++x) step(x, y, x, y + 1, 2000 + y);
     for (int y = 0; y < im.height; ++y)
       for (int x = 0; x < im.width; ++x)
-        for (int c = 0; c < im.channels; ++c)
-          colors[size_t((1000 + x) % period)] += im.at(x, y, c) / double(im.height * im.channels);
+        for (int c = 0; c < im.channels; ++c) {
+          colorSum[size_t((1000 + x) % period)] += im.at(x, y, c);
+          colorCount[size_t((1000 + x) % period)] += 1;
+        }
   }
   /// The mean colour at offset k along the plane's first axis, in 8-bit units.
-  double meanColor(size_t k, int width) const { return 255.0 * colors[k] * double(colors.size()) / double(width); }
+  double meanColor(size_t k) const { return 255.0 * colorSum[k] / colorCount[k]; }
   // The mean step across the face planes (into a face and out of it) over the mean step elsewhere.
   double seamRatio() const {
     const size_t last = sum.size() - 1;
@@ -254,13 +257,13 @@ int main(int argc, char** argv) {
           std::printf("plane %zu step by offset:", k);
           for (size_t i = 0; i < profile.sum.size(); ++i) std::printf(" %.1f", profile.meanStep(i));
           std::printf("\nplane %zu mean colour by offset:", k);
-          for (size_t i = 0; i < profile.colors.size(); ++i) std::printf(" %.0f", profile.meanColor(i, im.width));
+          for (size_t i = 0; i < profile.colorSum.size(); ++i) std::printf(" %.0f", profile.meanColor(i));
           std::printf("\n");
         }
       }
       if (env("PROFILE", 0) != 0) {
         const StepProfile own(ex, 1);
-        std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0, ex.width));
+        std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0));
       }
       std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", seam, peak,
                   tiles.seconds);
