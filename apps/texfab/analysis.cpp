@@ -37,7 +37,8 @@ void solidFidelityFlags(Flags& f, SolidMethodChoice& method, float& gain, int& r
                "matching solid tiles optimized once per exemplar, about half a minute on 2 cores, and cached; then "
                "each voxel is one read, hundreds of times faster; slices more faithful to the exemplar, but its "
                "structure repeats faintly with the tile period, and its largest features are about a tile, 32 "
-               "voxels; a smooth exemplar with large soft features such as clouds shows the tiles' grid; --contrast-gain and --refine do not apply). docs/measurements.md#solid-tiles compares them");
+               "voxels; a smooth exemplar with large soft features such as clouds shows the tiles' grid; "
+               "--contrast-gain and --refine do not apply). docs/measurements.md#solid-tiles compares them");
   f.option("--tile-size", method.tiles.tileSide,
            "With --solid-method tiles: voxels per tile side (8, 16, 32 or 64), the period of the tiles' lattice and "
            "about the largest feature they keep; the precomputation grows with its cube (16: a few seconds, 64: "
