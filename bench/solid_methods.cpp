@@ -262,6 +262,16 @@ int main(int argc, char** argv) {
         }
       }
       if (env("PROFILE", 0) != 0) {
+        // the exemplar colour that the tile set's shared elements (faces, edges, corners) and its
+        // interiors point at: the mean of their triples' three colours
+        double sums[2] = {0, 0}, counts[2] = {0, 0};
+        for (size_t el = 0; el < tiles.elements.size(); ++el) {
+          const int k = el < tiles.layout.interiors ? 0 : 1;
+          for (uint32_t c : tiles.elements[el])
+            for (int ch = 0; ch < 3; ++ch) sums[k] += ex.at(int(coordU(c)), int(coordV(c)), ch), counts[k] += 1;
+        }
+        std::printf("mean exemplar colour at shared elements %.0f, at interiors %.0f\n", 255.0 * sums[0] / counts[0],
+                    255.0 * sums[1] / counts[1]);
         const StepProfile own(ex, 1);
         std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0));
       }
