@@ -149,10 +149,6 @@ Image truthSlice(const test::ProceduralSolid& solid, const std::vector<Voxel>& v
   return out;
 }
 
-struct Measures {
-  double fidelity = 0, completeness = 0, contrast = 0, histogram = 0, lattice = 0, seam = 0, peak = 0;
-};
-
 // The colour steps between voxels at offsets k and k + 1 within the lattice's period, summed and
 // counted per k, and the colours at offset k, on an axis-aligned plane whose in-plane voxel
 // coordinates are 1000 + i and 2000 + j (axisPlane).
@@ -199,6 +195,61 @@ struct StepProfile {
   }
 };
 
+struct Measures {
+  double fidelity = 0, completeness = 0, contrast = 0, histogram = 0, lattice = 0, seam = 0, peak = 0;
+  // Seam ratio and peak step: the largest over the axis-aligned planes.
+  void addSteps(const StepProfile& p) {
+    seam = std::max(seam, p.seamRatio());
+    peak = std::max(peak, p.peak());
+  }
+};
+
+// SAVE=dir: one PNG per exemplar, method and plane.
+void saveImage(const char* dir, const Image& im, const std::string& name, const std::string& method, const Plane& p) {
+  if (dir)
+    writeImage(im, std::filesystem::path(dir) /
+                       (name.substr(name.find(':') + 1) + "-" + method + "-" + p.name + ".png"));
+}
+
+// QUICK=1: the tile set's seam ratio and peak step on the axis-aligned planes (the first three);
+// PROFILE=1 adds the mean step and colour by offset, and the exemplar colour that the tile set's
+// shared elements (faces, edges, corners) and its interiors point at.
+void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysis& a, const SolidTileOptions& to,
+                    const std::vector<Plane>& planes, int n, const char* save, const Context& ctx) {
+  const bool printProfile = env("PROFILE", 0) != 0;
+  const SolidTileSet tiles = buildSolidTiles(a, to, ctx);
+  Measures m;
+  for (size_t k = 0; k < 3; ++k) {
+    std::vector<Triple> out(planes[k].voxels.size());
+    evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
+    const Image im = image(out, ex, n, planes[k].normal);
+    saveImage(save, im, name, "tiles", planes[k]);
+    const StepProfile profile(im, to.tileSide);
+    m.addSteps(profile);
+    if (!printProfile) continue;
+    std::printf("plane %zu step by offset:", k);
+    for (size_t i = 0; i < profile.sum.size(); ++i) std::printf(" %.1f", profile.meanStep(i));
+    std::printf("\nplane %zu mean colour by offset:", k);
+    for (size_t i = 0; i < profile.colorSum.size(); ++i) std::printf(" %.0f", profile.meanColor(i));
+    std::printf("\n");
+  }
+  if (printProfile) {
+    double sums[2] = {0, 0}, counts[2] = {0, 0};  // shared elements, interiors
+    for (size_t el = 0; el < tiles.elements.size(); ++el) {
+      const int k = el < tiles.layout.interiors ? 0 : 1;
+      for (uint32_t c : tiles.elements[el])
+        for (int ch = 0; ch < 3; ++ch) sums[k] += ex.at(int(coordU(c)), int(coordV(c)), ch), counts[k] += 1;
+    }
+    std::printf("mean exemplar colour at shared elements %.0f, at interiors %.0f\n", 255.0 * sums[0] / counts[0],
+                255.0 * sums[1] / counts[1]);
+    const StepProfile own(ex, 1);
+    std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0));
+  }
+  std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", m.seam, m.peak,
+              tiles.seconds);
+  std::fflush(stdout);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -218,10 +269,6 @@ int main(int argc, char** argv) {
   const bool lazy = env("LAZY", 1) != 0, tilesToo = env("TILES", 1) != 0;
   const char* save = std::getenv("SAVE");
   const FidelityOptions fo{};
-  auto saveImage = [&](const Image& im, const std::string& name, const std::string& method, const Plane& p) {
-    if (save)
-      writeImage(im, std::filesystem::path(save) / (name.substr(name.find(':') + 1) + "-" + method + "-" + p.name + ".png"));
-  };
 
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -230,8 +277,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  std::printf("%-14s %-6s %8s %8s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "exemplar", "method", "fid/2d", "comp/2d", "contrast",
-              "hist/2d", "lattice", "seam", "peak", "faceLat", "precomp_s", "cut256_ms", "box128_ms");
+  std::printf("%-14s %-6s %8s %8s %8s %8s %8s %8s %8s %8s %9s %9s %9s\n", "exemplar", "method", "fid/2d", "comp/2d",
+              "contrast", "hist/2d", "lattice", "seam", "peak", "faceLat", "precomp_s", "cut256_ms", "box128_ms");
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const test::ProceduralSolid truth(truthKind(arg).value_or(""));
@@ -242,42 +289,8 @@ int main(int argc, char** argv) {
     const SolidAnalysis a = analyzeSolid(ex, ex, ex, ao, ctx);
     const std::vector<Plane> planes{axisPlane(2, 45, n), axisPlane(0, 77, n), axisPlane(1, 301, n),
                                     obliquePlane(n)};
-    if (env("QUICK", 0) != 0) {  // the tile set's seam ratio only
-      const SolidTileSet tiles = buildSolidTiles(a, to, ctx);
-      double seam = 0, peak = 0;
-      for (size_t k = 0; k < 3; ++k) {
-        std::vector<Triple> out(planes[k].voxels.size());
-        evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
-        const Image im = image(out, ex, n, planes[k].normal);
-        saveImage(im, name, "tiles", planes[k]);
-        const StepProfile profile(im, to.tileSide);
-        seam = std::max(seam, profile.seamRatio());
-        peak = std::max(peak, profile.peak());
-        if (env("PROFILE", 0) != 0) {
-          std::printf("plane %zu step by offset:", k);
-          for (size_t i = 0; i < profile.sum.size(); ++i) std::printf(" %.1f", profile.meanStep(i));
-          std::printf("\nplane %zu mean colour by offset:", k);
-          for (size_t i = 0; i < profile.colorSum.size(); ++i) std::printf(" %.0f", profile.meanColor(i));
-          std::printf("\n");
-        }
-      }
-      if (env("PROFILE", 0) != 0) {
-        // the exemplar colour that the tile set's shared elements (faces, edges, corners) and its
-        // interiors point at: the mean of their triples' three colours
-        double sums[2] = {0, 0}, counts[2] = {0, 0};
-        for (size_t el = 0; el < tiles.elements.size(); ++el) {
-          const int k = el < tiles.layout.interiors ? 0 : 1;
-          for (uint32_t c : tiles.elements[el])
-            for (int ch = 0; ch < 3; ++ch) sums[k] += ex.at(int(coordU(c)), int(coordV(c)), ch), counts[k] += 1;
-        }
-        std::printf("mean exemplar colour at shared elements %.0f, at interiors %.0f\n", 255.0 * sums[0] / counts[0],
-                    255.0 * sums[1] / counts[1]);
-        const StepProfile own(ex, 1);
-        std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0));
-      }
-      std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", seam, peak,
-                  tiles.seconds);
-      std::fflush(stdout);
+    if (env("QUICK", 0) != 0) {
+      printTileSeams(name, ex, a, to, planes, n, save, ctx);
       continue;
     }
     AnalysisOptions o2;
@@ -295,7 +308,7 @@ int main(int argc, char** argv) {
       Measures m;
       for (const Plane& p : planes) {
         const Image im = view(p);
-        saveImage(im, name, method, p);
+        saveImage(save, im, name, method, p);
         m.fidelity += neighborhoodFidelity(im, ex, fo, ctx) / shufFid / baseFid / double(planes.size());
         m.completeness += neighborhoodCompleteness(im, ex, fo, ctx) / shufComp / baseComp / double(planes.size());
         m.contrast += contrastRatio(im, ex) / double(planes.size());
@@ -303,9 +316,7 @@ int main(int argc, char** argv) {
         for (int k = period; k < n / 2; k += period)
           m.lattice = std::max(m.lattice, shiftedSelfCorrelation(im, k, k));
         if (p.name == "oblique") continue;
-        const StepProfile profile(im, period);
-        m.seam = std::max(m.seam, profile.seamRatio());
-        m.peak = std::max(m.peak, profile.peak());
+        m.addSteps(StepProfile(im, period));
       }
       return m;
     };
@@ -315,7 +326,8 @@ int main(int argc, char** argv) {
     };
     auto row = [&](const char* method, const Measures& m, double face, double pre, double cut, double box) {
       std::printf("%-14s %-6s %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %9.2f %9.3f %9.2f\n", name.c_str(),
-                  method, m.fidelity, m.completeness, m.contrast, m.histogram, m.lattice, m.seam, m.peak, face, pre, cut * 1e3, box * 1e3);
+                  method, m.fidelity, m.completeness, m.contrast, m.histogram, m.lattice, m.seam, m.peak, face, pre,
+                  cut * 1e3, box * 1e3);
       std::fflush(stdout);
     };
 
