@@ -55,6 +55,8 @@ inline constexpr Stage kSolidObliquePlane[] = {{"analysis", "39c22a9410faab61"},
 inline constexpr Stage kSolidClampVolume[] = {{"analysis", "376954e8afa4e8c9"}, {"synthesis", "b014e0dd69a65782"}};
 inline constexpr Stage kSolidTiles[] = {
     {"analysis", "39c22a9410faab61"}, {"tiles", "7337d839b4718cad"}, {"evaluation", "2f72b1d90329728e"}};
+inline constexpr Stage kSolidTilesTwoLevels[] = {
+    {"analysis", "39c22a9410faab61"}, {"tiles", "f0a5fb5ed1c460ef"}, {"evaluation", "a42983dc2d0a23e4"}};
 inline constexpr Stage kSolidClampTiles[] = {
     {"analysis", "376954e8afa4e8c9"}, {"tiles", "a8c43503106029d9"}, {"evaluation", "037924fbbd000eb6"}};
 inline constexpr Stage kAtlasTexelUvs[] = {{"atlas", "66752b2be1750fd4"}};
@@ -283,11 +285,13 @@ inline Stages solidPlane(Backend backend = Backend::Cpu) {
   return Stages().add("analysis", hashOf(solidAnalysis32())).add("synthesis", hashOf(r.triples));
 }
 
-/// A tile set (8-voxel tiles: one level, 32^3 arrangements) of a solid analysis, and the oblique
-/// plane read from it with seed 5.
-inline Stages solidTiles(const synthesis::SolidAnalysis& analysis) {
+/// A tile set of a solid analysis, and the oblique plane read from it with seed 5. 8-voxel tiles are
+/// one level (32^3 arrangements); 16-voxel tiles add a coarse level and the upsampling to the finest,
+/// at one iteration per level to keep the emulated runs short.
+inline Stages solidTiles(const synthesis::SolidAnalysis& analysis, int tileSide = 8) {
   synthesis::SolidTileOptions options;
-  options.tileSide = 8;
+  options.tileSide = tileSide;
+  if (tileSide > 8) options.iterations = options.finestIterations = 1;
   const synthesis::SolidTileSet tiles = synthesis::buildSolidTiles(analysis, options, Context{.threads = 2});
   const std::vector<synthesis::Voxel> voxels = obliquePlane();
   std::vector<synthesis::Triple> triples(voxels.size());

@@ -19,6 +19,7 @@ TEST(Golden, SolidVolume) { expectStages(solidVolume(), kSolidVolume); }
 TEST(Golden, SolidObliquePlane) { expectStages(solidPlane(), kSolidObliquePlane); }
 TEST(Golden, SolidClampVolume) { expectStages(solidClampVolume(), kSolidClampVolume); }
 TEST(Golden, SolidTiles) { expectStages(solidTiles(solidAnalysis32()), kSolidTiles); }
+TEST(Golden, SolidTilesTwoLevels) { expectStages(solidTiles(solidAnalysis32(), 16), kSolidTilesTwoLevels); }
 TEST(Golden, SolidClampTiles) { expectStages(solidTiles(solidClampAnalysis40()), kSolidClampTiles); }
 #ifndef TEXFAB_GOLDEN_SYNTHESIS_ONLY
 TEST(Golden, AtlasTexelUvs) { expectStages(atlasTexelUvs(), kAtlasTexelUvs); }
