@@ -4,7 +4,7 @@
 // the slices' 7x7 fidelity and completeness relative to the 2-D synthesis of the same exemplar,
 // each measured as a ratio to a shuffled-pixel image's, contrast, histogram distance over the 2-D
 // synthesis', the shifted-self correlation at the tile period, the seam ratio and peak step
-// (StepProfile; the largest over the axis-aligned slices), and timings: the tile set's
+// (latticeSteps; the largest over the axis-aligned slices), and timings: the tile set's
 // precomputation, a 256^2 cut and a 128^3 box (2 threads, best of REPEAT).
 //   build/bench/solid_methods /usr/share/gimp/2.0/patterns/Stone/terra.pat ...
 // An argument truth:KIND (tests/synthesis/procedural_solids.h: clouds, marble, spots, granite,
@@ -149,56 +149,24 @@ Image truthSlice(const test::ProceduralSolid& solid, const std::vector<Voxel>& v
   return out;
 }
 
-// The colour steps between voxels at offsets k and k + 1 within the lattice's period, summed and
-// counted per k, and the colours at offset k, on an axis-aligned plane whose in-plane voxel
+// The steps across the lattice (latticeSteps) on an axis-aligned plane whose in-plane voxel
 // coordinates are 1000 + i and 2000 + j (axisPlane).
-struct StepProfile {
-  std::vector<double> sum, count, colorSum, colorCount;
+LatticeSteps planeSteps(const Image& im, int period) { return latticeSteps(im, period, 1000, 2000); }
 
-  StepProfile(const Image& im, int period)
-      : sum(size_t(period), 0.0), count(size_t(period), 0.0), colorSum(size_t(period), 0.0),
-        colorCount(size_t(period), 0.0) {
-    auto step = [&](int x0, int y0, int x1, int y1, int64_t coordinate) {
-      double d = 0;
-      for (int c = 0; c < im.channels; ++c) d += std::fabs(im.at(x1, y1, c) - im.at(x0, y0, c));
-      sum[size_t(coordinate % period)] += d;
-      count[size_t(coordinate % period)] += 1;
-    };
-    for (int y = 0; y < im.height; ++y)
-      for (int x = 0; x + 1 < im.width; ++x) step(x, y, x + 1, y, 1000 + x);
-    for (int y = 0; y + 1 < im.height; ++y)
-      for (int x = 0; x < im.width; ++x) step(x, y, x, y + 1, 2000 + y);
-    for (int y = 0; y < im.height; ++y)
-      for (int x = 0; x < im.width; ++x)
-        for (int c = 0; c < im.channels; ++c) {
-          colorSum[size_t((1000 + x) % period)] += im.at(x, y, c);
-          colorCount[size_t((1000 + x) % period)] += 1;
-        }
-  }
-  /// The mean colour at offset k along the plane's first axis, in 8-bit units.
-  double meanColor(size_t k) const { return 255.0 * colorSum[k] / colorCount[k]; }
-  // The mean step across the face planes (into a face and out of it) over the mean step elsewhere.
-  double seamRatio() const {
-    const size_t last = sum.size() - 1;
-    double inside = 0, insideCount = 0;
-    for (size_t k = 1; k < last; ++k) inside += sum[k], insideCount += count[k];
-    return (sum[0] + sum[last]) / (count[0] + count[last]) / (inside / insideCount);
-  }
-  /// The mean step from offset k to k + 1, in 8-bit units.
-  double meanStep(size_t k) const { return 255.0 * sum[k] / count[k]; }
-  // The largest mean step at any offset over the median offset's: a step off the face planes too.
-  double peak() const {
-    std::vector<double> mean(sum.size());
-    for (size_t k = 0; k < sum.size(); ++k) mean[k] = sum[k] / count[k];
-    std::sort(mean.begin(), mean.end());
-    return mean.back() / mean[mean.size() / 2];
-  }
-};
+// The mean colour at each offset within the period along such a plane's first axis, in 8-bit units.
+std::vector<double> colorProfile(const Image& im, int period) {
+  std::vector<double> sum(size_t(period), 0.0), count(size_t(period), 0.0);
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x)
+      for (int c = 0; c < im.channels; ++c) sum[size_t((1000 + x) % period)] += im.at(x, y, c), ++count[size_t((1000 + x) % period)];
+  for (size_t k = 0; k < sum.size(); ++k) sum[k] = 255.0 * sum[k] / count[k];
+  return sum;
+}
 
 struct Measures {
   double fidelity = 0, completeness = 0, contrast = 0, histogram = 0, lattice = 0, seam = 0, peak = 0;
   // Seam ratio and peak step: the largest over the axis-aligned planes.
-  void addSteps(const StepProfile& p) {
+  void addSteps(const LatticeSteps& p) {
     seam = std::max(seam, p.seamRatio());
     peak = std::max(peak, p.peak());
   }
@@ -224,13 +192,13 @@ void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysi
     evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
     const Image im = image(out, ex, n, planes[k].normal);
     saveImage(save, im, name, "tiles", planes[k]);
-    const StepProfile profile(im, to.tileSide);
-    m.addSteps(profile);
+    const LatticeSteps steps = planeSteps(im, to.tileSide);
+    m.addSteps(steps);
     if (!printProfile) continue;
     std::printf("plane %zu step by offset:", k);
-    for (size_t i = 0; i < profile.sum.size(); ++i) std::printf(" %.1f", profile.meanStep(i));
+    for (double step : steps.meanStep) std::printf(" %.1f", 255.0 * step);
     std::printf("\nplane %zu mean colour by offset:", k);
-    for (size_t i = 0; i < profile.colorSum.size(); ++i) std::printf(" %.0f", profile.meanColor(i));
+    for (double color : colorProfile(im, to.tileSide)) std::printf(" %.0f", color);
     std::printf("\n");
   }
   if (printProfile) {
@@ -242,8 +210,9 @@ void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysi
     }
     std::printf("mean exemplar colour at shared elements %.0f, at interiors %.0f\n", 255.0 * sums[0] / counts[0],
                 255.0 * sums[1] / counts[1]);
-    const StepProfile own(ex, 1);
-    std::printf("exemplar mean step %.1f, mean colour %.0f\n", own.meanStep(0), own.meanColor(0));
+    const LatticeSteps own = latticeSteps(ex, 3, 0, 0);
+    std::printf("exemplar mean step %.1f, mean colour %.0f\n",
+                255.0 * (own.meanStep[0] + own.meanStep[1] + own.meanStep[2]) / 3, colorProfile(ex, 1)[0]);
   }
   std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", m.seam, m.peak,
               tiles.seconds);
@@ -313,10 +282,9 @@ int main(int argc, char** argv) {
         m.completeness += neighborhoodCompleteness(im, ex, fo, ctx) / shufComp / baseComp / double(planes.size());
         m.contrast += contrastRatio(im, ex) / double(planes.size());
         m.histogram += histogramDistance(im, ex) / base.histogramDistance / double(planes.size());
-        for (int k = period; k < n / 2; k += period)
-          m.lattice = std::max(m.lattice, shiftedSelfCorrelation(im, k, k));
+        m.lattice = std::max(m.lattice, latticeCorrelation(im, period));
         if (p.name == "oblique") continue;
-        m.addSteps(StepProfile(im, period));
+        m.addSteps(planeSteps(im, period));
       }
       return m;
     };
@@ -354,12 +322,8 @@ int main(int argc, char** argv) {
       return out;
     };
     const Measures m = measure(slice, "tiles", period);
-    double face = 0;  // a slice on a face plane of the lattice
-    {
-      const Plane p = axisPlane(2, 4 * period, n);
-      const Image im = image(slice(p), ex, n, p.normal);
-      for (int k = period; k < n / 2; k += period) face = std::max(face, shiftedSelfCorrelation(im, k, k));
-    }
+    const Plane facePlane = axisPlane(2, 4 * period, n);  // a slice on a face plane of the lattice
+    const double face = latticeCorrelation(image(slice(facePlane), ex, n, facePlane.normal), period);
     std::vector<Triple> out(size_t(box.count()));
     const double tCut = seconds([&] { slice(cut); }, repeat * 10);
     const double tBox = seconds([&] { evaluateSolidTilesBox(tiles, 1, box, out, ctx); }, repeat);

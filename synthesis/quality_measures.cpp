@@ -266,6 +266,49 @@ double shiftedSelfCorrelation(const Image& image, int dx, int dy) {
   return std::max(pearson(lum, image.width, image.height, dx, 0), pearson(lum, image.width, image.height, 0, dy));
 }
 
+double latticeCorrelation(const Image& image, int period) {
+  double c = 0;
+  for (int k = period; period > 0 && 2 * k < std::min(image.width, image.height); k += period)
+    c = std::max(c, shiftedSelfCorrelation(image, k, k));
+  return c;
+}
+
+LatticeSteps latticeSteps(const Image& image, int period, int64_t originX, int64_t originY) {
+  if (period < 3) throw Error("lattice steps need a period of 3 or more, got " + std::to_string(period));
+  const int channels = std::min(image.channels, 3);
+  std::vector<double> sum(size_t(period), 0.0), count(size_t(period), 0.0);
+  auto step = [&](const float* a, const float* b, int64_t position) {
+    double d = 0;
+    for (int c = 0; c < channels; ++c) d += std::fabs(double(b[c]) - double(a[c]));
+    const size_t k = size_t((position % period + period) % period);
+    sum[k] += d;
+    count[k] += 1;
+  };
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      if (x + 1 < image.width) step(image.pixel(x, y), image.pixel(x + 1, y), originX + x);
+      if (y + 1 < image.height) step(image.pixel(x, y), image.pixel(x, y + 1), originY + y);
+    }
+  LatticeSteps s;
+  s.meanStep.resize(size_t(period));
+  for (size_t k = 0; k < sum.size(); ++k) s.meanStep[k] = count[k] > 0 ? sum[k] / count[k] : 0.0;
+  return s;
+}
+
+double LatticeSteps::seamRatio() const {
+  const size_t last = meanStep.size() - 1;
+  double inside = 0;
+  for (size_t k = 1; k < last; ++k) inside += meanStep[k];
+  inside /= double(last - 1);
+  return inside > 0 ? (meanStep[0] + meanStep[last]) / 2 / inside : 1.0;
+}
+
+double LatticeSteps::peak() const {
+  std::vector<double> sorted = meanStep;
+  std::sort(sorted.begin(), sorted.end());
+  return sorted[sorted.size() / 2] > 0 ? sorted.back() / sorted[sorted.size() / 2] : 1.0;
+}
+
 double contrastRatio(const Image& image, const Image& exemplar) {
   auto deviation = [](const Image& im) {
     const std::vector<float> lum = luminance(im);

@@ -12,6 +12,7 @@
 
 #include <optional>
 #include <span>
+#include <vector>
 
 namespace texfab::synthesis {
 
@@ -74,6 +75,25 @@ double coverage(const CoordMap& coords);
 /// of the two Pearson correlations. 1 for an image that repeats with that period.
 /// Throws if the image is not larger than the shift in both directions.
 double shiftedSelfCorrelation(const Image& image, int dx, int dy);
+
+/// The largest shiftedSelfCorrelation at `period` and its multiples below half the image's smaller
+/// side: how strongly the image repeats with that period (0 when it does not; 0 when no multiple fits).
+double latticeCorrelation(const Image& image, int period);
+
+/// Steps across a lattice of planes `period` pixels apart (solid tiles' faces) on an image whose
+/// pixel (x, y) lies at lattice position (originX + x, originY + y): the mean colour step (summed
+/// over the colour channels) between neighbouring pixels, horizontal and vertical together, by the
+/// offset k within the period of the pixel it starts at.
+struct LatticeSteps {
+  std::vector<double> meanStep;  ///< period values, k = 0 .. period - 1
+  /// The mean step into and out of a lattice plane (k = period - 1 and 0) over the mean step at
+  /// the other offsets: about 1 when the planes do not show.
+  double seamRatio() const;
+  /// The largest mean step at any offset over the median offset's: a step off the planes too.
+  double peak() const;
+};
+/// Throws if period < 3 (no offset would be off the planes).
+LatticeSteps latticeSteps(const Image& image, int period, int64_t originX, int64_t originY);
 
 /// Luminance contrast ratio: the standard deviation of the image's luminance over the
 /// exemplar's. Near 1 keeps the exemplar's contrast; below 1 is washed out. NaN if the exemplar

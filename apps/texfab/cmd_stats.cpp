@@ -23,14 +23,19 @@ struct StatsJob {
   std::string image, exemplar, coords;
   synthesis::FidelityOptions fidelity;
   bool baseline = false;
+  int latticePeriod = 0;
   CommonFlags common;
 };
 
 void runStats(const StatsJob& args) {
   using namespace synthesis;
   Run run("stats", args.common);
+  if (args.latticePeriod > 0 && args.latticePeriod < 3) throw UsageError("--lattice-period: 3 or more, or 0 (off)");
   const Image image = readImage(args.image);
   const Image exemplar = readImage(args.exemplar);
+  if (std::min(image.width, image.height) <= 2 * args.latticePeriod)
+    throw Error("--lattice-period " + std::to_string(args.latticePeriod) + ": the image must be more than twice as "
+                "wide and tall, it is " + std::to_string(image.width) + "x" + std::to_string(image.height));
   std::optional<CoordMap> coords;
   if (!args.coords.empty()) {
     coords = readCoordMap(args.coords, exemplar.width, exemplar.height);
@@ -78,7 +83,26 @@ void runStats(const StatsJob& args) {
     std::printf("2-D contrast ratio   %.4f   (the same 2-D synthesis')\n", baseline->contrast);
   }
 
+  std::optional<LatticeSteps> steps;
+  double correlation = 0;
+  if (args.latticePeriod > 0) {
+    steps = latticeSteps(image, args.latticePeriod, 0, 0);
+    correlation = latticeCorrelation(image, args.latticePeriod);
+    std::printf("lattice seam ratio   %.4f   (mean step into and out of the planes every %d pixels over inside; 1 = "
+                "they do not show)\n",
+                steps->seamRatio(), args.latticePeriod);
+    std::printf("lattice peak step    %.4f   (largest mean step at an offset over the median offset's)\n",
+                steps->peak());
+    std::printf("lattice correlation  %.4f   (shifted self-correlation at the period and its multiples; 0 = none)\n",
+                correlation);
+  }
+
   run.report() = baseline ? toJson(q, *baseline) : toJson(q);
+  if (steps)
+    run.report()["lattice"] = {{"period", args.latticePeriod},
+                               {"seam_ratio", steps->seamRatio()},
+                               {"peak_step", steps->peak()},
+                               {"correlation", correlation}};
   run.report()["image"] = args.image;
   run.report()["exemplar"] = args.exemplar;
   run.finish();
@@ -98,6 +122,11 @@ Command addStatsCommand(CLI::App& root) {
   f.flag("--baseline-2d", job->baseline,
          "Also measure a 2-D synthesis of the image's size from the exemplar (seed 1, default options) and give "
          "the image's fidelity relative to it: for slices of a solid texture, 1 = as faithful as 2-D synthesis");
+  f.option("--lattice-period", job->latticePeriod,
+           "Also measure a lattice of planes this many pixels apart, starting at pixel 0 (a slice of solid tiles: "
+           "the tile size, at voxel size 1 and a plane through voxel 0): the step across its planes and the image's "
+           "self-correlation at the period (0 = off)",
+           {0, 65536});
   f.common(job->common, Common::Threads | Common::Memory | Common::Report | Common::Cache | Common::Quiet);
   return {f.app(), [job] { runStats(*job); }};
 }

@@ -26,6 +26,37 @@ Image constant(int w, int h, float value) {
   return image;
 }
 
+TEST(QualityMeasures, LatticeCorrelationSeesARepeatingPeriod) {
+  // Noise, and the same noise's 8 x 8 corner repeated: 1 at period 8, about 0 for the noise.
+  Image noise(40, 40, 1), tiled(40, 40, 1);
+  uint32_t state = 12345;
+  for (float& v : noise.pixels) v = float((state = state * 1664525u + 1013904223u) >> 8) / float(1u << 24);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) tiled.at(x, y, 0) = noise.at(x % 8, y % 8, 0);
+  EXPECT_NEAR(latticeCorrelation(tiled, 8), 1.0, 1e-6);
+  EXPECT_LT(latticeCorrelation(noise, 8), 0.2);
+  EXPECT_EQ(latticeCorrelation(noise, 20), 0.0);  // no multiple below half the side
+}
+
+TEST(QualityMeasures, LatticeStepsFindTheStepAtTheLatticePlanes) {
+  // A ramp of 0.01 per pixel that falls back at every lattice plane (period 8), pixel 0 at lattice
+  // position 3: steps of 0.01 everywhere but the 0.07 into a plane.
+  Image im(41, 1, 1);
+  for (int x = 0; x < im.width; ++x) im.at(x, 0, 0) = 0.01f * float((3 + x) % 8);
+  const LatticeSteps s = latticeSteps(im, 8, 3, 0);
+  ASSERT_EQ(s.meanStep.size(), 8u);
+  EXPECT_NEAR(s.meanStep[7], 0.07, 1e-6);
+  EXPECT_NEAR(s.meanStep[3], 0.01, 1e-6);
+  EXPECT_NEAR(s.seamRatio(), (0.07 + 0.01) / 2 / 0.01, 1e-4);
+  EXPECT_NEAR(s.peak(), 7.0, 1e-4);
+  // Read with another phase, the step is off the planes (at offset 4): the planes are smoother than
+  // the mean inside, (5 * 0.01 + 0.07) / 6; the peak is the same.
+  const LatticeSteps shifted = latticeSteps(im, 8, 0, 0);
+  EXPECT_NEAR(shifted.seamRatio(), 0.01 / 0.02, 1e-4);
+  EXPECT_NEAR(shifted.peak(), 7.0, 1e-4);
+  EXPECT_THROW(latticeSteps(im, 2, 0, 0), Error);
+}
+
 TEST(QualityMeasures, FidelityIsZeroForAnyCropOfTheTiledExemplar) {
   const Image exemplar = test::noiseImage(16, 16);
   const Image tiled = applyCoords(tiling(50, 40, 16, 16), exemplar);

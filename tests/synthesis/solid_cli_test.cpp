@@ -3,6 +3,7 @@
 // other voxel for voxel, and bad input fails with one line, a non-zero exit and no output.
 #include "core/crop.h"
 #include "core/image_io.h"
+#include "procedural_solids.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -157,16 +158,22 @@ TEST(CliSolid, TilesMethodIsCachedAndAgreesAcrossModes) {
   TempDir dir;
   const std::string ex = smallExemplar(dir);
   const std::string common = ex + " --solid-method tiles --tile-size 16 -q --cache-dir " + (dir / "cache").string();
-  ASSERT_EQ(texfab("solid " + common + " --volume 20 -o " + (dir / "vol").string() + " --report " +
-                   (dir / "r.json").string())
-                .status,
-            0);
+  const test::CliResult first =
+      texfab("solid " + common + " --volume 20 -o " + (dir / "vol").string() + " --report " + (dir / "r.json").string());
+  ASSERT_EQ(first.status, 0) << first.err;
   std::ifstream in(dir / "r.json");
   const auto report = nlohmann::json::parse(in);
   EXPECT_EQ(report["parameters"]["method"], "tiles");
   EXPECT_EQ(report["synthesized_voxels"], 0);
   EXPECT_GT(report["measures"]["slices"]["z"]["contrast_ratio"].get<double>(), 0.5);
   EXPECT_EQ(report["timings"]["tiles"].is_number(), true) << report["timings"].dump();
+  // The tile set's lattice measures (issue 33's); marble's faces do not show, so no warning.
+  const auto& lattice = report["solid_tiles"];
+  EXPECT_EQ(lattice["tile_side"], 16);
+  EXPECT_LT(lattice["seam_ratio"].get<double>(), 1.1) << lattice.dump();
+  EXPECT_GT(lattice["seam_ratio"].get<double>(), 0.5) << lattice.dump();
+  EXPECT_LT(lattice["lattice_correlation"].get<double>(), 0.5) << lattice.dump();
+  EXPECT_EQ(first.err.find("faces show"), std::string::npos) << first.err;
   size_t tileFiles = 0;
   for (const auto& e : fs::directory_iterator(dir / "cache")) tileFiles += e.path().extension() == ".tiles";
   EXPECT_EQ(tileFiles, 1u);
@@ -187,6 +194,31 @@ TEST(CliSolid, TilesMethodIsCachedAndAgreesAcrossModes) {
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("--tile-size"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+TEST(CliSolid, WarnsWhenTheTilesFacesShow) {
+  // Procedural clouds whose soft features are as wide as a 16-voxel tile: their faces show (seam
+  // ratio about 1.3), and the warning names the way out.
+  TempDir dir;
+  writeImage(test::ProceduralSolid("clouds").exemplar(64), dir / "clouds.png");
+  const test::CliResult r = texfab("solid " + (dir / "clouds.png").string() +
+                                   " --solid-method tiles --tile-size 16 --plane 0,0,5,1,0,0,0,1,0 --size 64 -o " +
+                                   (dir / "p.png").string() + " --cache-dir " + (dir / "cache").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("faces show on this exemplar"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--solid-method lazy"), std::string::npos) << r.err;
+  // `texfab stats` measures the same on the plane written (pixel i is voxel i: the lattice's phase 0).
+  const test::CliResult stats = texfab("stats " + (dir / "p.png").string() + " --exemplar " +
+                                       (dir / "clouds.png").string() + " --lattice-period 16 -q --report " +
+                                       (dir / "s.json").string());
+  ASSERT_EQ(stats.status, 0) << stats.err;
+  std::ifstream in(dir / "s.json");
+  const auto lattice = nlohmann::json::parse(in)["lattice"];
+  EXPECT_EQ(lattice["period"], 16);
+  EXPECT_GT(lattice["seam_ratio"].get<double>(), 1.1) << lattice.dump();
+  EXPECT_NE(texfab("stats " + (dir / "p.png").string() + " --exemplar " + (dir / "clouds.png").string() +
+                   " --lattice-period 2").status,
+            0);
 }
 
 TEST(CliSolid, WarnsWhenTheExemplarsDifferInColour) {

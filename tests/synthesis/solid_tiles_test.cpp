@@ -10,6 +10,7 @@
 #include "synthesis/coord_map.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
+#include "synthesis/solid_tile_measures.h"
 #include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_solid.h"
 #include "test_support.h"
@@ -184,24 +185,10 @@ Image tileSlice(const SolidTileSet& t, const Image& ex, int64_t k, int n) {
   return colors(triples, ex, n);
 }
 
-// The mean colour difference between voxels on either side of a face plane over the same inside a
-// tile, along x on a z-slice of 8 x 8 tiles: faces are shared, so a face should look like any other
+// The mean colour step into and out of a face plane over the same inside a tile, the largest over
+// three axis-aligned slices of 8 x 8 tiles: faces are shared, so a face should look like any other
 // plane.
-double seamRatio(const SolidTileSet& t, const Image& ex) {
-  const int n = t.layout.side, side = 8 * n;
-  const Image im = tileSlice(t, ex, 37, side);
-  double across = 0, inside = 0;
-  int64_t nAcross = 0, nInside = 0;
-  for (int y = 0; y < side; ++y)
-    for (int x = 0; x + 1 < side; ++x) {
-      double d = 0;
-      for (int c = 0; c < im.channels; ++c) d += std::abs(im.at(x + 1, y, c) - im.at(x, y, c));
-      // voxel x + 100 + 1 is on a face plane when it is a multiple of n
-      if ((x + 101) % n == 0 || (x + 100) % n == 0) across += d, ++nAcross;
-      else inside += d, ++nInside;
-    }
-  return (across / double(nAcross)) / (inside / double(nInside));
-}
+double seamRatio(const SolidTileSet& t, const Image& ex) { return measureSolidTileLattice(t, ex, ex, ex).seamRatio; }
 
 TEST(SolidTiles, NoSeamAcrossTileFaces) {
   const double ratio = seamRatio(tiles64(), marble(64, 8, 8));
@@ -211,14 +198,14 @@ TEST(SolidTiles, NoSeamAcrossTileFaces) {
 
 TEST(SolidTiles, SeamAcrossTileFacesOfASmoothExemplarIsBounded) {
   // Clouds whose features are as wide as a tile, where a seam shows most. Upsampling a tile's last
-  // voxels from its own interior gave 1.75 here, a visible grid; from the next face, 1.15. What
+  // voxels from its own interior gave 1.89 here, a visible grid; from the next face, 1.31. What
   // is left is a rougher band along the faces (docs/measurements.md#seams-at-the-tiles-faces): the
   // bound holds that gain, not yet the 1.1.
   const Image ex = test::ProceduralSolid("clouds").exemplar(64);
   const SolidAnalysis a = analyzeSolid(ex, ex, ex, {}, Context{.threads = 2});
   const double ratio = seamRatio(buildSolidTiles(a, options16(), Context{.threads = 2}), ex);
   RecordProperty("seam_ratio", std::to_string(ratio));
-  EXPECT_LT(ratio, 1.25) << "seam ratio " << ratio;
+  EXPECT_LT(ratio, 1.45) << "seam ratio " << ratio;
 }
 
 TEST(SolidTiles, SlicesMatchTheExemplarAtLeastAsWellAsLazySynthesis) {
