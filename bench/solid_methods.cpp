@@ -20,6 +20,7 @@
 #include "synthesis/exemplar_analysis.h"
 #include "synthesis/quality_measures.h"
 #include "synthesis/solid_analysis.h"
+#include "synthesis/solid_tile_measures.h"
 #include "synthesis/solid_tiles.h"
 #include "synthesis/synthesize_solid.h"
 #include "tests/synthesis/procedural_solids.h"
@@ -214,8 +215,10 @@ void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysi
     std::printf("exemplar mean step %.1f, mean colour %.0f\n",
                 255.0 * (own.meanStep[0] + own.meanStep[1] + own.meanStep[2]) / 3, colorProfile(ex, 1)[0]);
   }
-  std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s\n", name.c_str(), "tiles", m.seam, m.peak,
-              tiles.seconds);
+  const SolidTileLattice jobs = measureSolidTileLattice(tiles, ex, ex, ex, ctx);  // what the jobs report
+  std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s; the jobs' measure: seam %.3f, peak "
+              "step %.3f, lattice %.3f\n",
+              name.c_str(), "tiles", m.seam, m.peak, tiles.seconds, jobs.seamRatio, jobs.peakStep, jobs.correlation);
   std::fflush(stdout);
 }
 
