@@ -159,7 +159,11 @@ std::vector<double> colorProfile(const Image& im, int period) {
   std::vector<double> sum(size_t(period), 0.0), count(size_t(period), 0.0);
   for (int y = 0; y < im.height; ++y)
     for (int x = 0; x < im.width; ++x)
-      for (int c = 0; c < im.channels; ++c) sum[size_t((1000 + x) % period)] += im.at(x, y, c), ++count[size_t((1000 + x) % period)];
+      for (int c = 0; c < im.channels; ++c) {
+        const size_t k = size_t((1000 + x) % period);
+        sum[k] += im.at(x, y, c);
+        count[k] += 1;
+      }
   for (size_t k = 0; k < sum.size(); ++k) sum[k] = 255.0 * sum[k] / count[k];
   return sum;
 }

@@ -158,8 +158,8 @@ TEST(CliSolid, TilesMethodIsCachedAndAgreesAcrossModes) {
   TempDir dir;
   const std::string ex = smallExemplar(dir);
   const std::string common = ex + " --solid-method tiles --tile-size 16 -q --cache-dir " + (dir / "cache").string();
-  const test::CliResult first =
-      texfab("solid " + common + " --volume 20 -o " + (dir / "vol").string() + " --report " + (dir / "r.json").string());
+  const test::CliResult first = texfab("solid " + common + " --volume 20 -o " + (dir / "vol").string() +
+                                       " --report " + (dir / "r.json").string());
   ASSERT_EQ(first.status, 0) << first.err;
   std::ifstream in(dir / "r.json");
   const auto report = nlohmann::json::parse(in);
