@@ -39,8 +39,8 @@ void reportTileLattice(Run& run, const synthesis::SolidAnalysis& a, const Image&
   if (m.seamRatio > kTileSeamWarning) {
     std::snprintf(text, sizeof text,
                   "the solid tiles' faces show on this exemplar (seam ratio %.2f, above %.1f): its features are about "
-                  "as large and smooth as a tile; --solid-method lazy has no tiles%s",
-                  m.seamRatio, kTileSeamWarning, side < 64 ? ", a larger --tile-size makes them larger" : "");
+                  "as large and smooth as a tile; --solid-method lazy has no tiles",
+                  m.seamRatio, kTileSeamWarning);
     run.ctx().warn(text);
   }
 }
