@@ -403,6 +403,9 @@ int main(int argc, char** argv) {
     const double tCut = seconds([&] { slice(cut); }, repeat * 10);
     const double tBox = seconds([&] { evaluateSolidTilesBox(tiles, 1, box, out, ctx); }, repeat);
     row("tiles", m, face, pre, tCut, tBox);
+    if (env("BLEND", 0) != 0)
+      row("blend", measureImages([&](const Plane& p) { return blendedSlice(tiles, ex, p, n, ctx); }, "blend", period),
+          0, pre, 0, 0);
   }
   return 0;
 }
