@@ -184,11 +184,12 @@ void saveImage(const char* dir, const Image& im, const std::string& name, const 
                        (name.substr(name.find(':') + 1) + "-" + method + "-" + p.name + ".png"));
 }
 
-// BLEND=1 (an experiment): the plane read from 8 arrangements of the tile set (seeds 1-8), each
-// shifted by half a tile along some of the axes, and blended as Heitz and Neyret 2018 blend
-// their tiles: each weighted by the product over the axes of a hat that is 0 on its faces and 1 in
-// its cells' middles (the weights sum to 1), variance-preserving around the mean colour of the 8
-// readings. Colours, not triples: what evaluation would have to return.
+// BLEND=1 or 2 (an experiment; docs/measurements.md): the plane read from 8 arrangements of the tile
+// set (seeds 1-8), each shifted by half a tile along some of the axes, and blended as Heitz and
+// Neyret 2018 blend their tiles: each weighted by the product over the axes of a hat that is 0 on
+// its faces and 1 in its cells' middles (the weights sum to 1), variance-preserving around the mean
+// colour of the 8 readings (1) or each reading's expected colour at its position in the cell (2).
+// Colours, not triples: what evaluation would have to return.
 Image blendedSlice(const SolidTileSet& tiles, const Image& ex, const Plane& plane, int n, const Context& ctx) {
   const int side = tiles.layout.side;
   const size_t count = plane.voxels.size();
@@ -230,7 +231,7 @@ Image blendedSlice(const SolidTileSet& tiles, const Image& ex, const Plane& plan
   }
   auto expected = [&](size_t part, size_t i, int c) {
     if (local.empty()) return mean[size_t(c)];
-    Voxel q = plane.voxels[i];
+    const Voxel& q = plane.voxels[i];
     size_t cell = 0;
     for (int a = 2; a >= 0; --a) {
       const int64_t p = q[size_t(a)] + ((int64_t(part) >> a) & 1) * (side / 2);
@@ -263,7 +264,8 @@ void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysi
   for (size_t k = 0; k < 3; ++k) {
     std::vector<Triple> out(planes[k].voxels.size());
     evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
-    const Image im = env("BLEND", 0) != 0 ? blendedSlice(tiles, ex, planes[k], n, ctx) : image(out, ex, n, planes[k].normal);
+    const Image im =
+        env("BLEND", 0) != 0 ? blendedSlice(tiles, ex, planes[k], n, ctx) : image(out, ex, n, planes[k].normal);
     saveImage(save, im, name, "tiles", planes[k]);
     const LatticeSteps steps = planeSteps(im, to.tileSide);
     m.addSteps(steps);
