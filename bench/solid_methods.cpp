@@ -184,69 +184,68 @@ void saveImage(const char* dir, const Image& im, const std::string& name, const 
                        (name.substr(name.find(':') + 1) + "-" + method + "-" + p.name + ".png"));
 }
 
+// BLEND=2: the tile set's mean colour at each position in the cell (side^3 positions, channels
+// interleaved), over a box of 4^3 cells read with seed 1.
+std::vector<double> cellMeans(const SolidTileSet& tiles, const Image& ex, const Context& ctx) {
+  const int side = tiles.layout.side, b = 4 * side, ch = solidColorChannels(ex, ex, ex);
+  std::vector<Triple> box(size_t(b) * b * b);
+  evaluateSolidTilesBox(tiles, 1, VoxelBox{0, 0, 0, b, b, b}, box, ctx);
+  std::vector<float> colors;
+  solidColors(box, ex, ex, ex, colors);
+  std::vector<double> means(size_t(side) * side * side * size_t(ch), 0.0);
+  for (size_t v = 0; v < box.size(); ++v) {
+    const size_t x = v % size_t(b), y = v / size_t(b) % size_t(b), z = v / size_t(b * b);
+    const size_t cell = ((z % size_t(side)) * size_t(side) + y % size_t(side)) * size_t(side) + x % size_t(side);
+    for (int c = 0; c < ch; ++c) means[cell * size_t(ch) + size_t(c)] += colors[v * size_t(ch) + size_t(c)] / 64.0;
+  }
+  return means;
+}
+
 // BLEND=1 or 2 (an experiment; docs/measurements.md): the plane read from 8 arrangements of the tile
 // set (seeds 1-8), each shifted by half a tile along some of the axes, and blended as Heitz and
 // Neyret 2018 blend their tiles: each weighted by the product over the axes of a hat that is 0 on
 // its faces and 1 in its cells' middles (the weights sum to 1), variance-preserving around the mean
-// colour of the 8 readings (1) or each reading's expected colour at its position in the cell (2).
-// Colours, not triples: what evaluation would have to return.
-Image blendedSlice(const SolidTileSet& tiles, const Image& ex, const Plane& plane, int n, const Context& ctx) {
+// colour of the 8 readings (1: `means` empty) or each reading's expected colour at its position in
+// the cell (2: `means` from cellMeans). Colours, not triples: what evaluation would have to return.
+Image blendedSlice(const SolidTileSet& tiles, const Image& ex, const Plane& plane, int n,
+                   const std::vector<double>& means, const Context& ctx) {
   const int side = tiles.layout.side;
   const size_t count = plane.voxels.size();
   std::vector<Image> parts;
   std::vector<std::vector<double>> weights;
+  std::vector<std::vector<size_t>> cells;  // each reading's position in its cell
   for (int bits = 0; bits < 8; ++bits) {
     std::vector<Voxel> shifted = plane.voxels;
     std::vector<double> w(count, 1.0);
+    std::vector<size_t> cell(count, 0);
     for (size_t i = 0; i < count; ++i)
-      for (int a = 0; a < 3; ++a) {
+      for (int a = 2; a >= 0; --a) {
         int64_t& q = shifted[i][size_t(a)];
         q += ((bits >> a) & 1) * (side / 2);
-        w[i] *= 1 - std::fabs(2 * (double((q % side + side) % side) + 0.5) / side - 1);
+        const int64_t offset = (q % side + side) % side;
+        w[i] *= 1 - std::fabs(2 * (double(offset) + 0.5) / side - 1);
+        cell[i] = cell[i] * size_t(side) + size_t(offset);
       }
     std::vector<Triple> triples(count);
     evaluateSolidTiles(tiles, uint32_t(1 + bits), shifted, triples, ctx);
     parts.push_back(image(triples, ex, n, plane.normal));
     weights.push_back(std::move(w));
+    cells.push_back(std::move(cell));
   }
   const int ch = parts[0].channels;
   std::vector<double> mean(size_t(ch), 0.0);
   for (const Image& p : parts)
     for (size_t i = 0; i < p.pixels.size(); ++i) mean[i % size_t(ch)] += p.pixels[i] / double(8 * count);
-  // BLEND=2: each reading's deviation from the tile set's mean colour at its position in the cell
-  // (over a box of 4^3 cells), instead of from the overall mean.
-  std::vector<double> local;
-  if (env("BLEND", 0) == 2) {
-    const int b = 4 * side;
-    std::vector<Triple> box(size_t(b * b * b));
-    evaluateSolidTilesBox(tiles, 1, VoxelBox{0, 0, 0, b, b, b}, box, ctx);
-    std::vector<float> colors;
-    solidColors(box, ex, ex, ex, colors);
-    local.assign(size_t(side) * side * side * size_t(ch), 0.0);
-    for (size_t v = 0; v < box.size(); ++v) {
-      const size_t x = v % size_t(b), y = v / size_t(b) % size_t(b), z = v / size_t(b * b);
-      const size_t cell = ((z % size_t(side)) * size_t(side) + y % size_t(side)) * size_t(side) + x % size_t(side);
-      for (int c = 0; c < ch; ++c) local[cell * size_t(ch) + size_t(c)] += colors[v * size_t(ch) + size_t(c)] / 64.0;
-    }
-  }
-  auto expected = [&](size_t part, size_t i, int c) {
-    if (local.empty()) return mean[size_t(c)];
-    const Voxel& q = plane.voxels[i];
-    size_t cell = 0;
-    for (int a = 2; a >= 0; --a) {
-      const int64_t p = q[size_t(a)] + ((int64_t(part) >> a) & 1) * (side / 2);
-      cell = cell * size_t(side) + size_t((p % side + side) % side);
-    }
-    return local[cell * size_t(ch) + size_t(c)];
-  };
   Image out = parts[0];
   for (size_t i = 0; i < count; ++i) {
     double norm = 0;
     for (const auto& w : weights) norm += w[i] * w[i];
     for (int c = 0; c < ch; ++c) {
       double v = 0;
-      for (size_t p = 0; p < parts.size(); ++p)
-        v += weights[p][i] * (parts[p].pixels[i * size_t(ch) + size_t(c)] - expected(p, i, c));
+      for (size_t p = 0; p < parts.size(); ++p) {
+        const double expected = means.empty() ? mean[size_t(c)] : means[cells[p][i] * size_t(ch) + size_t(c)];
+        v += weights[p][i] * (parts[p].pixels[i * size_t(ch) + size_t(c)] - expected);
+      }
       out.pixels[i * size_t(ch) + size_t(c)] = float(std::clamp(mean[size_t(c)] + v / std::sqrt(norm), 0.0, 1.0));
     }
   }
@@ -259,14 +258,20 @@ Image blendedSlice(const SolidTileSet& tiles, const Image& ex, const Plane& plan
 void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysis& a, const SolidTileOptions& to,
                     const std::vector<Plane>& planes, int n, const char* save, const Context& ctx) {
   const bool printProfile = env("PROFILE", 0) != 0;
+  const int blend = int(env("BLEND", 0));
   const SolidTileSet tiles = buildSolidTiles(a, to, ctx);
+  const std::vector<double> means = blend == 2 ? cellMeans(tiles, ex, ctx) : std::vector<double>{};
   Measures m;
   for (size_t k = 0; k < 3; ++k) {
-    std::vector<Triple> out(planes[k].voxels.size());
-    evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
-    const Image im =
-        env("BLEND", 0) != 0 ? blendedSlice(tiles, ex, planes[k], n, ctx) : image(out, ex, n, planes[k].normal);
-    saveImage(save, im, name, "tiles", planes[k]);
+    Image im;
+    if (blend != 0) {
+      im = blendedSlice(tiles, ex, planes[k], n, means, ctx);
+    } else {
+      std::vector<Triple> out(planes[k].voxels.size());
+      evaluateSolidTiles(tiles, 1, planes[k].voxels, out, ctx);
+      im = image(out, ex, n, planes[k].normal);
+    }
+    saveImage(save, im, name, blend != 0 ? "blend" : "tiles", planes[k]);
     const LatticeSteps steps = planeSteps(im, to.tileSide);
     m.addSteps(steps);
     if (!printProfile) continue;
@@ -292,7 +297,8 @@ void printTileSeams(const std::string& name, const Image& ex, const SolidAnalysi
   const SolidTileLattice jobs = measureSolidTileLattice(tiles, ex, ex, ex, ctx);  // what the jobs report
   std::printf("%-14s %-6s seam %.3f, peak step %.3f, precomputation %.1f s; the jobs' measure: seam %.3f, peak "
               "step %.3f, lattice %.3f\n",
-              name.c_str(), "tiles", m.seam, m.peak, tiles.seconds, jobs.seamRatio, jobs.peakStep, jobs.correlation);
+              name.c_str(), blend != 0 ? "blend" : "tiles", m.seam, m.peak, tiles.seconds, jobs.seamRatio,
+              jobs.peakStep, jobs.correlation);
   std::fflush(stdout);
 }
 
@@ -405,9 +411,11 @@ int main(int argc, char** argv) {
     const double tCut = seconds([&] { slice(cut); }, repeat * 10);
     const double tBox = seconds([&] { evaluateSolidTilesBox(tiles, 1, box, out, ctx); }, repeat);
     row("tiles", m, face, pre, tCut, tBox);
-    if (env("BLEND", 0) != 0)
-      row("blend", measureImages([&](const Plane& p) { return blendedSlice(tiles, ex, p, n, ctx); }, "blend", period),
-          0, pre, 0, 0);
+    if (const int blend = int(env("BLEND", 0)); blend != 0) {
+      const std::vector<double> means = blend == 2 ? cellMeans(tiles, ex, ctx) : std::vector<double>{};
+      const auto view = [&](const Plane& p) { return blendedSlice(tiles, ex, p, n, means, ctx); };
+      row("blend", measureImages(view, "blend", period), 0, pre, 0, 0);
+    }
   }
   return 0;
 }
